@@ -1,0 +1,51 @@
+// Conventions every tachi executable shares, so that `main` stays a dozen lines:
+// one way to parse flags (CLI11), one way to log (spdlog), one way to stop (SIGINT/SIGTERM),
+// and one table of exit codes (documented in docs/cli.md).
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+#include <atomic>
+#include <chrono>
+#include <functional>
+#include <string>
+
+namespace tachi::common {
+
+/// Process exit codes shared by every executable.
+enum ExitCode : int {
+  kExitOk = 0,
+  kExitFailure = 1,  ///< runtime error: bad input data, lost peer, I/O failure
+  kExitUsage = 2,    ///< bad flags: one line names the flag and the allowed range
+  kExitNoDevice = 3, ///< no Kinect found (live mode only)
+};
+
+/// Flags every process that joins the DDS bus understands.
+struct BusOptions {
+  unsigned domain = 0;         ///< DDS domain id (0..232)
+  std::string dds_config;      ///< Cyclone XML file; empty = the loopback config built in
+};
+
+/// Adds `--log-level` to an app; the chosen level is applied by parse().
+void add_log_level_flag(CLI::App& app, std::string& level);
+/// Adds `--domain` and `--dds-config`.
+void add_bus_flags(CLI::App& app, BusOptions& options);
+
+/// Parses argv. Returns an exit code when the process should stop now (help printed: 0;
+/// bad flag: one line "<program>: <flag>: <reason>" on stderr, kExitUsage), else -1.
+int parse(CLI::App& app, int argc, char** argv);
+
+/// Sets spdlog's level from a name (trace, debug, info, warn, error, critical, off).
+void set_log_level(const std::string& level);
+
+/// Installs SIGINT/SIGTERM handlers that raise the stop flag instead of killing the process.
+void install_stop_handlers();
+/// True once SIGINT or SIGTERM has arrived (or request_stop was called).
+bool stop_requested();
+void request_stop();
+
+/// Calls `tick` until it returns false or a stop is requested.
+/// `tick` is expected to block briefly (e.g. on a DDS waitset) so this does not spin.
+void run_until_stopped(const std::function<bool()>& tick);
+
+}  // namespace tachi::common

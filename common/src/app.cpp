@@ -1,0 +1,78 @@
+#include "tachi/common/app.hpp"
+
+#include <spdlog/spdlog.h>
+
+#include <csignal>
+#include <iostream>
+
+namespace tachi::common {
+namespace {
+std::atomic<bool> g_stop{false};
+static_assert(std::atomic<bool>::is_always_lock_free, "the stop flag is written from a signal handler");
+
+extern "C" void on_stop_signal(int /*signal*/) { g_stop.store(true); }
+
+const std::map<std::string, spdlog::level::level_enum> kLevels{
+    {"trace", spdlog::level::trace}, {"debug", spdlog::level::debug}, {"info", spdlog::level::info},
+    {"warn", spdlog::level::warn},   {"error", spdlog::level::err},   {"critical", spdlog::level::critical},
+    {"off", spdlog::level::off}};
+}  // namespace
+
+void add_log_level_flag(CLI::App& app, std::string& level) {
+  if (level.empty()) level = "info";
+  app.add_option("--log-level", level, "Log verbosity")
+      ->check(CLI::IsMember({"trace", "debug", "info", "warn", "error", "critical", "off"}))
+      ->capture_default_str();
+}
+
+void add_bus_flags(CLI::App& app, BusOptions& options) {
+  app.add_option("--domain", options.domain, "DDS domain id; processes of one pipeline share it")
+      ->check(CLI::Range(0u, 232u))
+      ->capture_default_str();
+  app.add_option("--dds-config", options.dds_config,
+                 "Cyclone DDS XML config; default: the built-in loopback-only config (config/cyclonedds-loopback.xml)")
+      ->check(CLI::ExistingFile);
+}
+
+int parse(CLI::App& app, int argc, char** argv) {
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp&) {
+    std::cout << app.help();
+    return kExitOk;
+  } catch (const CLI::CallForAllHelp&) {
+    std::cout << app.help("", CLI::AppFormatMode::All);
+    return kExitOk;
+  } catch (const CLI::CallForVersion& v) {
+    std::cout << v.what() << '\n';
+    return kExitOk;
+  } catch (const CLI::ParseError& e) {
+    std::cerr << app.get_name() << ": " << e.what() << '\n';
+    return kExitUsage;
+  }
+  return -1;
+}
+
+void set_log_level(const std::string& level) {
+  const auto it = kLevels.find(level);
+  spdlog::set_level(it == kLevels.end() ? spdlog::level::info : it->second);
+}
+
+void install_stop_handlers() {
+  struct sigaction action {};
+  action.sa_handler = on_stop_signal;
+  sigemptyset(&action.sa_mask);
+  sigaction(SIGINT, &action, nullptr);
+  sigaction(SIGTERM, &action, nullptr);
+}
+
+bool stop_requested() { return g_stop.load(); }
+void request_stop() { g_stop.store(true); }
+
+void run_until_stopped(const std::function<bool()>& tick) {
+  while (!stop_requested()) {
+    if (!tick()) break;
+  }
+}
+
+}  // namespace tachi::common

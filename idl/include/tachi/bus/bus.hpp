@@ -1,0 +1,205 @@
+// tachi's one typed layer over Cyclone DDS's C API: participant, typed writer and reader, waitset.
+// Everything above this header speaks C++ (RAII handles, std::chrono, exceptions with context);
+// everything below is Cyclone's C API. Message types are the idlc-generated C structs of tachi.idl.
+#pragma once
+
+#include <dds/dds.h>
+
+#include <chrono>
+#include <cstdint>
+#include <cstring>
+#include <functional>
+#include <stdexcept>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace tachi::bus {
+
+/// config/cyclonedds-loopback.xml, embedded at build time: every byte stays on `lo`.
+extern const char* const kLoopbackConfigXml;
+
+/// A Cyclone call failed. what() names the entity and the call, e.g.
+/// "create writer on topic tachi/hand/raw: dds_create_writer: Precondition not met".
+class DdsError : public std::runtime_error {
+ public:
+  DdsError(std::string_view context, dds_return_t code);
+  dds_return_t code() const noexcept { return code_; }
+
+ private:
+  dds_return_t code_;
+};
+
+/// Returns `rc` when it is not an error; throws DdsError(context) when it is.
+dds_return_t check(dds_return_t rc, std::string_view context);
+
+/// Named QoS profiles. A topic's writers and readers use the same profile, so offered and
+/// requested QoS always match (a mismatch in Cyclone is silent: nothing arrives).
+enum class QosProfile {
+  SensorData,  ///< best effort, keep last 8: a late hand sample is worth less than the next one
+  Commands,    ///< reliable, keep last 1024: strokes, voice commands, cut events must all arrive
+  Topology,    ///< reliable, transient-local, keep last 1 per key: late joiners get the current mesh
+  State,       ///< reliable, keep last 2: the newest cloth positions, never a queue of stale ones
+  Status,      ///< reliable, transient-local, keep last 1 per node, 3 s liveliness lease
+};
+
+/// A topic: its DDS name, its QoS profile and (through T) its type.
+template <class T>
+struct TopicSpec {
+  const char* name;
+  QosProfile profile;
+};
+
+/// Maps a generated C type to its idlc descriptor; specialised in topics.hpp.
+template <class T>
+struct Descriptor;
+
+/// A DDS domain participant. The domain is created with the embedded loopback config unless a
+/// config file is given. Several participants of one domain may live in one process.
+class Participant {
+ public:
+  explicit Participant(std::uint32_t domain, const std::string& config_file = {});
+  ~Participant();
+  Participant(const Participant&) = delete;
+  Participant& operator=(const Participant&) = delete;
+
+  dds_entity_t handle() const noexcept { return participant_; }
+  std::uint32_t domain() const noexcept { return domain_; }
+
+ private:
+  std::uint32_t domain_;
+  dds_entity_t participant_;
+};
+
+namespace detail {
+dds_entity_t create_topic(const Participant& participant, const dds_topic_descriptor_t* descriptor, const char* name);
+dds_entity_t create_writer(const Participant& participant, dds_entity_t topic, QosProfile profile, const char* name);
+dds_entity_t create_reader(const Participant& participant, dds_entity_t topic, QosProfile profile, const char* name);
+void delete_entity(dds_entity_t entity) noexcept;
+std::uint32_t matched_readers(dds_entity_t writer);
+std::uint32_t matched_writers(dds_entity_t reader);
+/// Polls `count()` until it reaches `n` or the timeout passes.
+bool wait_until_count(const std::function<std::uint32_t()>& count, std::uint32_t n, std::chrono::nanoseconds timeout);
+bool wait_for_data(dds_entity_t reader, std::chrono::nanoseconds timeout);
+}  // namespace detail
+
+/// A received sample that owns its sequences and strings (freed with the descriptor on destruction).
+template <class T>
+class Owned {
+ public:
+  Owned() noexcept { std::memset(static_cast<void*>(&msg_), 0, sizeof msg_); }
+  ~Owned() { dds_sample_free(&msg_, &Descriptor<T>::value(), DDS_FREE_CONTENTS); }
+  Owned(Owned&& other) noexcept {
+    std::memcpy(static_cast<void*>(&msg_), &other.msg_, sizeof msg_);
+    std::memset(static_cast<void*>(&other.msg_), 0, sizeof msg_);
+  }
+  Owned& operator=(Owned&& other) noexcept {
+    if (this != &other) {
+      dds_sample_free(&msg_, &Descriptor<T>::value(), DDS_FREE_CONTENTS);
+      std::memcpy(static_cast<void*>(&msg_), &other.msg_, sizeof msg_);
+      std::memset(static_cast<void*>(&other.msg_), 0, sizeof msg_);
+    }
+    return *this;
+  }
+  Owned(const Owned&) = delete;
+  Owned& operator=(const Owned&) = delete;
+
+  T& operator*() noexcept { return msg_; }
+  const T& operator*() const noexcept { return msg_; }
+  T* operator->() noexcept { return &msg_; }
+  const T* operator->() const noexcept { return &msg_; }
+
+ private:
+  T msg_;
+};
+
+/// A typed writer. Write a sample whose sequences point at your own buffers (`_release = false`)
+/// to publish without a copy.
+template <class T>
+class Writer {
+ public:
+  Writer(const Participant& participant, const TopicSpec<T>& topic)
+      : name_(topic.name),
+        topic_(detail::create_topic(participant, &Descriptor<T>::value(), topic.name)),
+        writer_(detail::create_writer(participant, topic_, topic.profile, topic.name)) {}
+  ~Writer() { detail::delete_entity(writer_); }
+  Writer(const Writer&) = delete;
+  Writer& operator=(const Writer&) = delete;
+
+  void write(const T& sample) { check(dds_write(writer_, &sample), "write on topic " + name_ + ": dds_write"); }
+  std::uint32_t matched_readers() const { return detail::matched_readers(writer_); }
+  /// True once at least `n` readers have matched, false after `timeout`.
+  bool wait_for_readers(std::uint32_t n, std::chrono::nanoseconds timeout) const {
+    return detail::wait_until_count([this] { return matched_readers(); }, n, timeout);
+  }
+  dds_entity_t handle() const noexcept { return writer_; }
+
+ private:
+  std::string name_;
+  dds_entity_t topic_;
+  dds_entity_t writer_;
+};
+
+/// A typed reader that takes samples into a std::vector.
+template <class T>
+class Reader {
+ public:
+  Reader(const Participant& participant, const TopicSpec<T>& topic)
+      : name_(topic.name),
+        topic_(detail::create_topic(participant, &Descriptor<T>::value(), topic.name)),
+        reader_(detail::create_reader(participant, topic_, topic.profile, topic.name)) {}
+  ~Reader() { detail::delete_entity(reader_); }
+  Reader(const Reader&) = delete;
+  Reader& operator=(const Reader&) = delete;
+
+  /// Takes up to `max` samples with valid data (oldest first); disposal notices are dropped.
+  std::vector<Owned<T>> take(std::size_t max = 256) {
+    std::vector<Owned<T>> samples(max);
+    std::vector<void*> buffers(max);
+    std::vector<dds_sample_info_t> infos(max);
+    for (std::size_t i = 0; i < max; ++i) buffers[i] = &*samples[i];
+    const dds_return_t n = check(dds_take(reader_, buffers.data(), infos.data(), max, static_cast<uint32_t>(max)),
+                                 "take on topic " + name_ + ": dds_take");
+    std::vector<Owned<T>> valid;
+    valid.reserve(static_cast<std::size_t>(n));
+    for (dds_return_t i = 0; i < n; ++i)
+      if (infos[static_cast<std::size_t>(i)].valid_data) valid.push_back(std::move(samples[static_cast<std::size_t>(i)]));
+    return valid;
+  }
+  /// Blocks until data is available or the timeout passes; true when data is available.
+  bool wait_for_data(std::chrono::nanoseconds timeout) const { return detail::wait_for_data(reader_, timeout); }
+  std::uint32_t matched_writers() const { return detail::matched_writers(reader_); }
+  /// True once at least `n` writers have matched, false after `timeout`.
+  bool wait_for_writers(std::uint32_t n, std::chrono::nanoseconds timeout) const {
+    return detail::wait_until_count([this] { return matched_writers(); }, n, timeout);
+  }
+  dds_entity_t handle() const noexcept { return reader_; }
+
+ private:
+  std::string name_;
+  dds_entity_t topic_;
+  dds_entity_t reader_;
+};
+
+/// Waits on several readers at once: wakes when any has data, or on timeout.
+class WaitSet {
+ public:
+  explicit WaitSet(const Participant& participant);
+  ~WaitSet();
+  WaitSet(const WaitSet&) = delete;
+  WaitSet& operator=(const WaitSet&) = delete;
+
+  template <class T>
+  void attach(const Reader<T>& reader) {
+    attach_reader(reader.handle());
+  }
+  /// True when at least one attached reader has data; false on timeout.
+  bool wait(std::chrono::nanoseconds timeout);
+
+ private:
+  void attach_reader(dds_entity_t reader);
+  dds_entity_t waitset_;
+  std::vector<dds_entity_t> conditions_;
+};
+
+}  // namespace tachi::bus

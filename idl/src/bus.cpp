@@ -1,0 +1,187 @@
+#include "tachi/bus/bus.hpp"
+
+#include <fstream>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <sstream>
+#include <thread>
+
+namespace tachi::bus {
+namespace {
+
+// Cyclone allows one explicitly created domain per id per process, and deleting it deletes every
+// participant in it; so domains are shared and reference counted between Participants.
+struct DomainEntry {
+  dds_entity_t domain = 0;
+  int users = 0;
+};
+std::mutex g_domains_mutex;
+std::map<std::uint32_t, DomainEntry> g_domains;
+
+std::string read_config_file(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error("cannot read DDS config file " + path);
+  std::ostringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+void acquire_domain(std::uint32_t id, const std::string& config_file) {
+  std::lock_guard lock(g_domains_mutex);
+  auto& entry = g_domains[id];
+  if (entry.users++ > 0) return;
+  const std::string xml = config_file.empty() ? std::string(kLoopbackConfigXml) : read_config_file(config_file);
+  const dds_entity_t domain = dds_create_domain(id, xml.c_str());
+  if (domain < 0) {
+    g_domains.erase(id);
+    check(domain, "create DDS domain " + std::to_string(id) + ": dds_create_domain");
+  }
+  entry.domain = domain;
+}
+
+void release_domain(std::uint32_t id) noexcept {
+  std::lock_guard lock(g_domains_mutex);
+  const auto it = g_domains.find(id);
+  if (it == g_domains.end()) return;
+  if (--it->second.users == 0) {
+    dds_delete(it->second.domain);
+    g_domains.erase(it);
+  }
+}
+
+using QosPtr = std::unique_ptr<dds_qos_t, decltype(&dds_delete_qos)>;
+
+QosPtr make_qos(QosProfile profile) {
+  QosPtr qos(dds_create_qos(), &dds_delete_qos);
+  switch (profile) {
+    case QosProfile::SensorData:
+      dds_qset_reliability(qos.get(), DDS_RELIABILITY_BEST_EFFORT, 0);
+      dds_qset_history(qos.get(), DDS_HISTORY_KEEP_LAST, 8);
+      break;
+    case QosProfile::Commands:
+      dds_qset_reliability(qos.get(), DDS_RELIABILITY_RELIABLE, DDS_SECS(1));
+      dds_qset_history(qos.get(), DDS_HISTORY_KEEP_LAST, 1024);
+      break;
+    case QosProfile::Topology:
+      dds_qset_reliability(qos.get(), DDS_RELIABILITY_RELIABLE, DDS_SECS(1));
+      dds_qset_durability(qos.get(), DDS_DURABILITY_TRANSIENT_LOCAL);
+      dds_qset_history(qos.get(), DDS_HISTORY_KEEP_LAST, 1);
+      break;
+    case QosProfile::State:
+      dds_qset_reliability(qos.get(), DDS_RELIABILITY_RELIABLE, DDS_MSECS(100));
+      dds_qset_history(qos.get(), DDS_HISTORY_KEEP_LAST, 2);
+      break;
+    case QosProfile::Status:
+      dds_qset_reliability(qos.get(), DDS_RELIABILITY_RELIABLE, DDS_SECS(1));
+      dds_qset_durability(qos.get(), DDS_DURABILITY_TRANSIENT_LOCAL);
+      dds_qset_history(qos.get(), DDS_HISTORY_KEEP_LAST, 1);
+      dds_qset_liveliness(qos.get(), DDS_LIVELINESS_AUTOMATIC, DDS_SECS(3));
+      break;
+  }
+  return qos;
+}
+
+}  // namespace
+
+DdsError::DdsError(std::string_view context, dds_return_t code)
+    : std::runtime_error(std::string(context) + ": " + dds_strretcode(code)), code_(code) {}
+
+dds_return_t check(dds_return_t rc, std::string_view context) {
+  if (rc < 0) throw DdsError(context, rc);
+  return rc;
+}
+
+Participant::Participant(std::uint32_t domain, const std::string& config_file) : domain_(domain) {
+  acquire_domain(domain, config_file);
+  participant_ = dds_create_participant(domain, nullptr, nullptr);
+  if (participant_ < 0) {
+    release_domain(domain);
+    check(participant_, "create participant in domain " + std::to_string(domain) + ": dds_create_participant");
+  }
+}
+
+Participant::~Participant() {
+  dds_delete(participant_);
+  release_domain(domain_);
+}
+
+namespace detail {
+
+dds_entity_t create_topic(const Participant& participant, const dds_topic_descriptor_t* descriptor,
+                          const char* name) {
+  return check(dds_create_topic(participant.handle(), descriptor, name, nullptr, nullptr),
+               std::string("create topic ") + name + ": dds_create_topic");
+}
+
+dds_entity_t create_writer(const Participant& participant, dds_entity_t topic, QosProfile profile,
+                           const char* name) {
+  const auto qos = make_qos(profile);
+  return check(dds_create_writer(participant.handle(), topic, qos.get(), nullptr),
+               std::string("create writer on topic ") + name + ": dds_create_writer");
+}
+
+dds_entity_t create_reader(const Participant& participant, dds_entity_t topic, QosProfile profile,
+                           const char* name) {
+  const auto qos = make_qos(profile);
+  return check(dds_create_reader(participant.handle(), topic, qos.get(), nullptr),
+               std::string("create reader on topic ") + name + ": dds_create_reader");
+}
+
+void delete_entity(dds_entity_t entity) noexcept { dds_delete(entity); }
+
+std::uint32_t matched_readers(dds_entity_t writer) {
+  dds_publication_matched_status_t status{};
+  check(dds_get_publication_matched_status(writer, &status), "dds_get_publication_matched_status");
+  return status.current_count;
+}
+
+std::uint32_t matched_writers(dds_entity_t reader) {
+  dds_subscription_matched_status_t status{};
+  check(dds_get_subscription_matched_status(reader, &status), "dds_get_subscription_matched_status");
+  return status.current_count;
+}
+
+bool wait_until_count(const std::function<std::uint32_t()>& count, std::uint32_t n,
+                      std::chrono::nanoseconds timeout) {
+  const auto deadline = std::chrono::steady_clock::now() + timeout;
+  while (count() < n) {
+    if (std::chrono::steady_clock::now() >= deadline) return false;
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  return true;
+}
+
+bool wait_for_data(dds_entity_t reader, std::chrono::nanoseconds timeout) {
+  const dds_entity_t waitset = check(dds_create_waitset(dds_get_participant(reader)), "dds_create_waitset");
+  const dds_entity_t condition = dds_create_readcondition(reader, DDS_ANY_STATE);
+  dds_return_t rc = condition;
+  if (condition >= 0) rc = dds_waitset_attach(waitset, condition, condition);
+  if (rc >= 0) rc = dds_waitset_wait(waitset, nullptr, 0, timeout.count());
+  if (condition >= 0) dds_delete(condition);
+  dds_delete(waitset);
+  return check(rc, "wait for data: dds_waitset_wait") > 0;
+}
+
+}  // namespace detail
+
+WaitSet::WaitSet(const Participant& participant)
+    : waitset_(check(dds_create_waitset(participant.handle()), "create waitset: dds_create_waitset")) {}
+
+WaitSet::~WaitSet() {
+  for (const auto condition : conditions_) dds_delete(condition);
+  dds_delete(waitset_);
+}
+
+void WaitSet::attach_reader(dds_entity_t reader) {
+  const dds_entity_t condition =
+      check(dds_create_readcondition(reader, DDS_ANY_STATE), "attach reader to waitset: dds_create_readcondition");
+  conditions_.push_back(condition);
+  check(dds_waitset_attach(waitset_, condition, condition), "attach reader to waitset: dds_waitset_attach");
+}
+
+bool WaitSet::wait(std::chrono::nanoseconds timeout) {
+  return check(dds_waitset_wait(waitset_, nullptr, 0, timeout.count()), "wait: dds_waitset_wait") > 0;
+}
+
+}  // namespace tachi::bus

@@ -1,0 +1,49 @@
+#!/usr/bin/env bash
+# Installs every Debian bookworm package tachi needs to build, test and run.
+# Idempotent: when everything is present it prints nothing and exits 0.
+# Fails loudly (non-zero, naming the package) when a package cannot be installed.
+set -euo pipefail
+
+packages=(
+  # toolchain
+  build-essential cmake pkg-config git
+  # DDS
+  cyclonedds-dev cyclonedds-tools
+  # Kinect v1 (live driver + fakenect playback library)
+  libfreenect-dev libfreenect-bin
+  # maths, vision (libopencv-dev carries the CMake package config the module -dev packages lack)
+  libeigen3-dev libopencv-dev
+  # conventions shared by every executable
+  libcli11-dev libspdlog-dev nlohmann-json3-dev
+  # voice commands
+  libpocketsphinx-dev libsphinxbase-dev pocketsphinx-en-us pocketsphinx-testdata flite sox
+  # tests and benchmarks (Bullet is the simulator baseline)
+  libgtest-dev libgmock-dev libbenchmark-dev libbullet-dev
+  # multi-host tests in network namespaces
+  iproute2
+  # viewer under a virtual display
+  xvfb
+)
+
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+[ ${#missing[@]} -eq 0 ] && exit 0
+
+if [ "$(id -u)" -ne 0 ]; then
+  echo "setup.sh: missing packages: ${missing[*]}; run this script as root" >&2
+  exit 1
+fi
+echo "setup.sh: installing ${missing[*]}" >&2
+export DEBIAN_FRONTEND=noninteractive
+apt-get update -qq >/dev/null || { echo "setup.sh: apt-get update failed" >&2; exit 1; }
+if ! apt-get install -y -qq --no-install-recommends "${missing[@]}" >/tmp/tachi-setup.log 2>&1; then
+  tail -n 20 /tmp/tachi-setup.log >&2
+  echo "setup.sh: apt-get install failed for: ${missing[*]}" >&2
+  exit 1
+fi
+for p in "${missing[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" \
+    || { echo "setup.sh: package $p is still not installed" >&2; exit 1; }
+done

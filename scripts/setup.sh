@@ -19,8 +19,8 @@ packages=(
   libpocketsphinx-dev libsphinxbase-dev pocketsphinx-en-us pocketsphinx-testdata flite sox
   # tests and benchmarks (Bullet is the simulator baseline)
   libgtest-dev libgmock-dev libbenchmark-dev libbullet-dev
-  # multi-host tests in network namespaces
-  iproute2
+  # multi-host tests in network namespaces; the capture that proves DDS stays on loopback
+  iproute2 tcpdump
   # viewer under a virtual display
   xvfb
 )

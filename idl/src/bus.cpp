@@ -27,17 +27,19 @@ std::string read_config_file(const std::string& path) {
   return text.str();
 }
 
+// A participant created in a domain that was not explicitly created gets Cyclone's default
+// config, which multicasts on every interface. So the domain entry is recorded only after
+// dds_create_domain succeeded, and any failure leaves no entry behind.
 void acquire_domain(std::uint32_t id, const std::string& config_file) {
   std::lock_guard lock(g_domains_mutex);
-  auto& entry = g_domains[id];
-  if (entry.users++ > 0) return;
-  const std::string xml = config_file.empty() ? std::string(kLoopbackConfigXml) : read_config_file(config_file);
-  const dds_entity_t domain = dds_create_domain(id, xml.c_str());
-  if (domain < 0) {
-    g_domains.erase(id);
-    check(domain, "create DDS domain " + std::to_string(id) + ": dds_create_domain");
+  if (const auto it = g_domains.find(id); it != g_domains.end()) {
+    ++it->second.users;
+    return;
   }
-  entry.domain = domain;
+  const std::string xml = config_file.empty() ? std::string(kLoopbackConfigXml) : read_config_file(config_file);
+  const dds_entity_t domain =
+      check(dds_create_domain(id, xml.c_str()), "create DDS domain " + std::to_string(id) + ": dds_create_domain");
+  g_domains.emplace(id, DomainEntry{domain, 1});
 }
 
 void release_domain(std::uint32_t id) noexcept {
@@ -161,6 +163,13 @@ bool wait_for_data(dds_entity_t reader, std::chrono::nanoseconds timeout) {
   if (condition >= 0) dds_delete(condition);
   dds_delete(waitset);
   return check(rc, "wait for data: dds_waitset_wait") > 0;
+}
+
+bool wait_for_acks(dds_entity_t writer, std::chrono::nanoseconds timeout) {
+  const dds_return_t rc = dds_wait_for_acks(writer, timeout.count());
+  if (rc == DDS_RETCODE_TIMEOUT) return false;
+  check(rc, "wait for acknowledgements: dds_wait_for_acks");
+  return true;
 }
 
 }  // namespace detail

@@ -1,16 +1,154 @@
+// The typed bus in one process: keyed samples, large zero-copy samples, transient-local
+// late joiners, waitset timeouts, shared domains, and errors that name the failing call.
 #include "tachi/bus/topics.hpp"
+
 #include <gtest/gtest.h>
-using namespace tachi;
-TEST(Bus, Smoke) {
-  bus::Participant p{11};
-  bus::Writer<tachi_msg_RawHandSample> w{p, bus::topics::raw_hand};
-  bus::Reader<tachi_msg_RawHandSample> r{p, bus::topics::raw_hand};
-  ASSERT_TRUE(w.wait_for_readers(1, std::chrono::seconds(5)));
-  tachi_msg_RawHandSample s{};
-  s.sensor_id = 3; s.frame = 42;
-  w.write(s);
-  ASSERT_TRUE(r.wait_for_data(std::chrono::seconds(2)));
-  auto got = r.take();
+
+#include <filesystem>
+#include <fstream>
+#include <map>
+
+using namespace std::chrono_literals;
+namespace bus = tachi::bus;
+
+namespace {
+// Domain ids 10-19 belong to this file (docs/testing.md).
+constexpr std::uint32_t kKeyedDomain = 10;
+constexpr std::uint32_t kLargeDomain = 11;
+constexpr std::uint32_t kLateJoinerDomain = 12;
+constexpr std::uint32_t kErrorDomain = 13;
+constexpr std::uint32_t kWaitSetDomain = 14;
+constexpr std::uint32_t kSharedDomain = 15;
+}  // namespace
+
+TEST(Bus, KeyedSamplesArriveInOrderPerKey) {
+  bus::Participant dds{kKeyedDomain};
+  bus::Writer<tachi_msg_StrokeSample> writer{dds, bus::topics::stroke};
+  bus::Reader<tachi_msg_StrokeSample> reader{dds, bus::topics::stroke};
+  ASSERT_TRUE(writer.wait_for_readers(1, 5s));
+  for (std::uint64_t frame = 0; frame < 50; ++frame)
+    for (std::uint32_t key = 1; key <= 3; ++key) {
+      tachi_msg_StrokeSample s{};
+      s.sensor_id = key;
+      s.frame = frame;
+      writer.write(s);
+    }
+  std::map<std::uint32_t, std::vector<std::uint64_t>> frames;
+  std::size_t total = 0;
+  for (int tries = 0; tries < 100 && total < 150; ++tries) {
+    reader.wait_for_data(50ms);
+    for (const auto& s : reader.take()) {
+      frames[s->sensor_id].push_back(s->frame);
+      ++total;
+    }
+  }
+  ASSERT_EQ(total, 150u);
+  ASSERT_EQ(frames.size(), 3u);
+  for (const auto& [key, list] : frames) {
+    ASSERT_EQ(list.size(), 50u) << "key " << key;
+    for (std::size_t i = 0; i < list.size(); ++i) EXPECT_EQ(list[i], i) << "key " << key;
+  }
+}
+
+TEST(Bus, LargeSampleWrittenWithoutCopyArrivesIntact) {
+  bus::Participant dds{kLargeDomain};
+  bus::Writer<tachi_msg_ClothState> writer{dds, bus::topics::cloth_state};
+  bus::Reader<tachi_msg_ClothState> reader{dds, bus::topics::cloth_state};
+  ASSERT_TRUE(writer.wait_for_readers(1, 5s));
+  std::vector<float> positions(50'000);  // 200 KB
+  for (std::size_t i = 0; i < positions.size(); ++i) positions[i] = static_cast<float>(i) * 0.5f;
+  tachi_msg_ClothState state{};
+  state.cloth_id = 1;
+  state.frame = 9;
+  state.positions._buffer = positions.data();
+  state.positions._length = state.positions._maximum = static_cast<std::uint32_t>(positions.size());
+  state.positions._release = false;
+  writer.write(state);
+  ASSERT_TRUE(reader.wait_for_data(5s));
+  const auto got = reader.take();
   ASSERT_EQ(got.size(), 1u);
-  EXPECT_EQ(got[0]->frame, 42u);
+  ASSERT_EQ(got[0]->positions._length, positions.size());
+  EXPECT_EQ(got[0]->frame, 9u);
+  EXPECT_EQ(got[0]->positions._buffer[0], 0.0f);
+  EXPECT_EQ(got[0]->positions._buffer[49'999], 49'999 * 0.5f);
+  EXPECT_NE(got[0]->positions._buffer, positions.data()) << "the received sample owns its own buffer";
+}
+
+TEST(Bus, LateReaderReceivesOnlyTheLastTopologyPerCloth) {
+  bus::Participant dds{kLateJoinerDomain};
+  bus::Writer<tachi_msg_ClothTopology> writer{dds, bus::topics::cloth_topology};
+  for (std::uint32_t cloth : {1u, 2u})
+    for (std::uint32_t version = 1; version <= 4; ++version) {
+      tachi_msg_ClothTopology t{};
+      t.cloth_id = cloth;
+      t.version = version * cloth;
+      writer.write(t);
+    }
+  bus::Participant late{kLateJoinerDomain};
+  bus::Reader<tachi_msg_ClothTopology> reader{late, bus::topics::cloth_topology};
+  std::map<std::uint32_t, std::vector<std::uint32_t>> versions;
+  for (int tries = 0; tries < 40 && versions.size() < 2; ++tries) {
+    reader.wait_for_data(50ms);
+    for (const auto& t : reader.take()) versions[t->cloth_id].push_back(t->version);
+  }
+  EXPECT_EQ(versions[1], std::vector<std::uint32_t>{4});
+  EXPECT_EQ(versions[2], std::vector<std::uint32_t>{8});
+}
+
+TEST(Bus, WaitSetTimesOutWithoutDataAndWakesWithIt) {
+  bus::Participant dds{kWaitSetDomain};
+  bus::Reader<tachi_msg_VoiceCommand> voice{dds, bus::topics::voice_command};
+  bus::Reader<tachi_msg_RawHandSample> hands{dds, bus::topics::raw_hand};
+  bus::WaitSet waitset{dds};
+  waitset.attach(voice);
+  waitset.attach(hands);
+  EXPECT_FALSE(waitset.wait(30ms));
+  bus::Writer<tachi_msg_VoiceCommand> writer{dds, bus::topics::voice_command};
+  ASSERT_TRUE(writer.wait_for_readers(1, 5s));
+  tachi_msg_VoiceCommand command{};
+  command.command = tachi_msg_VOICE_STOP;
+  std::snprintf(command.phrase, sizeof command.phrase, "%s", "stop cutting");
+  writer.write(command);
+  EXPECT_TRUE(waitset.wait(5s));
+  const auto got = voice.take();
+  ASSERT_EQ(got.size(), 1u);
+  EXPECT_STREQ(got[0]->phrase, "stop cutting");
+  EXPECT_TRUE(hands.take().empty());
+}
+
+TEST(Bus, ParticipantsShareADomainAndOutliveEachOther) {
+  auto first = std::make_unique<bus::Participant>(kSharedDomain);
+  bus::Participant second{kSharedDomain};
+  first.reset();  // must not tear down the domain the second participant uses
+  bus::Writer<tachi_msg_NodeStatus> writer{second, bus::topics::node_status};
+  bus::Reader<tachi_msg_NodeStatus> reader{second, bus::topics::node_status};
+  ASSERT_TRUE(writer.wait_for_readers(1, 5s));
+  tachi_msg_NodeStatus status{};
+  std::snprintf(status.node, sizeof status.node, "%s", "tachi-test");
+  writer.write(status);
+  ASSERT_TRUE(reader.wait_for_data(5s));
+  EXPECT_EQ(reader.take().size(), 1u);
+}
+
+TEST(Bus, BadConfigFailsWithTheCallNamed) {
+  const auto path = std::filesystem::temp_directory_path() / "tachi_bad_cyclone_config.xml";
+  std::ofstream(path) << "<CycloneDDS><Domain><NoSuchElement>1</NoSuchElement></Domain></CycloneDDS>";
+  try {
+    bus::Participant dds{kErrorDomain, path.string()};
+    FAIL() << "a config Cyclone rejects must throw";
+  } catch (const bus::DdsError& e) {
+    EXPECT_NE(std::string(e.what()).find("dds_create_domain"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("domain 13"), std::string::npos) << e.what();
+  }
+  std::filesystem::remove(path);
+  EXPECT_THROW(bus::Participant(kErrorDomain, "/nonexistent/tachi.xml"), std::runtime_error);
+  // The failed attempts leave nothing behind: the domain can still be created normally.
+  EXPECT_NO_THROW(bus::Participant{kErrorDomain});
+}
+
+TEST(Bus, EmbeddedConfigKeepsTrafficOnLoopback) {
+  const std::string xml = bus::kLoopbackConfigXml;
+  EXPECT_NE(xml.find(R"(<NetworkInterface name="lo" multicast="false"/>)"), std::string::npos);
+  EXPECT_NE(xml.find("<AllowMulticast>false</AllowMulticast>"), std::string::npos);
+  EXPECT_NE(xml.find(R"(<Peer address="127.0.0.1"/>)"), std::string::npos);
 }

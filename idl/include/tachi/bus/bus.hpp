@@ -81,6 +81,7 @@ std::uint32_t matched_writers(dds_entity_t reader);
 /// Polls `count()` until it reaches `n` or the timeout passes.
 bool wait_until_count(const std::function<std::uint32_t()>& count, std::uint32_t n, std::chrono::nanoseconds timeout);
 bool wait_for_data(dds_entity_t reader, std::chrono::nanoseconds timeout);
+bool wait_for_acks(dds_entity_t writer, std::chrono::nanoseconds timeout);
 }  // namespace detail
 
 /// A received sample that owns its sequences and strings (freed with the descriptor on destruction).
@@ -128,6 +129,9 @@ class Writer {
 
   void write(const T& sample) { check(dds_write(writer_, &sample), "write on topic " + name_ + ": dds_write"); }
   std::uint32_t matched_readers() const { return detail::matched_readers(writer_); }
+  /// Blocks until every matched reliable reader acknowledged all written samples; false on timeout.
+  /// Call before a process exits so its last samples are not lost with it.
+  bool wait_for_acks(std::chrono::nanoseconds timeout) const { return detail::wait_for_acks(writer_, timeout); }
   /// True once at least `n` readers have matched, false after `timeout`.
   bool wait_for_readers(std::uint32_t n, std::chrono::nanoseconds timeout) const {
     return detail::wait_until_count([this] { return matched_readers(); }, n, timeout);

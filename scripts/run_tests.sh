@@ -1,0 +1,9 @@
+#!/usr/bin/env bash
+# Sets up a fresh Debian bookworm machine (as root), builds tachi and runs the whole test suite.
+# Exit status: 0 when every test passed.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+bash scripts/setup.sh
+cmake -S . -B build -DCMAKE_BUILD_TYPE=Release >/dev/null
+cmake --build build -j"$(nproc)"
+ctest --test-dir build -j"$(nproc)" --output-on-failure --timeout 600

@@ -1,5 +1,6 @@
 // The typed bus in one process: keyed samples, large zero-copy samples, transient-local
 // late joiners, waitset timeouts, shared domains, and errors that name the failing call.
+#include "tachi/bus/heartbeat.hpp"
 #include "tachi/bus/topics.hpp"
 
 #include <gtest/gtest.h>
@@ -151,4 +152,31 @@ TEST(Bus, EmbeddedConfigKeepsTrafficOnLoopback) {
   EXPECT_NE(xml.find(R"(<NetworkInterface name="lo" multicast="false"/>)"), std::string::npos);
   EXPECT_NE(xml.find("<AllowMulticast>false</AllowMulticast>"), std::string::npos);
   EXPECT_NE(xml.find(R"(<Peer address="127.0.0.1"/>)"), std::string::npos);
+}
+
+TEST(Heartbeat, AnnouncesStartStateChangesAndStop) {
+  constexpr std::uint32_t kHeartbeatDomain = 16;
+  bus::Participant dds{kHeartbeatDomain};
+  bus::Reader<tachi_msg_NodeStatus> reader{dds, bus::topics::node_status};
+  std::vector<tachi_msg_NodeState> states;
+  const auto collect = [&] {
+    // Status keeps the last sample per node, so read after each update.
+    for (int i = 0; i < 10; ++i) {
+      reader.wait_for_data(20ms);
+      for (const auto& s : reader.take()) {
+        EXPECT_STREQ(s->node, "tachi-test");
+        states.push_back(s->state);
+      }
+    }
+  };
+  {
+    bus::Heartbeat heartbeat{dds, "tachi-test", std::chrono::hours(1)};
+    collect();
+    heartbeat.update(tachi_msg_NODE_STARTING, 0, 0);  // no change, period not over: not published
+    collect();
+    heartbeat.update(tachi_msg_NODE_RUNNING, 5, 7, "ok");
+    collect();
+  }
+  collect();
+  EXPECT_EQ(states, (std::vector<tachi_msg_NodeState>{tachi_msg_NODE_STARTING, tachi_msg_NODE_RUNNING, tachi_msg_NODE_STOPPING}));
 }

@@ -1,0 +1,31 @@
+// A process's heartbeat on tachi/node/status: its state and message counters once a period and
+// whenever its state changes, and NODE_STOPPING when it goes away cleanly. Readers see a process
+// that died without saying so through the Status profile's 3 s liveliness lease.
+#pragma once
+
+#include "tachi/bus/topics.hpp"
+
+#include <string>
+
+namespace tachi::bus {
+
+class Heartbeat {
+ public:
+  Heartbeat(const Participant& participant, std::string node, std::chrono::milliseconds period = std::chrono::seconds(1));
+  ~Heartbeat();  // publishes NODE_STOPPING
+  Heartbeat(const Heartbeat&) = delete;
+  Heartbeat& operator=(const Heartbeat&) = delete;
+
+  /// Publishes when the period has passed or the state changed; cheap to call every loop iteration.
+  void update(tachi_msg_NodeState state, std::uint64_t messages_in, std::uint64_t messages_out,
+              const std::string& detail = {});
+
+ private:
+  void publish();
+  Writer<tachi_msg_NodeStatus> writer_;
+  tachi_msg_NodeStatus status_{};
+  std::chrono::milliseconds period_;
+  std::chrono::steady_clock::time_point last_{};
+};
+
+}  // namespace tachi::bus

@@ -120,9 +120,10 @@ std::size_t Cloth::duplicate_particle(std::size_t i) {
   pinned.push_back(is_pinned);
   mass[i] = half;
   mass.push_back(half);
-  const float inv = (is_pinned != 0 || inverse_mass[i] == 0.0F) ? 0.0F : 1.0F / half;
-  inverse_mass[i] = inv;
-  inverse_mass.push_back(inv);
+  // Particle i may be held by the hand (inverse mass 0 without being pinned): it stays held, the copy
+  // is free unless pinned.
+  inverse_mass[i] = (is_pinned != 0 || inverse_mass[i] == 0.0F) ? 0.0F : 1.0F / half;
+  inverse_mass.push_back(is_pinned != 0 ? 0.0F : 1.0F / half);
   spring_incidence_.emplace_back();
   triangle_incidence_.emplace_back();
   ++topology_version;

@@ -1,0 +1,68 @@
+// The offline driver of tachi-sim (no DDS): build a cloth, step it, export the final mesh (OBJ) and a
+// summary (JSON). Options, flag registration, the run and the JSON live here, in the library, so that
+// features (cutting: --stroke, --blade) extend OfflineOptions / run_offline / to_json, not main.
+#pragma once
+
+#include "tachi/sim/cloth.hpp"
+#include "tachi/sim/collision.hpp"
+#include "tachi/sim/solver.hpp"
+
+#include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
+
+#include <cstdint>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace tachi::sim {
+
+struct OfflineOptions {
+  ClothConfig cloth;                    ///< --grid, --size-m, --pin
+  SolverParams solver;                  ///< --substeps, --iterations
+  int steps = 600;                      ///< --steps
+  std::filesystem::path export_dir;     ///< --export; empty = summary on stdout only
+  std::uint32_t seed = 1;               ///< --seed: out-of-plane jitter that breaks the grid's symmetry
+  float jitter_m = 1e-4F;               ///< amplitude of that jitter (0 = perfectly flat start)
+  std::vector<Sphere> spheres;          ///< --sphere X Y Z R (repeatable)
+  std::optional<GroundPlane> ground;    ///< --ground Y
+};
+
+/// What a run produced. Keys of to_json(): the contract plus extras.
+struct Summary {
+  std::size_t particles = 0;
+  std::size_t springs = 0;    ///< live springs
+  std::size_t triangles = 0;  ///< live triangles
+  std::size_t pieces = 0;     ///< connected components over live springs
+  float max_strain = 0.0F;    ///< max over live structural springs of length / rest - 1
+  int steps = 0;
+  double step_ms_median = 0.0;
+  double step_ms_p95 = 0.0;
+  int columns = 0;
+  int rows = 0;
+  nlohmann::json extra = nlohmann::json::object();  ///< further keys merged into to_json()'s output
+};
+
+/// Registers the offline flags on `app`, writing into `options`. Values are checked at parse time
+/// (a bad one names its flag and the allowed range).
+void add_offline_flags(CLI::App& app, OfflineOptions& options);
+
+/// Parses "N" or "NxM" (columns x rows, each 2..4096). Nothing for anything else.
+[[nodiscard]] std::optional<std::pair<int, int>> parse_grid(const std::string& text);
+
+/// Summary as JSON: particles, springs, triangles, pieces, max_strain, steps, step_ms_median, ... + extra.
+[[nodiscard]] nlohmann::json to_json(const Summary& summary);
+
+/// Writes the live triangles of the cloth as Wavefront OBJ (v, vt from the grid coordinate, f).
+/// Throws std::runtime_error naming the file when it cannot be written.
+void write_obj(const Cloth& cloth, const std::filesystem::path& file);
+
+/// Summary of the cloth as it is now (no timing).
+[[nodiscard]] Summary summarize(const Cloth& cloth);
+
+/// Runs the offline simulation and, when export_dir is set, writes export_dir/cloth.obj and
+/// export_dir/summary.json. Throws std::runtime_error on an I/O failure; options must be valid.
+Summary run_offline(const OfflineOptions& options);
+
+}  // namespace tachi::sim

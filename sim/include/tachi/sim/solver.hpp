@@ -1,0 +1,90 @@
+// Time step of the cloth: position-based dynamics with Provot's deformation constraint.
+//   1. predict  x* = x + dt v + dt^2 (g + a_repulsion), v damped                (Mueller et al. 2007, eq. 1-3)
+//   2. long-range attachments: |x - x_pin| <= geodesic rest distance            (Kim, Chentanez, Mueller 2012)
+//   3. Gauss-Seidel projection of structural springs, C = |xa - xb| - L          (Mueller et al. 2007, sec. 3.3)
+//   4. shear and bend springs as soft constraints, compliance alpha / dt^2       (XPBD, Macklin et al. 2016, eq. 18)
+//   5. Provot's deformation constraint: no structural spring longer than (1 + max_strain) L (Provot 1995, sec. 4)
+//   6. collisions by projection; v = (x - x_old) / dt
+// Single-threaded with a fixed iteration order, so the same inputs give bit-identical results.
+// Why this and not semi-implicit + Provot or an implicit solver: docs/sim.md (with the figures).
+#pragma once
+
+#include "tachi/sim/cloth.hpp"
+#include "tachi/sim/collision.hpp"
+
+#include <Eigen/Core>
+
+#include <cstdint>
+#include <optional>
+#include <vector>
+
+namespace tachi::sim {
+
+struct SolverParams {
+  float dt = 1.0F / 60.0F;     ///< seconds per step
+  int substeps = 2;            ///< sub-steps per step (each one runs the whole pipeline with dt / substeps)
+  int iterations = 1;          ///< structural Gauss-Seidel passes per sub-step
+  Eigen::Vector3f gravity{0.0F, -9.81F, 0.0F};
+  float damping = 0.5F;            ///< velocity damping, 1/s (air drag)
+  float shear_compliance = 0.2F;   ///< XPBD compliance, m/N (inverse spring stiffness)
+  float bend_compliance = 2.0F;    ///< XPBD compliance, m/N
+  float max_strain = 0.10F;        ///< Provot's critical deformation rate (10%)
+  bool long_range_attachments = true;
+  bool soft_every_substep = true;   ///< project shear/bend in every sub-step, not only the first
+};
+
+/// Returns a message naming the bad field, or nothing.
+[[nodiscard]] std::optional<const char*> validate(const SolverParams& params);
+
+/// Steps a Cloth. Keeps caches derived from the cloth's topology (spring order, attachments),
+/// rebuilt when topology_version, the array sizes or the pinned set change, so a cut between steps
+/// (appended particles, rewired or dead springs) is picked up automatically.
+class Solver {
+ public:
+  explicit Solver(SolverParams params = {});
+
+  /// Advances the cloth by params().dt.
+  void step(Cloth& cloth, const Colliders& colliders = {});
+
+  [[nodiscard]] const SolverParams& params() const { return params_; }
+  /// Number of long-range attachments in use (0 when disabled or nothing is pinned).
+  [[nodiscard]] std::size_t attachment_count() const { return attach_particle_.size(); }
+
+ /// A live spring copied out of the Cloth arrays, in the solver's sweep order.
+  struct PackedSpring {
+    std::uint32_t a;
+    std::uint32_t b;
+    float rest;
+  };
+
+ private:
+
+  void refresh_caches(const Cloth& cloth);
+  void build_attachments(const Cloth& cloth);
+  void substep(Cloth& cloth, const Colliders& colliders, float h, bool first);
+
+  SolverParams params_;
+  // Cache key.
+  std::uint32_t cached_version_ = 0;
+  std::size_t cached_springs_ = 0;
+  std::size_t cached_particles_ = 0;
+  std::vector<std::uint32_t> cached_pins_;
+  bool cache_valid_ = false;
+  // Springs of each family, alive only, in an order where consecutive springs rarely share a particle.
+  std::vector<PackedSpring> structural_;
+  std::vector<PackedSpring> shear_;
+  std::vector<PackedSpring> bend_;
+  // Long-range attachments: particle, pin, maximal distance.
+  std::vector<std::uint32_t> attach_particle_;
+  std::vector<std::uint32_t> attach_pin_;
+  std::vector<float> attach_length_;
+  // Positions with the inverse mass in w, during a step.
+  std::vector<Eigen::Vector4f> work_;
+  std::vector<Eigen::Vector4f> old_work_;
+};
+
+/// Total mechanical energy (kinetic + gravitational potential relative to y = 0 + spring potential of
+/// stretched structural springs with stiffness k_structural), for tests that check energy does not grow.
+[[nodiscard]] double mechanical_energy(const Cloth& cloth, const Eigen::Vector3f& gravity, double k_structural);
+
+}  // namespace tachi::sim

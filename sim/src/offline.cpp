@@ -1,0 +1,204 @@
+#include "tachi/sim/offline.hpp"
+
+#include "tachi/sim/pieces.hpp"
+
+#include <algorithm>
+#include <charconv>
+#include <chrono>
+#include <cmath>
+#include <fstream>
+#include <map>
+#include <stdexcept>
+
+namespace tachi::sim {
+
+namespace {
+
+constexpr int kMaxGrid = 4096;
+
+std::optional<int> parse_int(std::string_view s) {
+  int value = 0;
+  const auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), value);
+  if (ec != std::errc{} || end != s.data() + s.size()) return std::nullopt;
+  return value;
+}
+
+/// SplitMix64 (Steele, Lea, Flood 2014): the same jitter on every standard library, unlike <random>'s
+/// distributions, so an offline run is reproducible across compilers.
+std::uint64_t splitmix64(std::uint64_t& state) {
+  std::uint64_t z = (state += 0x9E3779B97F4A7C15ULL);
+  z = (z ^ (z >> 30U)) * 0xBF58476D1CE4E5B9ULL;
+  z = (z ^ (z >> 27U)) * 0x94D049BB133111EBULL;
+  return z ^ (z >> 31U);
+}
+
+double percentile(std::vector<double> values, double q) {
+  if (values.empty()) return 0.0;
+  const auto k = static_cast<std::size_t>(q * static_cast<double>(values.size() - 1) + 0.5);
+  std::nth_element(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(k), values.end());
+  return values[k];
+}
+
+}  // namespace
+
+std::optional<std::pair<int, int>> parse_grid(const std::string& text) {
+  const auto x = text.find_first_of("xX");
+  const auto columns = parse_int(std::string_view{text}.substr(0, x));
+  const auto rows = x == std::string::npos ? columns : parse_int(std::string_view{text}.substr(x + 1));
+  if (!columns || !rows) return std::nullopt;
+  if (*columns < 2 || *rows < 2 || *columns > kMaxGrid || *rows > kMaxGrid) return std::nullopt;
+  return std::pair{*columns, *rows};
+}
+
+void add_offline_flags(CLI::App& app, OfflineOptions& o) {
+  app.add_option_function<std::string>(
+         "--grid",
+         [&o](const std::string& text) {
+           const auto grid = parse_grid(text);
+           if (!grid) {
+             throw CLI::ValidationError("--grid", "'" + text + "' is not N or NxM with N, M in 2..4096");
+           }
+           o.cloth.columns = grid->first;
+           o.cloth.rows = grid->second;
+         },
+         "Particles per side: N (square) or NxM (columns x rows), 2..4096")
+      ->default_str("64");
+  app.add_option_function<float>(
+         "--size-m",
+         [&o](float size) {
+           o.cloth.width_m = size;
+           o.cloth.height_m = size;
+         },
+         "Side of the square cloth in metres")
+      ->check(CLI::Range(0.01F, 100.0F))
+      ->default_str("1");
+  app.add_option_function<std::string>(
+         "--pin",
+         [&o](const std::string& text) {
+           static const std::map<std::string, PinMode> pins{
+               {"corners", PinMode::Corners}, {"top-edge", PinMode::TopEdge}, {"none", PinMode::None}};
+           const auto it = pins.find(text);
+           if (it == pins.end()) throw CLI::ValidationError("--pin", "'" + text + "' is not corners, top-edge or none");
+           o.cloth.pin = it->second;
+         },
+         "Fixed particles: corners (the two top ones), top-edge or none")
+      ->default_str("corners");
+  app.add_option("--steps", o.steps, "Number of 1/60 s steps to simulate")
+      ->check(CLI::Range(0, 10'000'000))
+      ->capture_default_str();
+  app.add_option("--export", o.export_dir, "Folder for cloth.obj and summary.json (created if missing)");
+  app.add_option("--seed", o.seed, "Seed of the tiny out-of-plane jitter that breaks the grid's symmetry")
+      ->capture_default_str();
+  app.add_option("--substeps", o.solver.substeps, "Solver sub-steps per 1/60 s step")
+      ->check(CLI::Range(1, 64))
+      ->capture_default_str();
+  app.add_option("--iterations", o.solver.iterations, "Structural Gauss-Seidel passes per sub-step")
+      ->check(CLI::Range(1, 200))
+      ->capture_default_str();
+  app.add_option_function<std::vector<float>>(
+         "--sphere",
+         [&o](const std::vector<float>& v) {
+           if (v.size() % 4 != 0) throw CLI::ValidationError("--sphere", "needs 4 numbers: X Y Z R");
+           for (std::size_t i = 0; i + 3 < v.size(); i += 4) {
+             if (!(v[i + 3] > 0.0F) || !std::isfinite(v[i]) || !std::isfinite(v[i + 1]) || !std::isfinite(v[i + 2])) {
+               throw CLI::ValidationError("--sphere", "needs X Y Z R with finite centre and R > 0");
+             }
+             o.spheres.push_back({Eigen::Vector3f{v[i], v[i + 1], v[i + 2]}, v[i + 3]});
+           }
+         },
+         "Sphere collider X Y Z R in metres (repeatable)")
+      ->expected(4)
+      ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
+  app.add_option_function<float>(
+         "--ground", [&o](float y) { o.ground = GroundPlane{y}; }, "Ground plane at height Y (metres)")
+      ->check(CLI::Range(-1000.0F, 1000.0F));
+}
+
+nlohmann::json to_json(const Summary& s) {
+  nlohmann::json j{
+      {"particles", s.particles},   {"springs", s.springs},       {"triangles", s.triangles},
+      {"pieces", s.pieces},         {"max_strain", s.max_strain}, {"steps", s.steps},
+      {"step_ms_median", s.step_ms_median}, {"step_ms_p95", s.step_ms_p95},
+      {"columns", s.columns},       {"rows", s.rows},
+  };
+  for (const auto& [key, value] : s.extra.items()) j[key] = value;
+  return j;
+}
+
+void write_obj(const Cloth& cloth, const std::filesystem::path& file) {
+  std::ofstream out{file};
+  if (!out) throw std::runtime_error("cannot write " + file.string());
+  out << "# tachi cloth: " << cloth.particle_count() << " particles, " << cloth.alive_triangle_count()
+      << " triangles\n";
+  char line[96];
+  for (const Eigen::Vector3f& p : cloth.position) {
+    std::snprintf(line, sizeof line, "v %.6f %.6f %.6f\n", static_cast<double>(p.x()), static_cast<double>(p.y()),
+                  static_cast<double>(p.z()));
+    out << line;
+  }
+  const double du = cloth.columns > 1 ? 1.0 / (cloth.columns - 1) : 0.0;
+  const double dv = cloth.rows > 1 ? 1.0 / (cloth.rows - 1) : 0.0;
+  for (const GridCoord& g : cloth.grid) {
+    std::snprintf(line, sizeof line, "vt %.6f %.6f\n", g.u * du, 1.0 - g.v * dv);
+    out << line;
+  }
+  for (std::size_t t = 0; t < cloth.triangle_count(); ++t) {
+    if (cloth.triangle_alive[t] == 0) continue;
+    const auto& tri = cloth.triangles[t];
+    out << "f " << tri[0] + 1 << '/' << tri[0] + 1 << ' ' << tri[1] + 1 << '/' << tri[1] + 1 << ' ' << tri[2] + 1
+        << '/' << tri[2] + 1 << '\n';
+  }
+  if (!out) throw std::runtime_error("error while writing " + file.string());
+}
+
+Summary summarize(const Cloth& cloth) {
+  Summary s;
+  s.particles = cloth.particle_count();
+  s.springs = cloth.alive_spring_count();
+  s.triangles = cloth.alive_triangle_count();
+  s.pieces = find_pieces(cloth).count();
+  s.max_strain = cloth.max_structural_strain();
+  s.columns = cloth.columns;
+  s.rows = cloth.rows;
+  return s;
+}
+
+Summary run_offline(const OfflineOptions& options) {
+  Cloth cloth{options.cloth};
+  std::uint64_t state = options.seed;
+  for (std::size_t i = 0; i < cloth.particle_count(); ++i) {
+    if (cloth.pinned[i] != 0) continue;
+    const double unit = static_cast<double>(splitmix64(state) >> 11U) * 0x1.0p-53;  // [0, 1)
+    cloth.position[i].z() += options.jitter_m * static_cast<float>(2.0 * unit - 1.0);
+  }
+  Solver solver{options.solver};
+  Colliders colliders;
+  colliders.spheres = options.spheres;
+  colliders.ground = options.ground;
+
+  std::vector<double> step_ms;
+  step_ms.reserve(static_cast<std::size_t>(options.steps));
+  for (int s = 0; s < options.steps; ++s) {
+    const auto t0 = std::chrono::steady_clock::now();
+    solver.step(cloth, colliders);
+    step_ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+  }
+
+  Summary summary = summarize(cloth);
+  summary.steps = options.steps;
+  summary.step_ms_median = percentile(step_ms, 0.5);
+  summary.step_ms_p95 = percentile(step_ms, 0.95);
+  if (!options.export_dir.empty()) {
+    std::error_code ec;
+    std::filesystem::create_directories(options.export_dir, ec);
+    if (ec) throw std::runtime_error("cannot create " + options.export_dir.string() + ": " + ec.message());
+    write_obj(cloth, options.export_dir / "cloth.obj");
+    const auto json_path = options.export_dir / "summary.json";
+    std::ofstream out{json_path};
+    out << to_json(summary).dump(2) << '\n';
+    if (!out) throw std::runtime_error("cannot write " + json_path.string());
+  }
+  return summary;
+}
+
+}  // namespace tachi::sim

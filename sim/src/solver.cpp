@@ -1,0 +1,313 @@
+#include "tachi/sim/solver.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <functional>
+#include <limits>
+#include <queue>
+#include <utility>
+
+namespace tachi::sim {
+
+namespace {
+
+/// Colour of a spring such that two springs of one colour never share a grid particle: sweeping the
+/// springs colour by colour lets the CPU overlap consecutive projections (they are independent) while
+/// the sweep as a whole stays plain Gauss-Seidel in a fixed order.
+int spring_colour(SpringKind k, GridCoord a, GridCoord b) {
+  const int du = b.u - a.u;
+  const int dv = b.v - a.v;
+  const int umin = std::min(a.u, b.u);
+  const int vmin = std::min(a.v, b.v);
+  switch (k) {
+    case SpringKind::Structural:
+      return du != 0 ? umin % 2 : 2 + vmin % 2;
+    case SpringKind::Shear:
+      return (du * dv > 0 ? 0 : 2) + umin % 2;
+    case SpringKind::Bend:
+      return du != 0 ? umin % 4 : 4 + vmin % 4;
+  }
+  return 0;
+}
+
+}  // namespace
+
+std::optional<const char*> validate(const SolverParams& p) {
+  if (!(p.dt > 0.0F) || !(p.dt <= 1.0F)) return "dt must be in (0, 1] s";
+  if (p.substeps < 1 || p.substeps > 64) return "substeps must be in [1, 64]";
+  if (p.iterations < 1 || p.iterations > 200) return "iterations must be in [1, 200]";
+  if (!p.gravity.allFinite()) return "gravity must be finite";
+  if (!(p.damping >= 0.0F) || !std::isfinite(p.damping)) return "damping must be >= 0";
+  if (!(p.shear_compliance >= 0.0F) || !(p.bend_compliance >= 0.0F)) return "compliance must be >= 0";
+  if (!(p.max_strain > 0.0F) || !(p.max_strain < 10.0F)) return "max_strain must be in (0, 10)";
+  return std::nullopt;
+}
+
+Solver::Solver(SolverParams params) : params_(std::move(params)) {}
+
+void Solver::refresh_caches(const Cloth& cloth) {
+  std::vector<std::uint32_t> pins;
+  for (std::size_t i = 0; i < cloth.particle_count(); ++i) {
+    if (cloth.pinned[i] != 0) pins.push_back(static_cast<std::uint32_t>(i));
+  }
+  const bool topology_same = cache_valid_ && cached_version_ == cloth.topology_version &&
+                             cached_springs_ == cloth.spring_count() &&
+                             cached_particles_ == cloth.particle_count();
+  if (topology_same && pins == cached_pins_) return;
+
+  if (!topology_same) {
+    struct Keyed {
+      int colour;
+      std::uint32_t first;
+      std::uint32_t k;
+    };
+    std::vector<Keyed> keyed[3];
+    for (std::size_t k = 0; k < cloth.spring_count(); ++k) {
+      if (cloth.alive[k] == 0) continue;
+      const std::uint32_t a = cloth.spring_a[k], b = cloth.spring_b[k];
+      const auto family = static_cast<std::size_t>(cloth.kind[k]);
+      keyed[family].push_back({spring_colour(cloth.kind[k], cloth.grid[a], cloth.grid[b]), std::min(a, b),
+                               static_cast<std::uint32_t>(k)});
+    }
+    std::vector<PackedSpring>* out[3] = {&structural_, &shear_, &bend_};
+    for (std::size_t f = 0; f < 3; ++f) {
+      std::sort(keyed[f].begin(), keyed[f].end(), [](const Keyed& l, const Keyed& r) {
+        return std::tie(l.colour, l.first, l.k) < std::tie(r.colour, r.first, r.k);
+      });
+      out[f]->clear();
+      out[f]->reserve(keyed[f].size());
+      for (const Keyed& e : keyed[f]) {
+        out[f]->push_back({cloth.spring_a[e.k], cloth.spring_b[e.k], cloth.rest_length[e.k]});
+      }
+    }
+  }
+  cached_pins_ = std::move(pins);
+  build_attachments(cloth);
+  cached_version_ = cloth.topology_version;
+  cached_springs_ = cloth.spring_count();
+  cached_particles_ = cloth.particle_count();
+  cache_valid_ = true;
+}
+
+void Solver::build_attachments(const Cloth& cloth) {
+  attach_particle_.clear();
+  attach_pin_.clear();
+  attach_length_.clear();
+  if (!params_.long_range_attachments || cached_pins_.empty()) return;
+  const std::size_t n = cloth.particle_count();
+  // Adjacency over live structural and shear springs (rest geometry), CSR form.
+  std::vector<std::uint32_t> offsets(n + 1, 0);
+  for (const auto* family : {&structural_, &shear_}) {
+    for (const PackedSpring& s : *family) {
+      ++offsets[s.a + 1];
+      ++offsets[s.b + 1];
+    }
+  }
+  for (std::size_t i = 0; i < n; ++i) offsets[i + 1] += offsets[i];
+  std::vector<std::pair<std::uint32_t, float>> edges(offsets[n]);
+  std::vector<std::uint32_t> fill(offsets.begin(), offsets.end() - 1);
+  for (const auto* family : {&structural_, &shear_}) {
+    for (const PackedSpring& s : *family) {
+      edges[fill[s.a]++] = {s.b, s.rest};
+      edges[fill[s.b]++] = {s.a, s.rest};
+    }
+  }
+  // Geodesic rest distance from a set of sources (Dijkstra); `owner` says which pin is nearest.
+  using Item = std::pair<float, std::uint32_t>;
+  std::vector<float> dist(n);
+  std::vector<std::uint32_t> owner(n);
+  auto dijkstra = [&](const std::vector<std::uint32_t>& sources) {
+    std::fill(dist.begin(), dist.end(), std::numeric_limits<float>::infinity());
+    std::priority_queue<Item, std::vector<Item>, std::greater<>> queue;
+    for (const std::uint32_t s : sources) {
+      dist[s] = 0.0F;
+      owner[s] = s;
+      queue.emplace(0.0F, s);
+    }
+    while (!queue.empty()) {
+      const auto [d, i] = queue.top();
+      queue.pop();
+      if (d > dist[i]) continue;
+      for (std::uint32_t e = offsets[i]; e < offsets[i + 1]; ++e) {
+        const auto [j, len] = edges[e];
+        if (d + len < dist[j]) {
+          dist[j] = d + len;
+          owner[j] = owner[i];
+          queue.emplace(dist[j], j);
+        }
+      }
+    }
+  };
+  // Dijkstra over springs measures octile paths, up to 8 % longer than the straight line: that much
+  // slack lets the middle of a wide drape sag by centimetres. Where the path is no longer than the
+  // octile distance of the two grid coordinates (no cut in the way), the straight rest distance is the
+  // geodesic, so it is used instead; behind a cut the path length is kept.
+  auto octile = [&](GridCoord a, GridCoord b) {
+    const float dx = std::abs(static_cast<float>(a.u - b.u)) * cloth.spacing_x();
+    const float dy = std::abs(static_cast<float>(a.v - b.v)) * cloth.spacing_y();
+    const float diagonal = std::min(dx / cloth.spacing_x(), dy / cloth.spacing_y());
+    return dx + dy - diagonal * (cloth.spacing_x() + cloth.spacing_y()) +
+           diagonal * std::hypot(cloth.spacing_x(), cloth.spacing_y());
+  };
+  auto collect = [&] {
+    for (std::size_t i = 0; i < n; ++i) {
+      if (cloth.pinned[i] != 0 || !std::isfinite(dist[i])) continue;
+      const GridCoord gi = cloth.grid[i];
+      const GridCoord gp = cloth.grid[owner[i]];
+      const bool unobstructed = dist[i] <= octile(gi, gp) * (1.0F + 1e-4F) + 1e-6F;
+      attach_particle_.push_back(static_cast<std::uint32_t>(i));
+      attach_pin_.push_back(owner[i]);
+      attach_length_.push_back(unobstructed ? cloth.grid_rest_length(gi, gp) : dist[i]);
+    }
+  };
+  // A few pins (corners): every particle is tethered to each of them. Many pins (an edge): only to
+  // its nearest, as Kim et al. do, which keeps the cost at one tether per particle.
+  constexpr std::size_t kAllPinsUpTo = 4;
+  if (cached_pins_.size() <= kAllPinsUpTo) {
+    for (const std::uint32_t pin : cached_pins_) {
+      dijkstra({pin});
+      collect();
+    }
+  } else {
+    dijkstra(cached_pins_);
+    collect();
+  }
+}
+
+void Solver::step(Cloth& cloth, const Colliders& colliders) {
+  refresh_caches(cloth);
+  const std::size_t n = cloth.particle_count();
+  // Work on (x, y, z, w) quadruples: one aligned 16-byte load brings a position and its inverse mass.
+  work_.resize(n);
+  old_work_.resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    work_[i] << cloth.position[i], cloth.inverse_mass[i];
+  }
+  const float h = params_.dt / static_cast<float>(params_.substeps);
+  for (int s = 0; s < params_.substeps; ++s) substep(cloth, colliders, h, s == 0);
+  for (std::size_t i = 0; i < n; ++i) cloth.position[i] = work_[i].head<3>();
+}
+
+namespace {
+
+using Vec4 = Eigen::Vector4f;
+const Vec4 kXyz{1.0F, 1.0F, 1.0F, 0.0F};
+
+/// Exact projection of one distance constraint C = |xa - xb| - target (Mueller et al. 2007, eq. 10-11),
+/// scaled by the XPBD factor 1 / (wa + wb + alpha~) (Macklin et al. 2016, eq. 18 with lambda = 0).
+inline void project_exact(Vec4& pa, Vec4& pb, float target, float alpha) {
+  const float wa = pa.w(), wb = pb.w();
+  const float wsum = wa + wb;
+  if (wsum == 0.0F) return;
+  const Vec4 d = (pb - pa).cwiseProduct(kXyz);
+  const float len2 = d.squaredNorm();
+  if (len2 < 1e-18F) return;  // coincident particles: no direction to correct along
+  const float len = std::sqrt(len2);
+  const float c = (len - target) / (len * (wsum + alpha));
+  pa += (wa * c) * d;
+  pb -= (wb * c) * d;
+}
+
+}  // namespace
+
+void Solver::substep(Cloth& cloth, const Colliders& colliders, float h, bool first) {
+  const std::size_t n = cloth.particle_count();
+  Vec4* x = work_.data();
+  Eigen::Vector3f* v = cloth.velocity.data();
+  std::copy(work_.begin(), work_.end(), old_work_.begin());
+
+  // 1. Prediction (symplectic Euler on external forces; seed 000's point-cloud repulsion is one of them).
+  const float keep = std::max(0.0F, 1.0F - params_.damping * h);
+  const Eigen::Vector3f gh = params_.gravity * h;
+  const PointCloudCollider* cloud = colliders.point_cloud;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (x[i].w() == 0.0F) continue;
+    Eigen::Vector3f vel = v[i] * keep + gh;
+    if (cloud != nullptr) vel += cloud->repulsion(x[i].head<3>()) * h;
+    v[i] = vel;
+    x[i].head<3>() += vel * h;
+  }
+
+  // 2. Long-range attachments (unilateral): a particle may not be farther from a pin than its rest
+  // distance, which removes in one pass the sag that Gauss-Seidel needs O(N^2) passes for.
+  for (std::size_t t = 0; t < attach_particle_.size(); ++t) {
+    Vec4& p = x[attach_particle_[t]];
+    if (p.w() == 0.0F) continue;
+    const Vec4& anchor = x[attach_pin_[t]];
+    const Vec4 d = (p - anchor).cwiseProduct(kXyz);
+    const float len2 = d.squaredNorm();
+    const float limit = attach_length_[t];
+    if (len2 > limit * limit) p.head<3>() = anchor.head<3>() + d.head<3>() * (limit / std::sqrt(len2));
+  }
+
+  // 4. Soft shear and bend springs, one XPBD pass per step (they are soft: more passes buy nothing visible).
+  if (first || params_.soft_every_substep) {
+    const float full_h = params_.soft_every_substep ? h : params_.dt;
+    const float shear_alpha = params_.shear_compliance / (full_h * full_h);
+    const float bend_alpha = params_.bend_compliance / (full_h * full_h);
+    for (const PackedSpring& s : shear_) project_exact(x[s.a], x[s.b], s.rest, shear_alpha);
+    for (const PackedSpring& s : bend_) project_exact(x[s.a], x[s.b], s.rest, bend_alpha);
+  }
+
+  // 3. Structural springs, hard, Gauss-Seidel. Near rest length the square root is replaced by its
+  // first-order expansion, |d| ~ (|d|^2 + L^2) / 2L (Jakobsen 2001, "Advanced Character Physics"):
+  // the fixed point is still |d| = L, and step 5 below is exact.
+  for (int it = 0; it < params_.iterations; ++it) {
+    for (const PackedSpring& s : structural_) {
+      Vec4& pa = x[s.a];
+      Vec4& pb = x[s.b];
+      const float wa = pa.w(), wb = pb.w();
+      const float wsum = wa + wb;
+      if (wsum == 0.0F) continue;
+      const Vec4 d = (pb - pa).cwiseProduct(kXyz);
+      const float len2 = d.squaredNorm();
+      const float rest2 = s.rest * s.rest;
+      const float c = (len2 - rest2) / ((len2 + rest2) * wsum);
+      pa += (wa * c) * d;
+      pb -= (wb * c) * d;
+    }
+  }
+
+  // 5. Provot's deformation constraint: a structural spring longer than (1 + max_strain) L is brought
+  // back to exactly that length (Provot 1995, section 4).
+  const float limit = 1.0F + params_.max_strain;
+  for (const PackedSpring& s : structural_) {
+    const Vec4 d = (x[s.b] - x[s.a]).cwiseProduct(kXyz);
+    const float target = limit * s.rest;
+    if (d.squaredNorm() > target * target) project_exact(x[s.a], x[s.b], target, 0.0F);
+  }
+
+  // 6. Collisions by projection, then velocities from the positions actually reached.
+  const bool any_shape = !colliders.spheres.empty() || !colliders.boxes.empty() || colliders.ground.has_value();
+  if (any_shape) {
+    for (std::size_t i = 0; i < n; ++i) {
+      if (x[i].w() == 0.0F) continue;
+      Eigen::Vector3f p = x[i].head<3>();
+      project_out_of_shapes(p, colliders);
+      x[i].head<3>() = p;
+    }
+  }
+  const float inv_h = 1.0F / h;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (x[i].w() == 0.0F) continue;
+    v[i] = (x[i].head<3>() - old_work_[i].head<3>()) * inv_h;
+  }
+}
+
+double mechanical_energy(const Cloth& cloth, const Eigen::Vector3f& gravity, double k_structural) {
+  double e = 0.0;
+  for (std::size_t i = 0; i < cloth.particle_count(); ++i) {
+    const double m = cloth.mass[i];
+    e += 0.5 * m * static_cast<double>(cloth.velocity[i].squaredNorm());
+    e -= m * static_cast<double>(gravity.dot(cloth.position[i]));
+  }
+  for (std::size_t k = 0; k < cloth.spring_count(); ++k) {
+    if (cloth.alive[k] == 0 || cloth.kind[k] != SpringKind::Structural) continue;
+    const double len = (cloth.position[cloth.spring_a[k]] - cloth.position[cloth.spring_b[k]]).norm();
+    const double stretch = len - static_cast<double>(cloth.rest_length[k]);
+    e += 0.5 * k_structural * stretch * stretch;
+  }
+  return e;
+}
+
+}  // namespace tachi::sim

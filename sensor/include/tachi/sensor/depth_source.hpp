@@ -1,0 +1,59 @@
+// Where depth frames come from: one interface, implemented by a recording reader (fakenect
+// format, below) and by the live Kinect (kinect_source.hpp, library tachi_sensor_kinect), so the
+// rest of the pipeline cannot tell a replay from a device (as libfreenect's fakenect does).
+#pragma once
+
+#include <chrono>
+#include <filesystem>
+#include <functional>
+#include <optional>
+#include <vector>
+
+#include "tachi/sensor/depth_frame.hpp"
+#include "tachi/sensor/depth_model.hpp"
+#include "tachi/sensor/fakenect_recording.hpp"
+
+namespace tachi::sensor {
+
+class DepthSource {
+ public:
+  virtual ~DepthSource() = default;
+  /// The next depth frame; nullopt at the end of the stream. Throws on a device or file error.
+  virtual std::optional<DepthFrame> next() = 0;
+  /// Depth conversion and intrinsics for this source's frames.
+  virtual const DepthModel& model() const = 0;
+};
+
+/// How a recording is paced: real time (1.0), a factor of it, or as fast as possible (0 = max).
+struct Playback {
+  double rate = 1.0;
+  bool loop = false;
+};
+
+/// Plays a fakenect recording's depth frames (colour and accelerometer entries are skipped).
+/// The whole index is checked at construction; a bad frame throws RecordingError when reached.
+class RecordingSource final : public DepthSource {
+ public:
+  explicit RecordingSource(const std::filesystem::path& dir, Playback playback = {});
+
+  std::optional<DepthFrame> next() override;
+  const DepthModel& model() const override { return model_; }
+  std::size_t depth_frame_count() const noexcept { return depth_entries_.size(); }
+
+  /// Replaces the sleep used for pacing (tests).
+  void set_sleep(std::function<void(std::chrono::nanoseconds)> sleep) { sleep_ = std::move(sleep); }
+
+ private:
+  std::filesystem::path dir_;
+  Playback playback_;
+  DepthModel model_;
+  std::vector<IndexEntry> depth_entries_;
+  std::size_t position_ = 0;
+  std::uint64_t frames_out_ = 0;
+  std::int64_t loop_offset_ns_ = 0;
+  std::optional<std::chrono::steady_clock::time_point> start_wall_;
+  std::int64_t start_host_ns_ = 0;
+  std::function<void(std::chrono::nanoseconds)> sleep_;
+};
+
+}  // namespace tachi::sensor

@@ -1,0 +1,90 @@
+// Synthetic Kinect recordings: renders a person whose arm moves the palm along a scripted path,
+// with Kinect v1 effects (integer disparity, noise, IR shadows, dropouts, invalid left band),
+// into fakenect-format frames plus a ground-truth CSV of the palm centre.
+//
+// Scene (camera frame, metres; x right, y down, z forward): a wall at 2.8 m; a person facing the
+// sensor, torso at ~1.47 m, shoulders at camera height; the active (camera-left) arm is posed by
+// two-bone inverse kinematics so that the palm centre follows the path; the other arm hangs; the
+// body sways a little. An optional static box (a "stand") sits nearer than the hand in the
+// bottom-right corner: the hand finder must ignore it. The IR projector sits 7.5 cm to the
+// camera's right (+x), so IR shadows fall on the left of near objects, as on a real Kinect.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "tachi/sensor/depth_frame.hpp"
+#include "tachi/sensor/depth_model.hpp"
+
+namespace tachi::sensor {
+
+/// A palm-centre waypoint; `rest` means the hanging position below the image.
+struct Keyframe {
+  double t = 0.0;  ///< seconds from the recording's start
+  Eigen::Vector3d p = Eigen::Vector3d::Zero();
+  bool rest = false;
+};
+
+struct ScenarioSpec {
+  std::string name;
+  std::string description;
+  std::uint64_t seed = 1;
+  double fps = 30.0;
+  std::vector<Keyframe> path;     ///< at least two, increasing t; monotone cubic (PCHIP) through them
+  double jitter_m = 0.0;          ///< RMS per axis of the hand tremor added to the intended path
+  double jitter_min_hz = 4.0;
+  double jitter_max_hz = 9.0;
+  double palm_yaw_deg = 0.0;      ///< palm normal turned about y (0 = facing the sensor)
+  double palm_pitch_deg = 0.0;    ///< about x
+  double palm_roll_deg = 0.0;     ///< fingers turned about the view axis (0 = fingers up)
+  bool distractor = true;         ///< the static box nearer than the hand
+  double noise_raw = 0.35;        ///< sigma of disparity noise, raw units
+  double edge_dropout = 0.35;     ///< chance that a pixel on a depth edge has no reading
+  double dropout_blobs = 6.0;     ///< mean number of small no-reading blobs per frame
+  int invalid_left_columns = 8;   ///< the band without readings at the left edge
+};
+
+/// Reads a scenario spec (JSON, see recordings/README.md). Throws std::runtime_error naming the
+/// file and the offending key.
+ScenarioSpec load_scenario(const std::filesystem::path& file);
+
+/// One ground-truth row: the palm centre (centre of the palm's camera-facing surface).
+struct GroundTruth {
+  std::uint64_t frame = 0;
+  std::int64_t stamp_ns = 0;
+  Eigen::Vector3d palm = Eigen::Vector3d::Zero();
+  Eigen::Vector2d pixel = Eigen::Vector2d::Zero();
+  bool visible = false;  ///< the whole palm face is inside the image and at least 90% unoccluded
+  Eigen::Vector3d intended = Eigen::Vector3d::Zero();  ///< the path without tremor
+};
+
+/// Renders one scenario frame by frame (deterministic for a given spec and seed).
+class SyntheticScene {
+ public:
+  explicit SyntheticScene(ScenarioSpec spec, DepthModel model = {});
+  ~SyntheticScene();
+  SyntheticScene(const SyntheticScene&) = delete;
+  SyntheticScene& operator=(const SyntheticScene&) = delete;
+
+  std::uint64_t frame_count() const noexcept;
+  /// Renders frame `i` (frames must be rendered in order for the noise to be reproducible).
+  DepthFrame render(std::uint64_t i, GroundTruth& truth);
+  const ScenarioSpec& spec() const noexcept;
+
+ private:
+  struct Impl;
+  Impl* impl_;
+};
+
+/// CSV header of ground_truth.csv.
+inline constexpr const char* kGroundTruthHeader = "frame,stamp_ns,x,y,z,u,v,visible,intended_x,intended_y,intended_z";
+
+/// Renders every frame of `spec` into a fakenect recording at `out_dir` (depth + accelerometer
+/// entries) and writes out_dir/ground_truth.csv. Returns the number of frames.
+std::uint64_t write_synthetic_recording(const ScenarioSpec& spec, const std::filesystem::path& out_dir);
+
+}  // namespace tachi::sensor

@@ -1,0 +1,56 @@
+// Voice commands for the cutting gate (seed 000 section 5: start and stop cutting by voice instead of by
+// the hand's distance, so the hand does not fluctuate at the start and end of a cut).
+// This unit is the pure part: which phrases mean what, at which keyword-spotting threshold, and how a
+// decoder hypothesis maps back to commands. The decoder itself is voice_spotter.hpp.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace tachi::sensor {
+
+enum class VoiceCommand : std::uint8_t { Start, Stop };
+
+std::string to_string(VoiceCommand command);  ///< "start" / "stop"
+
+/// One key phrase. Two-word phrases by default: a single "stop" false-alarms on ordinary speech
+/// (FIELD_NOTES: 5 false alarms on 27.5 s of LibriVox at 1e-20, "stop cutting" none).
+struct VoicePhrase {
+  std::string phrase;        ///< lower-case words of the pronunciation dictionary, one space apart
+  VoiceCommand command = VoiceCommand::Start;
+  double threshold = 1e-20;  ///< pocketsphinx kws threshold: larger = fewer detections, fewer false alarms
+};
+
+struct VoiceConfig {
+  std::string model_dir = "/usr/share/pocketsphinx/model/en-us/en-us";
+  std::string dictionary = "/usr/share/pocketsphinx/model/en-us/cmudict-en-us.dict";
+  std::vector<VoicePhrase> phrases{{"start cutting", VoiceCommand::Start, 1e-20},
+                                   {"stop cutting", VoiceCommand::Stop, 1e-20}};
+};
+
+/// Lower-cases and collapses whitespace: " Start   Cutting " -> "start cutting".
+std::string normalise_phrase(const std::string& phrase);
+
+/// Why a config is unusable (empty phrase, duplicate phrase, bad threshold, no start or no stop...), or nothing.
+std::optional<std::string> validate(const VoiceConfig& config);
+
+/// Parses JSON ({"model_dir", "dictionary", "phrases": [{"phrase", "command", "threshold"}]}); missing keys
+/// keep their defaults. Throws std::invalid_argument naming the key.
+VoiceConfig parse_voice_config(const std::string& json_text);
+VoiceConfig load_voice_config(const std::string& path);
+
+/// Replaces the phrase(s) of `command` with `phrase` at the threshold the old one had (the CLI's
+/// --start-phrase / --stop-phrase).
+void set_phrase(VoiceConfig& config, VoiceCommand command, const std::string& phrase);
+
+/// The keyword list pocketsphinx reads (`-kws`): one "phrase /threshold/" line per phrase. All phrases
+/// share one list so that one decoder tells them apart.
+std::string kws_file_text(const std::vector<VoicePhrase>& phrases);
+
+/// A decoder hypothesis -> the phrases it contains, in order (pocketsphinx returns kws phrases with a
+/// trailing space, and may return two when both ended in one block).
+std::vector<VoicePhrase> phrases_in_hypothesis(const std::string& hypothesis, const std::vector<VoicePhrase>& phrases);
+
+}  // namespace tachi::sensor

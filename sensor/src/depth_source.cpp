@@ -1,0 +1,50 @@
+#include "tachi/sensor/depth_source.hpp"
+
+#include <thread>
+
+namespace tachi::sensor {
+
+RecordingSource::RecordingSource(const std::filesystem::path& dir, Playback playback)
+    : dir_(dir), playback_(playback), model_(model_for_recording(dir)) {
+  if (playback_.rate < 0.0) throw RecordingError("recording " + dir.string() + ": playback rate must be >= 0");
+  for (auto& e : read_index(dir))
+    if (e.kind == EntryKind::Depth) depth_entries_.push_back(std::move(e));
+  sleep_ = [](std::chrono::nanoseconds d) { std::this_thread::sleep_for(d); };
+}
+
+std::optional<DepthFrame> RecordingSource::next() {
+  if (position_ == depth_entries_.size()) {
+    if (!playback_.loop) return std::nullopt;
+    // Keep the timeline monotonic across loops: the next pass starts one frame period later.
+    const auto& first = depth_entries_.front();
+    const auto& last = depth_entries_.back();
+    const std::int64_t period = depth_entries_.size() > 1
+                                    ? (last.host_time_ns - first.host_time_ns) / static_cast<std::int64_t>(depth_entries_.size() - 1)
+                                    : 33'333'333;
+    loop_offset_ns_ += last.host_time_ns - first.host_time_ns + period;
+    position_ = 0;
+  }
+  const IndexEntry& e = depth_entries_[position_];
+  DepthFrame frame;
+  frame.frame = frames_out_;
+  frame.stamp_ns = e.host_time_ns + loop_offset_ns_;
+  frame.device_timestamp = e.device_timestamp;
+  read_depth_file(dir_ / e.file, frame.raw);
+
+  if (playback_.rate > 0.0) {
+    const auto now = std::chrono::steady_clock::now();
+    if (!start_wall_) {
+      start_wall_ = now;
+      start_host_ns_ = frame.stamp_ns;
+    } else {
+      const auto due = *start_wall_ + std::chrono::nanoseconds(static_cast<std::int64_t>(
+                                          static_cast<double>(frame.stamp_ns - start_host_ns_) / playback_.rate));
+      if (due > now) sleep_(due - now);
+    }
+  }
+  ++position_;
+  ++frames_out_;
+  return frame;
+}
+
+}  // namespace tachi::sensor

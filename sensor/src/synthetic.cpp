@@ -1,0 +1,523 @@
+#include "tachi/sensor/synthetic.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <limits>
+#include <numbers>
+#include <random>
+#include <stdexcept>
+
+#include <Eigen/Geometry>
+#include <nlohmann/json.hpp>
+
+#include "tachi/sensor/fakenect_recording.hpp"
+
+namespace tachi::sensor {
+namespace {
+
+using Vec3 = Eigen::Vector3d;
+
+constexpr double kWallZ = 2.8;
+constexpr double kProjectorBaseline = 0.075;  // IR projector to the camera's right (+x)
+constexpr double kUpperArm = 0.31;
+constexpr double kForearm = 0.28;
+constexpr double kPalmHalfWidth = 0.041;
+constexpr double kPalmHalfHeight = 0.045;
+constexpr double kPalmRadius = 0.042;  // keep equal to HandFinderParams::palm_radius_m
+constexpr std::int64_t kStartHostNs = 1'700'000'000'000'000'000LL;
+
+enum Part : std::uint8_t { kNone = 0, kWall, kBody, kArm, kPalm, kFinger, kDistractor };
+
+struct Primitive {
+  enum Kind { Sphere, Capsule, Ellipsoid, Box, Disc } kind;
+  Part part;
+  Vec3 a, b;      // sphere/ellipsoid/disc centre in a; capsule ends a, b; box min a, max b
+  Vec3 radii;     // ellipsoid radii; sphere/capsule radius in x; disc half-axes in x (along u), y (along v)
+  Vec3 u, v, n;   // disc axes and normal
+};
+
+/// Ray (origin o, unit direction d) against one primitive; returns t > 0 or -1.
+double intersect(const Primitive& p, const Vec3& o, const Vec3& d) {
+  switch (p.kind) {
+    case Primitive::Sphere: {
+      const Vec3 oc = o - p.a;
+      const double b = oc.dot(d);
+      const double c = oc.squaredNorm() - p.radii.x() * p.radii.x();
+      const double h = b * b - c;
+      if (h < 0) return -1;
+      const double t = -b - std::sqrt(h);
+      return t > 0 ? t : -1;
+    }
+    case Primitive::Capsule: {  // Inigo Quilez' capsule intersection
+      const Vec3 ba = p.b - p.a;
+      const Vec3 oa = o - p.a;
+      const double r = p.radii.x();
+      const double baba = ba.dot(ba), bard = ba.dot(d), baoa = ba.dot(oa), rdoa = d.dot(oa), oaoa = oa.dot(oa);
+      const double qa = baba - bard * bard;
+      const double qb = baba * rdoa - baoa * bard;
+      const double qc = baba * oaoa - baoa * baoa - r * r * baba;
+      const double h = qb * qb - qa * qc;
+      if (h < 0) return -1;
+      bool cap_a;
+      if (qa > 1e-12) {
+        const double t = (-qb - std::sqrt(h)) / qa;
+        const double y = baoa + t * bard;
+        if (y > 0 && y < baba) return t > 0 ? t : -1;
+        cap_a = y <= 0;
+      } else {
+        cap_a = bard > 0;  // ray along the axis: it meets the cap it heads into first
+      }
+      const Vec3 oc = cap_a ? oa : Vec3(o - p.b);
+      const double b2 = d.dot(oc);
+      const double c2 = oc.dot(oc) - r * r;
+      const double h2 = b2 * b2 - c2;
+      if (h2 <= 0) return -1;
+      const double t = -b2 - std::sqrt(h2);
+      return t > 0 ? t : -1;
+    }
+    case Primitive::Ellipsoid: {
+      const Vec3 oo = (o - p.a).cwiseQuotient(p.radii);
+      const Vec3 dd = d.cwiseQuotient(p.radii);
+      const double qa = dd.dot(dd), qb = oo.dot(dd), qc = oo.dot(oo) - 1.0;
+      const double h = qb * qb - qa * qc;
+      if (h < 0) return -1;
+      const double t = (-qb - std::sqrt(h)) / qa;
+      return t > 0 ? t : -1;
+    }
+    case Primitive::Box: {
+      double t0 = 0, t1 = std::numeric_limits<double>::infinity();
+      for (int i = 0; i < 3; ++i) {
+        if (std::abs(d[i]) < 1e-12) {
+          if (o[i] < p.a[i] || o[i] > p.b[i]) return -1;
+          continue;
+        }
+        double ta = (p.a[i] - o[i]) / d[i], tb = (p.b[i] - o[i]) / d[i];
+        if (ta > tb) std::swap(ta, tb);
+        t0 = std::max(t0, ta);
+        t1 = std::min(t1, tb);
+        if (t0 > t1) return -1;
+      }
+      return t0 > 0 ? t0 : -1;
+    }
+    case Primitive::Disc: {
+      const double dn = d.dot(p.n);
+      if (std::abs(dn) < 1e-9) return -1;
+      const double t = (p.a - o).dot(p.n) / dn;
+      if (t <= 0) return -1;
+      const Vec3 q = o + t * d - p.a;
+      const double x = q.dot(p.u) / p.radii.x(), y = q.dot(p.v) / p.radii.y();
+      return x * x + y * y <= 1.0 ? t : -1;
+    }
+  }
+  return -1;
+}
+
+void bounds(const Primitive& p, Vec3& lo, Vec3& hi) {
+  switch (p.kind) {
+    case Primitive::Sphere: lo = p.a.array() - p.radii.x(); hi = p.a.array() + p.radii.x(); break;
+    case Primitive::Capsule:
+      lo = p.a.cwiseMin(p.b).array() - p.radii.x();
+      hi = p.a.cwiseMax(p.b).array() + p.radii.x();
+      break;
+    case Primitive::Ellipsoid: lo = p.a - p.radii; hi = p.a + p.radii; break;
+    case Primitive::Box: lo = p.a; hi = p.b; break;
+    case Primitive::Disc: {
+      const double r = std::max(p.radii.x(), p.radii.y());
+      lo = p.a.array() - r;
+      hi = p.a.array() + r;
+      break;
+    }
+  }
+}
+
+Primitive capsule(Part part, const Vec3& a, const Vec3& b, double r) {
+  return {Primitive::Capsule, part, a, b, Vec3(r, r, r), {}, {}, {}};
+}
+Primitive sphere(Part part, const Vec3& c, double r) { return {Primitive::Sphere, part, c, c, Vec3(r, r, r), {}, {}, {}}; }
+
+/// Monotone piecewise-cubic Hermite interpolation per axis (Fritsch & Carlson 1980, PCHIP
+/// weights): passes through every keyframe without overshoot, at rest at the first and last.
+Vec3 pchip(const std::vector<Keyframe>& k, const std::vector<Vec3>& pts, double t) {
+  if (t <= k.front().t) return pts.front();
+  if (t >= k.back().t) return pts.back();
+  std::size_t i = 0;
+  while (i + 1 < k.size() && k[i + 1].t < t) ++i;
+  const auto slope = [&](std::size_t j, int axis) { return (pts[j + 1][axis] - pts[j][axis]) / (k[j + 1].t - k[j].t); };
+  const auto tangent = [&](std::size_t j, int axis) {
+    if (j == 0 || j + 1 == k.size()) return 0.0;
+    const double d0 = slope(j - 1, axis), d1 = slope(j, axis);
+    if (d0 * d1 <= 0) return 0.0;
+    const double h0 = k[j].t - k[j - 1].t, h1 = k[j + 1].t - k[j].t;
+    const double w1 = 2 * h1 + h0, w2 = h1 + 2 * h0;
+    return (w1 + w2) / (w1 / d0 + w2 / d1);
+  };
+  const double h = k[i + 1].t - k[i].t, s = (t - k[i].t) / h;
+  const double h00 = (1 + 2 * s) * (1 - s) * (1 - s), h10 = s * (1 - s) * (1 - s), h01 = s * s * (3 - 2 * s),
+               h11 = s * s * (s - 1);
+  Vec3 out;
+  for (int axis = 0; axis < 3; ++axis)
+    out[axis] = h00 * pts[i][axis] + h10 * h * tangent(i, axis) + h01 * pts[i + 1][axis] + h11 * h * tangent(i + 1, axis);
+  return out;
+}
+
+double number(const nlohmann::json& j, const char* key, double fallback, const std::string& file) {
+  if (!j.contains(key)) return fallback;
+  if (!j[key].is_number()) throw std::runtime_error("scenario " + file + ": \"" + key + "\" must be a number");
+  return j[key].get<double>();
+}
+
+}  // namespace
+
+ScenarioSpec load_scenario(const std::filesystem::path& path) {
+  const std::string file = path.string();
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error("scenario " + file + ": cannot open");
+  nlohmann::json j;
+  try {
+    in >> j;
+  } catch (const nlohmann::json::exception& e) {
+    throw std::runtime_error("scenario " + file + ": not JSON: " + e.what());
+  }
+  ScenarioSpec s;
+  if (!j.contains("name") || !j["name"].is_string()) throw std::runtime_error("scenario " + file + ": \"name\" (string) is required");
+  s.name = j["name"].get<std::string>();
+  if (j.contains("description") && j["description"].is_string()) s.description = j["description"].get<std::string>();
+  s.seed = static_cast<std::uint64_t>(number(j, "seed", 1, file));
+  s.fps = number(j, "fps", s.fps, file);
+  s.jitter_m = number(j, "jitter_m", s.jitter_m, file);
+  s.jitter_min_hz = number(j, "jitter_min_hz", s.jitter_min_hz, file);
+  s.jitter_max_hz = number(j, "jitter_max_hz", s.jitter_max_hz, file);
+  s.palm_yaw_deg = number(j, "palm_yaw_deg", 0, file);
+  s.palm_pitch_deg = number(j, "palm_pitch_deg", 0, file);
+  s.palm_roll_deg = number(j, "palm_roll_deg", 0, file);
+  s.noise_raw = number(j, "noise_raw", s.noise_raw, file);
+  s.edge_dropout = number(j, "edge_dropout", s.edge_dropout, file);
+  s.dropout_blobs = number(j, "dropout_blobs", s.dropout_blobs, file);
+  s.invalid_left_columns = static_cast<int>(number(j, "invalid_left_columns", s.invalid_left_columns, file));
+  if (j.contains("distractor")) {
+    if (!j["distractor"].is_boolean()) throw std::runtime_error("scenario " + file + ": \"distractor\" must be true or false");
+    s.distractor = j["distractor"].get<bool>();
+  }
+  if (!(s.fps > 0 && s.fps <= 120)) throw std::runtime_error("scenario " + file + ": \"fps\" must be in (0, 120]");
+  if (s.jitter_m < 0 || s.noise_raw < 0 || s.edge_dropout < 0 || s.edge_dropout > 1 || s.dropout_blobs < 0)
+    throw std::runtime_error("scenario " + file + ": jitter_m, noise_raw, dropout_blobs must be >= 0 and edge_dropout in [0, 1]");
+  if (!(s.jitter_min_hz > 0 && s.jitter_max_hz >= s.jitter_min_hz))
+    throw std::runtime_error("scenario " + file + ": need 0 < jitter_min_hz <= jitter_max_hz");
+  if (s.invalid_left_columns < 0 || s.invalid_left_columns > 64)
+    throw std::runtime_error("scenario " + file + ": \"invalid_left_columns\" must be in [0, 64]");
+  if (!j.contains("path") || !j["path"].is_array() || j["path"].size() < 2)
+    throw std::runtime_error("scenario " + file + ": \"path\" must be an array of at least two keyframes");
+  for (const auto& k : j["path"]) {
+    Keyframe kf;
+    if (!k.is_object() || !k.contains("t") || !k["t"].is_number())
+      throw std::runtime_error("scenario " + file + ": every path keyframe needs \"t\" (seconds)");
+    kf.t = k["t"].get<double>();
+    if (k.contains("rest") && k["rest"].is_boolean() && k["rest"].get<bool>()) {
+      kf.rest = true;
+    } else if (k.contains("p") && k["p"].is_array() && k["p"].size() == 3 && k["p"][0].is_number() &&
+               k["p"][1].is_number() && k["p"][2].is_number()) {
+      kf.p = Vec3(k["p"][0].get<double>(), k["p"][1].get<double>(), k["p"][2].get<double>());
+      if (kf.p.z() < 0.5 || kf.p.z() > 2.5)
+        throw std::runtime_error("scenario " + file + ": keyframe at t=" + std::to_string(kf.t) + ": z must be in [0.5, 2.5] m");
+    } else {
+      throw std::runtime_error("scenario " + file + ": keyframe at t=" + std::to_string(kf.t) +
+                               " needs \"p\": [x, y, z] or \"rest\": true");
+    }
+    if (!s.path.empty() && kf.t <= s.path.back().t)
+      throw std::runtime_error("scenario " + file + ": keyframe times must increase");
+    s.path.push_back(kf);
+  }
+  if (s.path.front().t != 0.0) throw std::runtime_error("scenario " + file + ": the first keyframe must be at t = 0");
+  return s;
+}
+
+struct SyntheticScene::Impl {
+  ScenarioSpec spec;
+  DepthModel model;
+  std::vector<Vec3> path_points;
+  std::mt19937_64 rng;
+  std::vector<Vec3> rays;  // unit ray direction per pixel
+  std::vector<float> zbuf, proj_zbuf;
+  std::vector<std::uint8_t> label;
+  struct Tremor {
+    double amp, hz, phase;
+  };
+  std::array<std::vector<Tremor>, 3> tremor;
+  std::uint64_t frames = 0;
+
+  static Vec3 rest_palm() { return {-0.27, 0.72, 1.40}; }
+
+  Vec3 intended_at(double t) const { return pchip(spec.path, path_points, t); }
+
+  Vec3 tremor_at(double t) const {
+    Vec3 out = Vec3::Zero();
+    for (int axis = 0; axis < 3; ++axis)
+      for (const auto& c : tremor[static_cast<std::size_t>(axis)]) out[axis] += c.amp * std::sin(2 * std::numbers::pi * c.hz * t + c.phase);
+    return out;
+  }
+
+  /// Tremor fades in and out with the distance from the rest pose, so a resting hand is still.
+  double tremor_weight(double t) const {
+    const Vec3 p = intended_at(t);
+    return std::clamp((rest_palm() - p).norm() / 0.3, 0.0, 1.0);
+  }
+
+  void render_view(const std::vector<Primitive>& prims, const Vec3& origin, std::vector<float>& z,
+                   std::vector<std::uint8_t>* labels) const {
+    std::fill(z.begin(), z.end(), std::numeric_limits<float>::infinity());
+    if (labels) std::fill(labels->begin(), labels->end(), std::uint8_t{kNone});
+    const auto& k = model.intrinsics();
+    // The wall: a plane everywhere.
+    for (int i = 0; i < kDepthPixels; ++i) {
+      const Vec3& d = rays[static_cast<std::size_t>(i)];
+      const double t = (kWallZ - origin.z()) / d.z();
+      z[static_cast<std::size_t>(i)] = static_cast<float>(t * d.z());
+      if (labels) (*labels)[static_cast<std::size_t>(i)] = kWall;
+    }
+    for (const auto& p : prims) {
+      Vec3 lo, hi;
+      bounds(p, lo, hi);
+      double umin = 1e9, umax = -1e9, vmin = 1e9, vmax = -1e9;
+      bool behind = false;
+      for (int c = 0; c < 8; ++c) {
+        const Vec3 corner((c & 1) ? hi.x() : lo.x(), (c & 2) ? hi.y() : lo.y(), (c & 4) ? hi.z() : lo.z());
+        const Vec3 q = corner - origin;
+        if (q.z() < 0.05) {
+          behind = true;
+          break;
+        }
+        const double pu = k.cx + k.fx * q.x() / q.z(), pv = k.cy + k.fy * q.y() / q.z();
+        umin = std::min(umin, pu);
+        umax = std::max(umax, pu);
+        vmin = std::min(vmin, pv);
+        vmax = std::max(vmax, pv);
+      }
+      int u0 = 0, u1 = kDepthWidth - 1, v0 = 0, v1 = kDepthHeight - 1;
+      if (!behind) {
+        u0 = std::max(0, static_cast<int>(std::floor(umin)) - 2);
+        u1 = std::min(kDepthWidth - 1, static_cast<int>(std::ceil(umax)) + 2);
+        v0 = std::max(0, static_cast<int>(std::floor(vmin)) - 2);
+        v1 = std::min(kDepthHeight - 1, static_cast<int>(std::ceil(vmax)) + 2);
+      }
+      for (int v = v0; v <= v1; ++v)
+        for (int u = u0; u <= u1; ++u) {
+          const std::size_t i = static_cast<std::size_t>(v) * kDepthWidth + u;
+          const Vec3& d = rays[i];
+          const double t = intersect(p, origin, d);
+          if (t <= 0) continue;
+          const auto depth = static_cast<float>(t * d.z());
+          if (depth < z[i]) {
+            z[i] = depth;
+            if (labels) (*labels)[i] = p.part;
+          }
+        }
+    }
+  }
+
+  /// Scene primitives at time t with the palm at `palm`; returns the palm's disc for visibility.
+  std::vector<Primitive> build(double t, const Vec3& palm, Primitive& palm_disc) const {
+    std::vector<Primitive> prims;
+    const Vec3 sway(0.010 * std::sin(2 * std::numbers::pi * 0.31 * t), 0.004 * std::sin(2 * std::numbers::pi * 0.47 * t),
+                    0.008 * std::sin(2 * std::numbers::pi * 0.23 * t + 1.0));
+    Vec3 shoulder = Vec3(-0.19, 0.0, 1.44) + sway;
+    // Hand frame: n toward the sensor, w along the fingers, r across the palm.
+    const double deg = std::numbers::pi / 180.0;
+    const Eigen::Matrix3d rot = (Eigen::AngleAxisd(spec.palm_yaw_deg * deg, Vec3::UnitY()) *
+                                 Eigen::AngleAxisd(spec.palm_pitch_deg * deg, Vec3::UnitX()) *
+                                 Eigen::AngleAxisd(spec.palm_roll_deg * deg, Vec3::UnitZ()))
+                                    .toRotationMatrix();
+    const Vec3 n = rot * Vec3(0, 0, -1), w = rot * Vec3(0, -1, 0), r = w.cross(n);
+    const Vec3 wrist = palm - 0.055 * w - 0.034 * n;
+    // The body leans toward a target out of reach (a person steps or leans in).
+    const double reach = kUpperArm + kForearm - 0.01;
+    Vec3 lean = Vec3::Zero();
+    if (const double d = (wrist - shoulder).norm(); d > reach) lean = (wrist - shoulder).normalized() * (d - reach);
+    lean.y() = 0;
+    const Vec3 body = sway + lean;
+    shoulder = Vec3(-0.19, 0.0, 1.44) + body;
+    // Torso, neck, head, the hanging arm.
+    prims.push_back({Primitive::Ellipsoid, kBody, Vec3(0, 0.30, 1.47) + body, Vec3::Zero(), Vec3(0.18, 0.34, 0.11), {}, {}, {}});
+    prims.push_back(capsule(kBody, Vec3(0, -0.20, 1.47) + body, Vec3(0, 0.0, 1.47) + body, 0.05));
+    prims.push_back(sphere(kBody, Vec3(0, -0.30, 1.47) + body, 0.10));
+    const Vec3 ls = Vec3(0.19, 0.0, 1.44) + body, le = Vec3(0.23, 0.31, 1.46) + body, lw = Vec3(0.25, 0.58, 1.43) + body;
+    prims.push_back(capsule(kBody, ls, le, 0.045));
+    prims.push_back(capsule(kBody, le, lw, 0.033));
+    prims.push_back(sphere(kBody, lw + Vec3(0.01, 0.1, -0.01), 0.045));
+    // Active arm: two-bone IK with the elbow pointing down and out.
+    const double d = std::min((wrist - shoulder).norm(), reach);
+    const Vec3 dir = (wrist - shoulder).normalized();
+    const double a = (kUpperArm * kUpperArm - kForearm * kForearm + d * d) / (2 * d);
+    const double h = std::sqrt(std::max(0.0, kUpperArm * kUpperArm - a * a));
+    Vec3 pole = Vec3(-0.4, 1.0, 0.25);
+    pole = (pole - pole.dot(dir) * dir).normalized();
+    const Vec3 elbow = shoulder + a * dir + h * pole;
+    const Vec3 wrist_reached = shoulder + d * dir;
+    prims.push_back(capsule(kArm, shoulder, elbow, 0.045));
+    prims.push_back(capsule(kArm, elbow, wrist_reached, 0.028));
+    // Palm: a flat elliptic face (the camera-facing surface) with a thin back behind it.
+    palm_disc = {Primitive::Disc, kPalm, palm, Vec3::Zero(), Vec3(kPalmHalfWidth, kPalmHalfHeight, 0), r, w, n};
+    prims.push_back(palm_disc);
+    prims.push_back({Primitive::Ellipsoid, kArm, palm - 0.030 * n, Vec3::Zero(), Vec3(0.034, 0.040, 0.012), {}, {}, {}});
+    // Fingers, spread, their front surface level with the palm's.
+    const double finger_r = 0.0085;
+    const std::array<double, 4> across{-0.028, -0.0095, 0.0095, 0.028}, length{0.068, 0.078, 0.074, 0.060},
+        spread{-14, -5, 4, 13};
+    for (std::size_t f = 0; f < 4; ++f) {
+      const Vec3 base = palm + across[f] * r + 0.040 * w - finger_r * n;
+      const Vec3 dirf = std::cos(spread[f] * deg) * w + std::sin(spread[f] * deg) * r;
+      prims.push_back(capsule(kFinger, base, base + length[f] * dirf, finger_r));
+    }
+    const Vec3 thumb_base = palm + 0.036 * r - 0.015 * w - 0.010 * n;
+    const Vec3 thumb_dir = (std::cos(40 * deg) * r + std::sin(40 * deg) * w).normalized();
+    prims.push_back(capsule(kFinger, thumb_base, thumb_base + 0.055 * thumb_dir, 0.010));
+    if (spec.distractor)
+      prims.push_back({Primitive::Box, kDistractor, Vec3(0.28, 0.12, 0.66), Vec3(0.46, 0.60, 0.80), {}, {}, {}, {}});
+    return prims;
+  }
+
+  /// Visible: the palm's circle (radius kPalmRadius around the centre, the size a hand finder
+  /// can rely on) lies inside the valid image with 2 px to spare, and >= 90% of the palm face
+  /// is unoccluded.
+  bool palm_visible(const Primitive& disc) const {
+    const auto& k = model.intrinsics();
+    if (disc.a.z() < 0.5) return false;
+    const Eigen::Vector2d c = model.project(disc.a);
+    const double r = kPalmRadius * k.fx / disc.a.z() + 2.0;
+    if (c.x() - r < spec.invalid_left_columns || c.x() + r > kDepthWidth - 1 || c.y() - r < 0 || c.y() + r > kDepthHeight - 1)
+      return false;
+    int inside = 0, seen = 0;
+    for (int i = 0; i < 32; ++i) {
+      const double ang = 2 * std::numbers::pi * i / 32.0;
+      for (const double scale : {0.3, 0.6, 0.9}) {
+        const Vec3 q = disc.a + scale * (std::cos(ang) * disc.radii.x() * disc.u + std::sin(ang) * disc.radii.y() * disc.v);
+        const Eigen::Vector2d pq = model.project(q);
+        const long iu = std::lround(pq.x()), iv = std::lround(pq.y());
+        ++inside;
+        if (iu < 0 || iu >= kDepthWidth || iv < 0 || iv >= kDepthHeight) continue;
+        const std::uint8_t l = label[static_cast<std::size_t>(iv) * kDepthWidth + static_cast<std::size_t>(iu)];
+        if (l == kPalm || l == kFinger) ++seen;
+      }
+    }
+    return seen >= inside * 9 / 10;
+  }
+};
+
+SyntheticScene::SyntheticScene(ScenarioSpec spec, DepthModel model) : impl_(new Impl) {
+  Impl& m = *impl_;
+  m.spec = std::move(spec);
+  m.model = model;
+  m.rng.seed(m.spec.seed);
+  for (const auto& k : m.spec.path) m.path_points.push_back(k.rest ? Impl::rest_palm() : k.p);
+  m.frames = static_cast<std::uint64_t>(std::floor(m.spec.path.back().t * m.spec.fps + 1e-9)) + 1;
+  m.rays.resize(kDepthPixels);
+  const auto& k = model.intrinsics();
+  for (int v = 0; v < kDepthHeight; ++v)
+    for (int u = 0; u < kDepthWidth; ++u)
+      m.rays[static_cast<std::size_t>(v) * kDepthWidth + u] = Vec3((u - k.cx) / k.fx, (v - k.cy) / k.fy, 1.0).normalized();
+  m.zbuf.resize(kDepthPixels);
+  m.proj_zbuf.resize(kDepthPixels);
+  m.label.resize(kDepthPixels);
+  // Tremor: a few sinusoids per axis in the physiological band, scaled to the requested RMS.
+  std::uniform_real_distribution<double> hz(m.spec.jitter_min_hz, m.spec.jitter_max_hz), phase(0, 2 * std::numbers::pi);
+  for (auto& axis : m.tremor) {
+    for (int c = 0; c < 3; ++c) axis.push_back({m.spec.jitter_m * std::sqrt(2.0 / 3.0), hz(m.rng), phase(m.rng)});
+  }
+}
+
+SyntheticScene::~SyntheticScene() { delete impl_; }
+std::uint64_t SyntheticScene::frame_count() const noexcept { return impl_->frames; }
+const ScenarioSpec& SyntheticScene::spec() const noexcept { return impl_->spec; }
+
+DepthFrame SyntheticScene::render(std::uint64_t i, GroundTruth& truth) {
+  Impl& m = *impl_;
+  const double t = static_cast<double>(i) / m.spec.fps;
+  const Vec3 intended = m.intended_at(t);
+  const Vec3 palm = intended + m.tremor_weight(t) * m.tremor_at(t);
+  Primitive disc{};
+  const auto prims = m.build(t, palm, disc);
+  m.render_view(prims, Vec3::Zero(), m.zbuf, &m.label);
+  const Vec3 projector(kProjectorBaseline, 0, 0);
+  m.render_view(prims, projector, m.proj_zbuf, nullptr);
+
+  DepthFrame frame;
+  frame.frame = i;
+  const std::int64_t us = static_cast<std::int64_t>(std::llround(static_cast<double>(i) * 1e6 / m.spec.fps));
+  frame.stamp_ns = kStartHostNs + us * 1000;
+  frame.device_timestamp = static_cast<std::uint32_t>((i * 1'000'000ULL + 12345) & 0xffffffffULL);
+  frame.raw.assign(kDepthPixels, kNoReading);
+
+  const auto& k = m.model.intrinsics();
+  std::normal_distribution<double> noise(0.0, m.spec.noise_raw);
+  std::uniform_real_distribution<double> uni(0.0, 1.0);
+  for (int v = 0; v < kDepthHeight; ++v)
+    for (int u = 0; u < kDepthWidth; ++u) {
+      const std::size_t idx = static_cast<std::size_t>(v) * kDepthWidth + u;
+      const double z = m.zbuf[idx];
+      const double n = noise(m.rng);  // drawn for every pixel, so the sequence does not depend on the scene
+      const double e = uni(m.rng);
+      if (u < m.spec.invalid_left_columns || !(z > 0.45 && z < 3.6)) continue;
+      // IR shadow: the projector does not see this surface point.
+      const Vec3 x = m.rays[idx] * (z / m.rays[idx].z()) - projector;
+      const double pu = k.cx + k.fx * x.x() / x.z(), pv = k.cy + k.fy * x.y() / x.z();
+      const long iu = std::lround(pu), iv = std::lround(pv);
+      if (iu >= 0 && iu < kDepthWidth && iv >= 0 && iv < kDepthHeight) {
+        const float pz = m.proj_zbuf[static_cast<std::size_t>(iv) * kDepthWidth + static_cast<std::size_t>(iu)];
+        if (x.z() > pz + 0.02 + 0.01 * x.z()) continue;
+      }
+      // Depth edges: the correlation window straddles two surfaces, often giving no reading.
+      bool edge = false;
+      for (const auto& [du, dv] : {std::pair{1, 0}, {-1, 0}, {0, 1}, {0, -1}}) {
+        const int uu = u + du, vv = v + dv;
+        if (uu < 0 || uu >= kDepthWidth || vv < 0 || vv >= kDepthHeight) continue;
+        if (std::abs(m.zbuf[static_cast<std::size_t>(vv) * kDepthWidth + uu] - z) > 0.05) edge = true;
+      }
+      if (edge && e < m.spec.edge_dropout) continue;
+      const double raw = std::round(m.model.raw_at(z) + n);
+      if (raw < 0 || raw > kMaxValidRaw) continue;
+      frame.raw[idx] = static_cast<std::uint16_t>(raw);
+    }
+  // Small dropout blobs (specular or dark spots).
+  std::poisson_distribution<int> blobs(m.spec.dropout_blobs);
+  std::uniform_int_distribution<int> bu(0, kDepthWidth - 1), bv(0, kDepthHeight - 1), br(1, 3);
+  for (int b = blobs(m.rng); b > 0; --b) {
+    const int cu = bu(m.rng), cv = bv(m.rng), r = br(m.rng);
+    for (int v = std::max(0, cv - r); v <= std::min(kDepthHeight - 1, cv + r); ++v)
+      for (int u = std::max(0, cu - r); u <= std::min(kDepthWidth - 1, cu + r); ++u)
+        if ((u - cu) * (u - cu) + (v - cv) * (v - cv) <= r * r) frame.raw[static_cast<std::size_t>(v) * kDepthWidth + u] = kNoReading;
+  }
+
+  truth.frame = i;
+  truth.stamp_ns = frame.stamp_ns;
+  truth.palm = palm;
+  truth.pixel = m.model.project(palm);
+  truth.visible = m.palm_visible(disc);
+  truth.intended = intended;
+  return frame;
+}
+
+std::uint64_t write_synthetic_recording(const ScenarioSpec& spec, const std::filesystem::path& out_dir) {
+  SyntheticScene scene(spec);
+  FakenectWriter writer(out_dir);
+  std::ofstream csv(out_dir / "ground_truth.csv");
+  if (!csv) throw std::runtime_error("cannot write " + (out_dir / "ground_truth.csv").string());
+  csv << kGroundTruthHeader << '\n';
+  csv.setf(std::ios::fixed);
+  for (std::uint64_t i = 0; i < scene.frame_count(); ++i) {
+    GroundTruth gt;
+    const DepthFrame frame = scene.render(i, gt);
+    writer.write_depth(frame);
+    writer.write_accel(frame.stamp_ns + 1'000'000, frame.device_timestamp, AccelSample{});
+    csv.precision(6);
+    csv << gt.frame << ',' << gt.stamp_ns << ',' << gt.palm.x() << ',' << gt.palm.y() << ',' << gt.palm.z() << ',';
+    csv.precision(3);
+    csv << gt.pixel.x() << ',' << gt.pixel.y() << ',' << (gt.visible ? 1 : 0) << ',';
+    csv.precision(6);
+    csv << gt.intended.x() << ',' << gt.intended.y() << ',' << gt.intended.z() << '\n';
+  }
+  writer.flush();
+  if (!csv) throw std::runtime_error("cannot write " + (out_dir / "ground_truth.csv").string());
+  return scene.frame_count();
+}
+
+}  // namespace tachi::sensor

@@ -1,0 +1,146 @@
+#include "tachi/sensor/voice_commands.hpp"
+
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <set>
+#include <sstream>
+#include <stdexcept>
+
+namespace tachi::sensor {
+
+std::string to_string(VoiceCommand command) { return command == VoiceCommand::Start ? "start" : "stop"; }
+
+std::string normalise_phrase(const std::string& phrase) {
+  std::istringstream words(phrase);
+  std::string word, out;
+  while (words >> word) {
+    for (char& c : word) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    if (!out.empty()) out += ' ';
+    out += word;
+  }
+  return out;
+}
+
+std::optional<std::string> validate(const VoiceConfig& config) {
+  if (config.phrases.empty()) return "phrases: at least one phrase is needed";
+  bool start = false, stop = false;
+  std::set<std::string> seen;
+  for (const auto& p : config.phrases) {
+    if (p.phrase.empty() || p.phrase != normalise_phrase(p.phrase))
+      return "phrases: \"" + p.phrase + "\" must be non-empty lower-case words separated by single spaces";
+    for (char c : p.phrase)
+      if (!(std::islower(static_cast<unsigned char>(c)) || c == ' ' || c == '\''))
+        return "phrases: \"" + p.phrase + "\" may hold only letters, spaces and apostrophes";
+    if (!seen.insert(p.phrase).second) return "phrases: \"" + p.phrase + "\" appears twice";
+    if (!std::isfinite(p.threshold) || p.threshold <= 0.0 || p.threshold > 1.0)
+      return "phrases: threshold of \"" + p.phrase + "\" must be in (0, 1] (e.g. 1e-20)";
+    start = start || p.command == VoiceCommand::Start;
+    stop = stop || p.command == VoiceCommand::Stop;
+  }
+  if (!start || !stop) return "phrases: need at least one start and one stop phrase";
+  return std::nullopt;
+}
+
+namespace {
+[[noreturn]] void fail(const std::string& message) { throw std::invalid_argument("voice config: " + message); }
+}  // namespace
+
+VoiceConfig parse_voice_config(const std::string& json_text) {
+  using nlohmann::json;
+  json root;
+  try {
+    root = json::parse(json_text);
+  } catch (const json::exception& e) {
+    fail(std::string("not valid JSON: ") + e.what());
+  }
+  if (!root.is_object()) fail("the document must be a JSON object");
+  VoiceConfig c;
+  for (const auto& item : root.items())
+    if (item.key() != "model_dir" && item.key() != "dictionary" && item.key() != "phrases") fail("unknown key " + item.key());
+  try {
+    if (root.contains("model_dir")) c.model_dir = root.at("model_dir").get<std::string>();
+    if (root.contains("dictionary")) c.dictionary = root.at("dictionary").get<std::string>();
+    if (root.contains("phrases")) {
+      c.phrases.clear();
+      for (const auto& p : root.at("phrases")) {
+        for (const auto& item : p.items())
+          if (item.key() != "phrase" && item.key() != "command" && item.key() != "threshold")
+            fail("unknown key phrases[]." + item.key());
+        VoicePhrase vp;
+        vp.phrase = normalise_phrase(p.at("phrase").get<std::string>());
+        const std::string command = p.at("command").get<std::string>();
+        if (command != "start" && command != "stop") fail("phrases[].command must be \"start\" or \"stop\" (got \"" + command + "\")");
+        vp.command = command == "start" ? VoiceCommand::Start : VoiceCommand::Stop;
+        if (p.contains("threshold")) vp.threshold = p.at("threshold").get<double>();
+        c.phrases.push_back(vp);
+      }
+    }
+  } catch (const json::exception& e) {
+    fail(e.what());
+  }
+  if (const auto why = validate(c)) fail(*why);
+  return c;
+}
+
+VoiceConfig load_voice_config(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error("cannot read voice config " + path);
+  std::ostringstream text;
+  text << in.rdbuf();
+  return parse_voice_config(text.str());
+}
+
+void set_phrase(VoiceConfig& config, VoiceCommand command, const std::string& phrase) {
+  double threshold = 1e-20;
+  std::vector<VoicePhrase> kept;
+  for (const auto& p : config.phrases) {
+    if (p.command == command)
+      threshold = p.threshold;
+    else
+      kept.push_back(p);
+  }
+  kept.push_back({normalise_phrase(phrase), command, threshold});
+  config.phrases = std::move(kept);
+}
+
+std::string kws_file_text(const std::vector<VoicePhrase>& phrases) {
+  std::string text;
+  for (const auto& p : phrases) {
+    char threshold[32];
+    std::snprintf(threshold, sizeof threshold, "%g", p.threshold);
+    text += p.phrase + " /" + threshold + "/\n";
+  }
+  return text;
+}
+
+std::vector<VoicePhrase> phrases_in_hypothesis(const std::string& hypothesis, const std::vector<VoicePhrase>& phrases) {
+  std::string hyp(1, ' ');
+  hyp += normalise_phrase(hypothesis);
+  hyp += ' ';
+  std::vector<std::pair<std::size_t, VoicePhrase>> found;
+  for (const auto& p : phrases) {
+    std::string needle(1, ' ');
+    needle += p.phrase;
+    needle += ' ';
+    for (std::size_t at = hyp.find(needle); at != std::string::npos; at = hyp.find(needle, at + 1)) found.emplace_back(at, p);
+  }
+  // In order; where phrases overlap ("stop" inside "stop cutting") the longest one wins.
+  std::sort(found.begin(), found.end(), [](const auto& a, const auto& b) {
+    return a.first != b.first ? a.first < b.first : a.second.phrase.size() > b.second.phrase.size();
+  });
+  std::vector<VoicePhrase> out;
+  std::size_t end = 0;
+  for (auto& f : found) {
+    if (f.first < end) continue;
+    end = f.first + f.second.phrase.size() + 1;
+    out.push_back(std::move(f.second));
+  }
+  return out;
+}
+
+}  // namespace tachi::sensor

@@ -1,0 +1,116 @@
+// Smoothers for the hand trajectory. Seed 000 section 5 proposes a moving average of the hand
+// coordinates against Kinect noise; the One Euro filter (Casiez, Roussel, Vogel, CHI 2012) is the
+// default because it smooths hard when the hand is slow and follows closely when it is fast.
+//
+// Tuning the One Euro filter (the paper's procedure, section 3 "Tuning"): set beta = 0 and lower
+// min_cutoff_hz until a hand held still stops jittering; then raise beta until a fast stroke no
+// longer lags. d_cutoff_hz (cutoff for the speed estimate) rarely needs changing from 1 Hz.
+// min_cutoff_hz is in Hz, beta in 1/m (cutoff grows by beta Hz per m/s of hand speed).
+#pragma once
+
+#include <Eigen/Core>
+
+#include <cstddef>
+#include <cstdint>
+#include <deque>
+#include <memory>
+#include <optional>
+#include <string>
+
+namespace tachi::filter {
+
+/// Arithmetic mean of the last N samples (seed 000 section 5). Lags (N - 1) / 2 frames.
+class MovingAverage {
+ public:
+  explicit MovingAverage(std::size_t window);
+  Eigen::Vector3f filter(const Eigen::Vector3f& x);
+  void reset() { window_.clear(); sum_.setZero(); }
+  std::size_t window() const noexcept { return size_; }
+
+ private:
+  std::size_t size_;
+  std::deque<Eigen::Vector3f> window_;
+  Eigen::Vector3d sum_ = Eigen::Vector3d::Zero();
+};
+
+/// A first-order low-pass x_hat_i = alpha x_i + (1 - alpha) x_hat_{i-1} (eq. (1) of Casiez et al. 2012).
+class LowPass {
+ public:
+  double filter(double x, double alpha);
+  void reset() { initialised_ = false; }
+  bool initialised() const noexcept { return initialised_; }
+  double last() const noexcept { return value_; }
+
+ private:
+  bool initialised_ = false;
+  double value_ = 0.0;
+};
+
+struct OneEuroParams {
+  double min_cutoff_hz = 1.0;
+  double beta = 0.5;
+  double d_cutoff_hz = 1.0;
+};
+
+/// The One Euro filter for one scalar, Algorithm 1 of Casiez, Roussel, Vogel, CHI 2012:
+/// alpha = 1 / (1 + tau / Te), tau = 1 / (2 pi fc), fc = fcmin + beta |dx_hat|,
+/// dx = (x_i - x_hat_{i-1}) / Te as in the paper (the authors' later C++ code differentiates the raw signal).
+class OneEuroScalar {
+ public:
+  explicit OneEuroScalar(const OneEuroParams& params) : params_(params) {}
+  /// dt_s > 0: time since the previous sample.
+  double filter(double x, double dt_s);
+  void reset() { x_.reset(); dx_.reset(); }
+
+ private:
+  OneEuroParams params_;
+  LowPass x_;
+  LowPass dx_;
+};
+
+/// Smoothing factor of a first-order low-pass with cutoff `cutoff_hz` sampled every `dt_s` (Casiez et al. eq. (4)).
+double one_euro_alpha(double cutoff_hz, double dt_s);
+
+/// The One Euro filter applied per axis (as in the paper) to a 3D position.
+class OneEuroFilter {
+ public:
+  explicit OneEuroFilter(const OneEuroParams& params);
+  Eigen::Vector3f filter(const Eigen::Vector3f& x, double dt_s);
+  void reset();
+
+ private:
+  OneEuroScalar x_, y_, z_;
+};
+
+enum class SmootherKind { None, MovingAverage, OneEuro };
+
+/// "none", "moving-average", "one-euro" (the CLI's spelling) -> kind.
+std::optional<SmootherKind> smoother_kind_from_string(const std::string& name);
+std::string to_string(SmootherKind kind);
+
+struct SmootherParams {
+  SmootherKind kind = SmootherKind::OneEuro;
+  std::size_t moving_average_window = 5;
+  OneEuroParams one_euro;
+  double nominal_rate_hz = 30.0;   ///< used when timestamps do not advance
+  double reset_after_gap_s = 0.5;  ///< a longer gap between tracked samples restarts the filter
+};
+
+/// Why parameters are unusable, or nothing when valid.
+std::optional<std::string> validate(const SmootherParams& params);
+
+/// Smooths a trajectory of timestamped positions; a lost hand (reset()) or a long gap restarts it.
+class Smoother {
+ public:
+  explicit Smoother(const SmootherParams& params);
+  Eigen::Vector3f filter(const Eigen::Vector3f& x, std::int64_t stamp_ns);
+  void reset();
+
+ private:
+  SmootherParams params_;
+  MovingAverage average_;
+  OneEuroFilter one_euro_;
+  std::optional<std::int64_t> last_stamp_ns_;
+};
+
+}  // namespace tachi::filter

@@ -1,0 +1,40 @@
+// The filter stage: raw hand samples in, stroke samples out (one per hand sample).
+// Smooths in the camera frame (so the smoother's parameters are sensor metres), maps to the cloth's
+// world frame, measures the distance to the cloth and runs the gate. Pure: no DDS, no I/O.
+#pragma once
+
+#include "tachi/filter/cloth_proximity.hpp"
+#include "tachi/filter/config.hpp"
+#include "tachi/filter/gate.hpp"
+#include "tachi/filter/smoothing.hpp"
+#include "tachi/filter/types.hpp"
+
+#include <span>
+#include <vector>
+
+namespace tachi::filter {
+
+class StrokeFilter {
+ public:
+  explicit StrokeFilter(const FilterConfig& config);
+
+  /// A voice command; it takes effect before the next hand sample.
+  void on_voice(VoiceCommandKind command) { gate_.on_voice(command); }
+  /// The newest cloth positions (x, y, z per particle, world frame); replaces the rest cloth.
+  void on_cloth_state(std::span<const float> xyz);
+  /// One hand sample in, one stroke sample out.
+  StrokeSample on_hand(const HandSample& hand);
+
+  const Gate& gate() const noexcept { return gate_; }
+
+ private:
+  FilterConfig config_;
+  Smoother smoother_;
+  Gate gate_;
+  std::vector<float> cloth_xyz_;
+  bool have_cloth_ = false;
+  Eigen::Vector3f last_camera_ = Eigen::Vector3f::Zero();
+  bool have_last_ = false;
+};
+
+}  // namespace tachi::filter

@@ -1,0 +1,44 @@
+// The filter's own value types: a raw hand sample from the sensor and the stroke sample it becomes.
+// DDS message types never reach this library; main.cpp converts at the edge (bus_adapter).
+#pragma once
+
+#include <Eigen/Core>
+
+#include <cstdint>
+
+namespace tachi::filter {
+
+/// One palm-centre measurement in the camera frame (x right, y down, z forward, metres).
+struct HandSample {
+  std::uint64_t frame = 0;
+  std::int64_t stamp_ns = 0;
+  Eigen::Vector3f position_m = Eigen::Vector3f::Zero();  ///< meaningful only when tracked
+  bool tracked = false;
+  float confidence = 0.0F;
+};
+
+/// Whether cutting is on. Matches tachi_msg_GateState.
+enum class GateOutput : std::uint8_t { Idle, Cutting };
+
+/// What opened or closed a stroke. Matches tachi_msg_GateSource.
+enum class GateSource : std::uint8_t { None, Threshold, Voice };
+
+/// A voice command as the gate sees it.
+enum class VoiceCommandKind : std::uint8_t { Start, Stop };
+
+/// One output sample: the smoothed hand in the cloth's world frame with the gate's verdict.
+struct StrokeSample {
+  std::uint64_t frame = 0;
+  std::int64_t stamp_ns = 0;
+  Eigen::Vector3f position_m = Eigen::Vector3f::Zero();         ///< world frame, smoothed
+  Eigen::Vector3f camera_position_m = Eigen::Vector3f::Zero();  ///< camera frame, smoothed
+  bool tracked = false;
+  GateOutput gate = GateOutput::Idle;
+  std::uint32_t stroke_id = 0;  ///< grows by one each time the gate opens; 0 before the first stroke
+  GateSource opened_by = GateSource::None;
+  GateSource closed_by = GateSource::None;
+  bool hand_outside_cloth = false;
+  float distance_to_cloth_m = 0.0F;
+};
+
+}  // namespace tachi::filter

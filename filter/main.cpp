@@ -1,0 +1,189 @@
+// tachi-filter: raw hand samples -> smoothed, gated strokes. Offline (CSV in, CSV out) or on the DDS bus.
+#include "bus_adapter.hpp"
+#include "tachi/bus/topics.hpp"
+#include "tachi/common/app.hpp"
+#include "tachi/filter/config.hpp"
+#include "tachi/filter/hand_csv.hpp"
+#include "tachi/filter/stroke_filter.hpp"
+
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <fstream>
+#include <iostream>
+#include <sstream>
+
+namespace {
+
+struct Options {
+  bool offline = false;
+  std::string hands_csv;
+  std::string out_csv;
+  std::string voice_csv;
+  std::string config_file;
+  std::string smoother;
+  std::string gate;
+  bool camera_frame = false;
+  bool print_config = false;
+  unsigned sensor_id = 0;
+  std::string log_level;
+  tachi::common::BusOptions bus;
+};
+
+struct TimedCommand {
+  double time_s;
+  tachi::filter::VoiceCommandKind kind;
+};
+
+// tachi-voice's output (time_s,command,phrase), for replaying voice gating offline.
+std::vector<TimedCommand> read_voice_csv(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error("cannot read voice commands " + path);
+  std::vector<TimedCommand> commands;
+  std::string line;
+  int line_no = 0;
+  while (std::getline(in, line)) {
+    ++line_no;
+    if (line.empty() || line.starts_with("time_s")) continue;
+    std::istringstream cells(line);
+    std::string time, command;
+    std::getline(cells, time, ',');
+    std::getline(cells, command, ',');
+    char* end = nullptr;
+    const double t = std::strtod(time.c_str(), &end);
+    if (end == time.c_str() || (command != "start" && command != "stop")) {
+      spdlog::warn("{} line {}: expected time_s,start|stop,phrase; skipped", path, line_no);
+      continue;
+    }
+    commands.push_back({t, command == "start" ? tachi::filter::VoiceCommandKind::Start : tachi::filter::VoiceCommandKind::Stop});
+  }
+  std::stable_sort(commands.begin(), commands.end(), [](const auto& a, const auto& b) { return a.time_s < b.time_s; });
+  return commands;
+}
+
+int run_offline(const Options& o, const tachi::filter::FilterConfig& config) {
+  std::ifstream in(o.hands_csv);
+  if (!in) throw std::runtime_error("cannot read " + o.hands_csv);
+  const auto hands = tachi::filter::read_hand_csv(in);
+  for (const auto& why : hands.skipped) spdlog::warn("{}: {}; row skipped", o.hands_csv, why);
+  const auto commands = o.voice_csv.empty() ? std::vector<TimedCommand>{} : read_voice_csv(o.voice_csv);
+
+  std::ofstream out(o.out_csv);
+  if (!out) throw std::runtime_error("cannot write " + o.out_csv);
+  tachi::filter::StrokeFilter filter{config};
+  tachi::filter::write_stroke_csv_header(out);
+  std::size_t next_command = 0;
+  const std::int64_t t0 = hands.samples.empty() ? 0 : hands.samples.front().stamp_ns;
+  std::uint32_t strokes = 0;
+  for (const auto& hand : hands.samples) {
+    // Voice time 0 is the first hand sample: the recording's audio track starts with its video.
+    const double t = static_cast<double>(hand.stamp_ns - t0) * 1e-9;
+    while (next_command < commands.size() && commands[next_command].time_s <= t)
+      filter.on_voice(commands[next_command++].kind);
+    const auto stroke = filter.on_hand(hand);
+    strokes = stroke.stroke_id;
+    tachi::filter::write_stroke_csv_row(out, stroke, o.camera_frame);
+  }
+  out.flush();
+  if (!out) throw std::runtime_error("write failed: " + o.out_csv);
+  spdlog::info("{} samples ({} skipped), {} strokes -> {}", hands.samples.size(), hands.skipped.size(), strokes, o.out_csv);
+  return tachi::common::kExitOk;
+}
+
+int run_bus(const Options& o, const tachi::filter::FilterConfig& config) {
+  namespace bus = tachi::bus;
+  using namespace std::chrono_literals;
+  bus::Participant dds{o.bus.domain, o.bus.dds_config};
+  bus::Reader<tachi_msg_RawHandSample> hands{dds, bus::topics::raw_hand};
+  bus::Reader<tachi_msg_VoiceCommand> voice{dds, bus::topics::voice_command};
+  bus::Reader<tachi_msg_ClothState> cloth{dds, bus::topics::cloth_state};
+  bus::Writer<tachi_msg_StrokeSample> strokes{dds, bus::topics::stroke};
+  bus::WaitSet waitset{dds};
+  waitset.attach(hands);
+  waitset.attach(voice);
+  waitset.attach(cloth);
+
+  tachi::filter::StrokeFilter filter{config};
+  std::uint64_t in_count = 0;
+  std::uint64_t out_count = 0;
+  spdlog::info("tachi-filter on domain {}: gate {}, smoother {}", o.bus.domain, tachi::filter::to_string(config.gate.mode),
+               tachi::filter::to_string(config.smoother.kind));
+  tachi::common::install_stop_handlers();
+  tachi::common::run_until_stopped([&] {
+    waitset.wait(100ms);
+    // Commands first: one spoken before a hand sample arrived applies to that sample.
+    for (const auto& c : voice.take()) {
+      spdlog::info("voice command {} (\"{}\")", c->command == tachi_msg_VOICE_START ? "start" : "stop", c->phrase);
+      filter.on_voice(tachi::filter::from_msg(*c));
+    }
+    auto states = cloth.take();
+    if (!states.empty()) {
+      const auto& newest = *states.back();
+      filter.on_cloth_state({newest.positions._buffer, newest.positions._length});
+    }
+    for (const auto& h : hands.take()) {
+      ++in_count;
+      const auto stroke = filter.on_hand(tachi::filter::from_msg(*h));
+      strokes.write(tachi::filter::to_msg(stroke, h->sensor_id));
+      ++out_count;
+    }
+    return true;
+  });
+  spdlog::info("stopping: {} hand samples in, {} stroke samples out", in_count, out_count);
+  return tachi::common::kExitOk;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) try {
+  CLI::App app{"tachi-filter: smooths raw hand samples, maps them onto the cloth and gates cutting strokes"};
+  app.name("tachi-filter");
+  Options o;
+  app.add_flag("--offline", o.offline, "Read a hand CSV and write a stroke CSV instead of joining the DDS bus");
+  app.add_option("--hands", o.hands_csv, "Offline input: the sensor's CSV (frame,stamp_ns,x,y,z,u,v,tracked,confidence)")
+      ->check(CLI::ExistingFile);
+  app.add_option("--out", o.out_csv, "Offline output: frame,stamp_ns,x,y,z,gate,stroke_id");
+  app.add_option("--voice", o.voice_csv,
+                 "Offline: voice commands as tachi-voice prints them (time_s,command,phrase; time 0 = first hand sample)")
+      ->check(CLI::ExistingFile);
+  app.add_option("--config", o.config_file, "Filter config JSON (see config/filter.json); defaults built in")
+      ->check(CLI::ExistingFile);
+  app.add_option("--smoother", o.smoother, "Override the config's smoother")
+      ->check(CLI::IsMember({"one-euro", "moving-average", "none"}));
+  app.add_option("--gate", o.gate, "Override the config's gate mode")->check(CLI::IsMember({"threshold", "voice", "either"}));
+  app.add_flag("--camera-frame", o.camera_frame, "Offline: write camera-frame positions instead of world-frame ones");
+  app.add_flag("--print-config", o.print_config, "Print the effective config as JSON and exit");
+  tachi::common::add_log_level_flag(app, o.log_level);
+  tachi::common::add_bus_flags(app, o.bus);
+  if (const int rc = tachi::common::parse(app, argc, argv); rc >= 0) return rc;
+  tachi::common::set_log_level(o.log_level);
+
+  tachi::filter::FilterConfig config;
+  try {
+    if (!o.config_file.empty()) config = tachi::filter::load_filter_config(o.config_file);
+  } catch (const std::invalid_argument& e) {
+    std::cerr << "tachi-filter: --config " << o.config_file << ": " << e.what() << '\n';
+    return tachi::common::kExitUsage;
+  }
+  if (!o.smoother.empty()) config.smoother.kind = *tachi::filter::smoother_kind_from_string(o.smoother);
+  if (!o.gate.empty()) config.gate.mode = *tachi::filter::gate_mode_from_string(o.gate);
+  if (o.print_config) {
+    std::cout << tachi::filter::to_json(config) << '\n';
+    return tachi::common::kExitOk;
+  }
+  if (o.offline) {
+    if (o.hands_csv.empty() || o.out_csv.empty()) {
+      std::cerr << "tachi-filter: --offline needs --hands IN.csv and --out OUT.csv\n";
+      return tachi::common::kExitUsage;
+    }
+    return run_offline(o, config);
+  }
+  if (!o.hands_csv.empty() || !o.out_csv.empty() || !o.voice_csv.empty() || o.camera_frame) {
+    std::cerr << "tachi-filter: --hands, --out, --voice and --camera-frame need --offline\n";
+    return tachi::common::kExitUsage;
+  }
+  return run_bus(o, config);
+} catch (const std::exception& e) {
+  std::cerr << "tachi-filter: " << e.what() << '\n';
+  return tachi::common::kExitFailure;
+}

@@ -1,0 +1,135 @@
+// Runs the real tachi-filter executable offline on a synthetic recording and checks what it writes.
+#include "synthetic_hands.hpp"
+
+#include <gtest/gtest.h>
+
+#include <sys/wait.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <set>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace {
+
+namespace fs = std::filesystem;
+
+struct ProcessResult {
+  int exit_code;
+  std::string output;  // stdout + stderr
+};
+
+ProcessResult run(const std::string& args) {
+  const fs::path log = fs::temp_directory_path() / ("tachi_filter_cli_" + std::to_string(::getpid()) + ".log");
+  const std::string cmd = std::string(TACHI_FILTER_EXE) + " " + args + " > " + log.string() + " 2>&1";
+  const int status = std::system(cmd.c_str());
+  std::ifstream in(log);
+  std::stringstream text;
+  text << in.rdbuf();
+  fs::remove(log);
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, text.str()};
+}
+
+std::vector<std::vector<std::string>> read_rows(const fs::path& path) {
+  std::ifstream in(path);
+  std::vector<std::vector<std::string>> rows;
+  std::string line;
+  while (std::getline(in, line)) {
+    std::vector<std::string> cells;
+    std::stringstream s(line);
+    std::string cell;
+    while (std::getline(s, cell, ',')) cells.push_back(cell);
+    rows.push_back(cells);
+  }
+  return rows;
+}
+
+class FilterCli : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("tachi_filter_cli_" + std::to_string(::getpid()) + "_" +
+                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::create_directories(dir_);
+    std::ofstream out(dir_ / "hands.csv");
+    tachi::filter::testing::write_hand_csv(out, tachi::filter::testing::push_and_back(3));
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  fs::path dir_;
+};
+
+TEST_F(FilterCli, OfflinePushWritesOneStrokeInTheWorldFrame) {
+  const ProcessResult r = run("--offline --hands " + (dir_ / "hands.csv").string() + " --out " + (dir_ / "out.csv").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const auto rows = read_rows(dir_ / "out.csv");
+  ASSERT_EQ(rows.size(), 121U);
+  EXPECT_EQ(rows[0], (std::vector<std::string>{"frame", "stamp_ns", "x", "y", "z", "gate", "stroke_id"}));
+  std::set<std::string> cutting_ids;
+  for (std::size_t i = 1; i < rows.size(); ++i) {
+    ASSERT_EQ(rows[i].size(), 7U);
+    if (rows[i][5] == "1") cutting_ids.insert(rows[i][6]);
+  }
+  EXPECT_EQ(cutting_ids, std::set<std::string>{"1"});
+  // Frame 0: camera (-0.1, 0.05, 1.30) +- wobble -> world (0.1, -0.05, 0.30).
+  EXPECT_NEAR(std::stod(rows[1][2]), 0.1, 0.03);
+  EXPECT_NEAR(std::stod(rows[1][3]), -0.05, 0.03);
+  EXPECT_NEAR(std::stod(rows[1][4]), 0.30, 0.03);
+}
+
+TEST_F(FilterCli, CameraFrameFlagWritesCameraCoordinates) {
+  const ProcessResult r = run("--offline --hands " + (dir_ / "hands.csv").string() + " --out " + (dir_ / "out.csv").string() +
+                    " --camera-frame --smoother none");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const auto rows = read_rows(dir_ / "out.csv");
+  const auto in = read_rows(dir_ / "hands.csv");
+  ASSERT_EQ(rows.size(), in.size());
+  for (std::size_t i = 1; i < rows.size(); ++i)
+    for (std::size_t c = 2; c <= 4; ++c) EXPECT_NEAR(std::stod(rows[i][c]), std::stod(in[i][c]), 1e-5);
+}
+
+TEST_F(FilterCli, BadInputGivesAClearErrorNotACrash) {
+  {
+    std::ofstream bad(dir_ / "bad.csv");
+    bad << "frame,x,y\n1,2,3\n";
+  }
+  ProcessResult r = run("--offline --hands " + (dir_ / "bad.csv").string() + " --out " + (dir_ / "out.csv").string());
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.output.find("stamp_ns"), std::string::npos) << r.output;
+
+  r = run("--offline --hands " + (dir_ / "hands.csv").string() + " --out " + (dir_ / "out.csv").string() +
+          " --smoother kalman");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.output.find("--smoother"), std::string::npos) << r.output;
+
+  r = run("--offline --hands " + (dir_ / "hands.csv").string());
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.output.find("--out"), std::string::npos) << r.output;
+
+  {
+    std::ofstream cfg(dir_ / "bad.json");
+    cfg << R"({"gate": {"enter_distance_m": -1}})";
+  }
+  r = run("--offline --config " + (dir_ / "bad.json").string() + " --hands " + (dir_ / "hands.csv").string() +
+          " --out " + (dir_ / "out.csv").string());
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.output.find("enter_distance_m"), std::string::npos) << r.output;
+}
+
+TEST_F(FilterCli, VoiceCommandsFromACsvGateOffline) {
+  {
+    std::ofstream voice(dir_ / "voice.csv");
+    voice << "0.5,start,start cutting\n2.0,stop,stop cutting\n";
+  }
+  const ProcessResult r = run("--offline --gate voice --voice " + (dir_ / "voice.csv").string() + " --hands " +
+                    (dir_ / "hands.csv").string() + " --out " + (dir_ / "out.csv").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const auto rows = read_rows(dir_ / "out.csv");
+  int cutting = 0;
+  for (std::size_t i = 1; i < rows.size(); ++i) cutting += rows[i][5] == "1" ? 1 : 0;
+  // 0.5 s .. 2.0 s at 30 Hz: frames 15..59 (45 frames, +-1 for rounding of the stamps).
+  EXPECT_NEAR(cutting, 45, 1);
+}
+
+}  // namespace

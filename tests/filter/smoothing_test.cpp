@@ -1,0 +1,132 @@
+#include "tachi/filter/smoothing.hpp"
+
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cmath>
+#include <random>
+
+namespace tachi::filter {
+namespace {
+
+TEST(MovingAverage, MatchesHandComputedMeansWhileTheWindowFills) {
+  MovingAverage avg{3};
+  // Window 3 over 3, 6, 9, 12, 0: means 3, 4.5, 6, 9, 7 (computed by hand).
+  const std::array<float, 5> in{3, 6, 9, 12, 0};
+  const std::array<float, 5> expected{3.0F, 4.5F, 6.0F, 9.0F, 7.0F};
+  for (std::size_t i = 0; i < in.size(); ++i) {
+    const Eigen::Vector3f out = avg.filter(Eigen::Vector3f{in[i], -in[i], 2 * in[i]});
+    EXPECT_FLOAT_EQ(out.x(), expected[i]) << "sample " << i;
+    EXPECT_FLOAT_EQ(out.y(), -expected[i]) << "sample " << i;
+    EXPECT_FLOAT_EQ(out.z(), 2 * expected[i]) << "sample " << i;
+  }
+}
+
+TEST(MovingAverage, ResetForgetsThePast) {
+  MovingAverage avg{4};
+  avg.filter(Eigen::Vector3f::Constant(10));
+  avg.filter(Eigen::Vector3f::Constant(20));
+  avg.reset();
+  EXPECT_FLOAT_EQ(avg.filter(Eigen::Vector3f::Constant(1)).x(), 1.0F);
+}
+
+// Reference vectors: an independent Python implementation of Algorithm 1 of Casiez, Roussel, Vogel
+// (CHI 2012) -- alpha = 1/(1 + tau/Te), tau = 1/(2 pi fc), dx = (x_i - x_hat_{i-1})/Te low-passed at
+// d_cutoff, fc = min_cutoff + beta |dx_hat| -- run once on x = 0, 1, 1, 1, 0.5, 2, 2 and printed with
+// 9 decimals (the script is in docs/filter.md, "One Euro reference vectors").
+struct OneEuroCase {
+  OneEuroParams params;
+  std::array<double, 7> t;
+  std::array<double, 7> expected;
+};
+
+TEST(OneEuroScalar, MatchesIndependentReferenceVectors) {
+  const std::array<double, 7> x{0.0, 1.0, 1.0, 1.0, 0.5, 2.0, 2.0};
+  const std::array<OneEuroCase, 3> cases{{
+      {{1.0, 0.5, 1.0},
+       {0, 1.0 / 30, 2.0 / 30, 3.0 / 30, 4.0 / 30, 5.0 / 30, 6.0 / 30},
+       {0.000000000, 0.429702693, 0.710438559, 0.854887530, 0.712986093, 1.437326262, 1.766212441}},
+      {{2.0, 0.0, 1.0},
+       {0, 0.02, 0.05, 0.1, 0.11, 0.2, 0.25},
+       {0.000000000, 0.200848643, 0.419639425, 0.643582896, 0.627553989, 1.355953463, 1.604471407}},
+      {{0.5, 10.0, 2.0},
+       {0, 1.0 / 30, 2.0 / 30, 3.0 / 30, 4.0 / 30, 5.0 / 30, 6.0 / 30},
+       {0.000000000, 0.949119335, 0.996635230, 0.999695385, 0.648400077, 1.945014736, 1.997054949}},
+  }};
+  for (const auto& c : cases) {
+    OneEuroScalar f{c.params};
+    for (std::size_t i = 0; i < x.size(); ++i) {
+      const double dt = i == 0 ? 1.0 / 30 : c.t[i] - c.t[i - 1];
+      EXPECT_NEAR(f.filter(x[i], dt), c.expected[i], 1e-8)
+          << "min_cutoff " << c.params.min_cutoff_hz << " beta " << c.params.beta << " sample " << i;
+    }
+  }
+}
+
+TEST(OneEuroScalar, AlphaFollowsTheCutoffFormula) {
+  // fc = 1 Hz, Te = 1/30 s: tau = 1/(2 pi), alpha = 1/(1 + 30/(2 pi)) = 0.173171
+  EXPECT_NEAR(one_euro_alpha(1.0, 1.0 / 30), 1.0 / (1.0 + 30.0 / (2.0 * 3.14159265358979)), 1e-12);
+  EXPECT_NEAR(one_euro_alpha(1.0, 1.0 / 30), 0.173171, 1e-6);
+}
+
+TEST(OneEuroFilter, SmoothsMoreWhenSlowThanWhenFast) {
+  // Held still with noise, the filter removes most jitter; moving fast, beta opens the cutoff.
+  std::mt19937 rng{7};
+  std::normal_distribution<float> noise{0.0F, 0.005F};
+  OneEuroFilter still{{1.0, 1.0, 1.0}};
+  double raw_sq = 0, filtered_sq = 0;
+  for (int i = 0; i < 300; ++i) {
+    const Eigen::Vector3f n{noise(rng), noise(rng), noise(rng)};
+    const Eigen::Vector3f out = still.filter(n, 1.0 / 30);
+    if (i >= 30) {
+      raw_sq += n.squaredNorm();
+      filtered_sq += out.squaredNorm();
+    }
+  }
+  EXPECT_LT(filtered_sq, 0.25 * raw_sq);
+
+  OneEuroFilter fast{{1.0, 1.0, 1.0}};
+  OneEuroFilter no_beta{{1.0, 0.0, 1.0}};
+  Eigen::Vector3f a, b;
+  for (int i = 0; i < 30; ++i) {  // 1.5 m/s ramp
+    const Eigen::Vector3f x{0.05F * static_cast<float>(i), 0, 0};
+    a = fast.filter(x, 1.0 / 30);
+    b = no_beta.filter(x, 1.0 / 30);
+  }
+  const float target = 0.05F * 29;
+  EXPECT_LT(target - a.x(), 0.5F * (target - b.x()));
+}
+
+TEST(Smoother, LongGapRestartsTheFilter) {
+  SmootherParams p;
+  p.kind = SmootherKind::MovingAverage;
+  p.moving_average_window = 5;
+  p.reset_after_gap_s = 0.5;
+  Smoother s{p};
+  s.filter(Eigen::Vector3f::Constant(1), 0);
+  s.filter(Eigen::Vector3f::Constant(1), 33'000'000);
+  // 1 s later: the old samples must not drag the new position.
+  EXPECT_FLOAT_EQ(s.filter(Eigen::Vector3f::Constant(5), 1'033'000'000).x(), 5.0F);
+}
+
+TEST(Smoother, NoneReturnsTheInput) {
+  SmootherParams p;
+  p.kind = SmootherKind::None;
+  Smoother s{p};
+  s.filter({1, 2, 3}, 0);
+  EXPECT_EQ(s.filter({4, 5, 6}, 33'000'000), Eigen::Vector3f(4, 5, 6));
+}
+
+TEST(SmootherParams, ValidationNamesTheBadKey) {
+  SmootherParams p;
+  p.one_euro.min_cutoff_hz = 0;
+  ASSERT_TRUE(validate(p).has_value());
+  EXPECT_NE(validate(p)->find("min_cutoff_hz"), std::string::npos);
+  p = {};
+  p.moving_average_window = 0;
+  EXPECT_NE(validate(p)->find("window"), std::string::npos);
+  EXPECT_FALSE(validate(SmootherParams{}).has_value());
+}
+
+}  // namespace
+}  // namespace tachi::filter

@@ -1,0 +1,114 @@
+#include "tachi/filter/stroke_filter.hpp"
+
+#include "synthetic_hands.hpp"
+
+#include <gtest/gtest.h>
+
+#include <set>
+
+namespace tachi::filter {
+namespace {
+
+std::set<std::uint32_t> cut_strokes(StrokeFilter& f, const std::vector<HandSample>& hands) {
+  std::set<std::uint32_t> ids;
+  for (const auto& h : hands) {
+    const auto s = f.on_hand(h);
+    if (s.gate == GateOutput::Cutting) ids.insert(s.stroke_id);
+  }
+  return ids;
+}
+
+TEST(StrokeFilter, PushTowardTheClothAndBackIsOneStroke) {
+  for (unsigned seed = 1; seed <= 10; ++seed) {
+    StrokeFilter f{FilterConfig{}};
+    const auto strokes = cut_strokes(f, testing::push_and_back(seed));
+    EXPECT_EQ(strokes, std::set<std::uint32_t>{1}) << "seed " << seed;
+  }
+}
+
+// The seed paper's gate (one threshold, no dwell, no smoothing) fragments the same push: this is what
+// the hysteresis, the dwell and the smoothing fix, and it shows the test above can fail.
+TEST(StrokeFilter, TheSeedsSingleThresholdFragmentsThePush) {
+  FilterConfig seed_gate;
+  seed_gate.smoother.kind = SmootherKind::None;
+  seed_gate.gate.enter_distance_m = 0.05F;
+  seed_gate.gate.exit_distance_m = 0.0500001F;
+  seed_gate.gate.enter_dwell_samples = 1;
+  seed_gate.gate.exit_dwell_samples = 1;
+  std::size_t fragmented = 0;
+  for (unsigned seed = 1; seed <= 10; ++seed) {
+    StrokeFilter f{seed_gate};
+    if (cut_strokes(f, testing::push_and_back(seed)).size() > 1) ++fragmented;
+  }
+  EXPECT_GE(fragmented, 8U);
+}
+
+TEST(StrokeFilter, OutputIsInTheWorldFrameAndFlagsTheHandOutsideTheCloth) {
+  StrokeFilter f{FilterConfig{}};
+  HandSample h;
+  h.tracked = true;
+  h.position_m = {-0.2F, -0.1F, 1.1F};  // user's right, up, 10 cm in front of the cloth
+  const auto s = f.on_hand(h);
+  EXPECT_TRUE(s.position_m.isApprox(Eigen::Vector3f(0.2F, 0.1F, 0.1F), 1e-5F));
+  EXPECT_TRUE(s.camera_position_m.isApprox(h.position_m));
+  EXPECT_NEAR(s.distance_to_cloth_m, 0.1F, 1e-5F);
+  EXPECT_FALSE(s.hand_outside_cloth);
+  h.position_m = {-0.7F, 0.0F, 1.1F};
+  h.stamp_ns = 33'000'000;
+  StrokeFilter g{FilterConfig{}};
+  EXPECT_TRUE(g.on_hand(h).hand_outside_cloth);
+}
+
+TEST(StrokeFilter, ClothStateReplacesTheRestPlane) {
+  StrokeFilter f{FilterConfig{}};
+  // A cloth bulging toward the user by 0.2 m under the hand.
+  const std::vector<float> xyz{0.0F, 0.0F, 0.2F, 0.1F, 0.0F, 0.0F};
+  f.on_cloth_state(xyz);
+  HandSample h;
+  h.tracked = true;
+  h.position_m = {0.0F, 0.0F, 1.22F};  // world z = 0.22
+  EXPECT_NEAR(f.on_hand(h).distance_to_cloth_m, 0.02F, 1e-5F);
+}
+
+TEST(StrokeFilter, ALostHandResetsTheSmoother) {
+  FilterConfig c;
+  c.smoother.kind = SmootherKind::MovingAverage;
+  c.smoother.moving_average_window = 9;
+  StrokeFilter f{c};
+  HandSample h;
+  h.tracked = true;
+  for (int i = 0; i < 5; ++i) {
+    h.stamp_ns = i * 33'000'000LL;
+    h.position_m = {0.0F, 0.0F, 1.5F};
+    f.on_hand(h);
+  }
+  HandSample lost = h;
+  lost.tracked = false;
+  lost.stamp_ns += 33'000'000;
+  EXPECT_FALSE(f.on_hand(lost).tracked);
+  h.stamp_ns = lost.stamp_ns + 33'000'000;
+  h.position_m = {0.3F, 0.0F, 1.2F};
+  EXPECT_TRUE(f.on_hand(h).camera_position_m.isApprox(h.position_m));
+}
+
+TEST(StrokeFilter, VoiceGatingProducesOneStrokePerStartStop) {
+  FilterConfig c;
+  c.gate.mode = GateMode::Voice;
+  StrokeFilter f{c};
+  HandSample h;
+  h.tracked = true;
+  h.position_m = {0.0F, 0.0F, 1.4F};
+  EXPECT_EQ(f.on_hand(h).gate, GateOutput::Idle);
+  f.on_voice(VoiceCommandKind::Start);
+  auto s = f.on_hand(h);
+  EXPECT_EQ(s.gate, GateOutput::Cutting);
+  EXPECT_EQ(s.opened_by, GateSource::Voice);
+  f.on_voice(VoiceCommandKind::Stop);
+  s = f.on_hand(h);
+  EXPECT_EQ(s.gate, GateOutput::Idle);
+  EXPECT_EQ(s.closed_by, GateSource::Voice);
+  EXPECT_EQ(s.stroke_id, 1U);
+}
+
+}  // namespace
+}  // namespace tachi::filter

@@ -1,6 +1,7 @@
 #include "tachi/sim/offline.hpp"
 
 #include "tachi/sim/pieces.hpp"
+#include "tachi/sim/stroke.hpp"
 
 #include <algorithm>
 #include <charconv>
@@ -112,6 +113,20 @@ void add_offline_flags(CLI::App& app, OfflineOptions& o) {
   app.add_option_function<float>(
          "--ground", [&o](float y) { o.ground = GroundPlane{y}; }, "Ground plane at height Y (metres)")
       ->check(CLI::Range(-1000.0F, 1000.0F));
+  app.add_option("--stroke", o.stroke_file,
+                 "CSV stroke (header t,x,y,z; seconds from the start, world metres) cut while stepping")
+      ->check(CLI::ExistingFile);
+  app.add_option_function<std::string>(
+         "--blade",
+         [&o](const std::string& text) {
+           const auto blade = parse_blade(text);
+           if (!blade) {
+             throw CLI::ValidationError("--blade", "'" + text + "' is not razor, scalpel, utility, kitchen, hunting or worn");
+           }
+           o.blade = *blade;
+         },
+         "Blade sharpness (seed 001 Figure 4): razor, scalpel, utility, kitchen, hunting or worn")
+      ->default_str("scalpel");
 }
 
 nlohmann::json to_json(const Summary& s) {
@@ -176,16 +191,50 @@ Summary run_offline(const OfflineOptions& options) {
   colliders.spheres = options.spheres;
   colliders.ground = options.ground;
 
+  // The stroke is cut while stepping, each sample at its own time (issue 4).
+  StrokeFile stroke;
+  if (!options.stroke_file.empty()) {
+    std::ifstream in{options.stroke_file};
+    if (!in) throw std::runtime_error("cannot read " + options.stroke_file.string());
+    stroke = parse_stroke_csv(in);
+    if (!stroke.error.empty()) throw std::runtime_error(options.stroke_file.string() + ": " + stroke.error);
+  }
+  StrokeOptions stroke_options;
+  stroke_options.blade = options.blade;
+  StrokeCutter cutter{cloth, stroke_options};
+  std::size_t next_sample = 0;
+
   std::vector<double> step_ms;
   step_ms.reserve(static_cast<std::size_t>(options.steps));
   for (int s = 0; s < options.steps; ++s) {
+    const double step_end = (s + 1) * static_cast<double>(options.solver.dt);
+    while (next_sample < stroke.samples.size() && stroke.samples[next_sample].t < step_end) {
+      cutter.add_sample(stroke.samples[next_sample++]);
+      if (next_sample == stroke.samples.size()) cutter.end_stroke();
+    }
     const auto t0 = std::chrono::steady_clock::now();
     solver.step(cloth, colliders);
     step_ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
   }
 
+  cutter.end_stroke();  // a stroke still open when the run ends is cut up to its last applied sample
+
   Summary summary = summarize(cloth);
   summary.steps = options.steps;
+  const StrokeReport& cut = cutter.total();
+  nlohmann::json cut_line = nlohmann::json::array();
+  for (const GridCoord g : cut.cut_line) cut_line.push_back({g.u, g.v});
+  summary.extra["fallen_pieces"] = find_pieces(cloth).fallen();
+  summary.extra["cut_particles"] = cut.particles_duplicated;
+  summary.extra["cut_length_m"] = cut.cut_length_m;
+  summary.extra["cut_line"] = std::move(cut_line);
+  summary.extra["cut_lines"] = cut.lines;
+  summary.extra["blade"] = std::string{to_string(options.blade)};
+  summary.extra["blade_force_n"] = sharpness(options.blade).force_n();
+  summary.extra["stroke_samples"] = stroke.samples.size();
+  summary.extra["stroke_samples_applied"] = next_sample;
+  summary.extra["stroke_rows_skipped"] = stroke.skipped_rows;
+  summary.extra["topology_version"] = cloth.topology_version;
   summary.step_ms_median = percentile(step_ms, 0.5);
   summary.step_ms_p95 = percentile(step_ms, 0.95);
   if (!options.export_dir.empty()) {

@@ -3,6 +3,7 @@
 // features (cutting: --stroke, --blade) extend OfflineOptions / run_offline / to_json, not main.
 #pragma once
 
+#include "tachi/sim/blade.hpp"
 #include "tachi/sim/cloth.hpp"
 #include "tachi/sim/collision.hpp"
 #include "tachi/sim/solver.hpp"
@@ -27,6 +28,8 @@ struct OfflineOptions {
   float jitter_m = 1e-4F;               ///< amplitude of that jitter (0 = perfectly flat start)
   std::vector<Sphere> spheres;          ///< --sphere X Y Z R (repeatable)
   std::optional<GroundPlane> ground;    ///< --ground Y
+  std::filesystem::path stroke_file;    ///< --stroke: CSV t,x,y,z cut while stepping (t = seconds from the start)
+  Blade blade = Blade::Scalpel;         ///< --blade
 };
 
 /// What a run produced. Keys of to_json(): the contract plus extras.

@@ -1,0 +1,136 @@
+// From a hand stroke to cuts of the cloth, progressively, as the samples arrive (seed 000 sections 3.1-3.2
+// and the failures of its section 4, fixed):
+//  * each sample (world metres) maps to the nearest particle of the cloth in its current shape; its grid
+//    coordinate (u, v) is a cut-line point (seed 000 section 3.2). The sample's offset from that particle,
+//    in the local frame of the deformed grid, also gives a continuous (u, v), which says whether the
+//    hand is beyond the cloth's edge;
+//  * jitter and complex trajectories (Figure 8): the stroke is simplified in (u, v) before rasterising.
+//    A point joins the cut only once the samples since the last one stop fitting a straight chord (more
+//    than `tolerance_cells` off it, or going back) or the chord reaches `max_lag_cells`: the cut lags the
+//    hand by at most that, and a hand trembling around one particle cuts nothing;
+//  * a stroke that runs past the boundary (Figures 6-7) is clipped to the grid rectangle in (u, v): the cut
+//    goes straight to where the stroke crosses the edge instead of following the edge through the
+//    nearest boundary particles; a swipe that starts and ends outside cuts straight through;
+//  * the cut reaches the stroke's end point (Figure 5): the last sample always joins the cut at stroke end;
+//  * the blade's force drags the neighbourhood of each particle as it is cut (seed 001, blade.hpp).
+#pragma once
+
+#include "tachi/sim/blade.hpp"
+#include "tachi/sim/cloth.hpp"
+#include "tachi/sim/cut_line.hpp"
+#include "tachi/sim/cutting.hpp"
+
+#include <Eigen/Core>
+
+#include <cstdint>
+#include <istream>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace tachi::sim {
+
+struct StrokeSample {
+  double t = 0.0;  ///< seconds
+  Eigen::Vector3f position = Eigen::Vector3f::Zero();  ///< world metres
+};
+
+/// A stroke read from CSV, or why it could not be.
+struct StrokeFile {
+  std::vector<StrokeSample> samples;
+  std::size_t skipped_rows = 0;  ///< rows with a wrong field count, a non-number, or time going back
+  std::string error;             ///< set when the file is unusable (no header `t,x,y,z`, no sample)
+};
+
+/// Parses `t,x,y,z` CSV (header required; blank lines ignored; bad rows skipped and counted).
+[[nodiscard]] StrokeFile parse_stroke_csv(std::istream& in);
+
+/// Where a world point falls on the cloth.
+struct ClothPoint {
+  std::uint32_t particle = 0;          ///< nearest particle
+  GridCoord grid;                      ///< its grid coordinate
+  Eigen::Vector2d uv{0.0, 0.0};        ///< continuous grid coordinate of the point itself
+  float distance_m = 0.0F;             ///< to the nearest particle
+  bool inside = false;                 ///< uv within the grid rectangle (+ margin)
+};
+
+/// Nearest-particle search with a warm start (a hand moves little between samples): greedy descent over
+/// live springs from the previous answer, falling back to a full scan when the descent ends far away.
+class ClothLocator {
+ public:
+  explicit ClothLocator(double inside_margin_cells = 0.5) : margin_(inside_margin_cells) {}
+  [[nodiscard]] ClothPoint locate(const Cloth& cloth, const Eigen::Vector3f& point);
+  void reset() { hint_.reset(); }
+
+ private:
+  double margin_;
+  std::optional<std::uint32_t> hint_;
+};
+
+struct StrokeOptions {
+  Blade blade = Blade::Scalpel;
+  BladeDrag drag;
+  double tolerance_cells = 0.75;  ///< simplification: largest deviation from a chord, grid cells
+  double max_lag_cells = 2.0;     ///< simplification: longest chord before it joins the cut
+  double inside_margin_cells = 0.5;
+};
+
+/// What a stroke did so far.
+struct StrokeReport {
+  std::vector<GridCoord> cut_line;   ///< every cut line of the stroke, concatenated (an exit and re-entry starts a new one)
+  std::size_t lines = 0;             ///< how many separate cut lines
+  std::size_t particles_duplicated = 0;
+  float cut_length_m = 0.0F;         ///< rest length of the cut lines
+};
+
+/// Receives the samples of strokes one at a time and cuts the cloth progressively. One per cloth (it
+/// owns the cloth's ClothCutter); the same object serves the live simulator and the offline driver.
+class StrokeCutter {
+ public:
+  StrokeCutter(Cloth& cloth, StrokeOptions options);
+
+  /// Gate opened: a new stroke. Ends an open stroke first.
+  TopologyChange begin_stroke();
+  /// A sample of the open stroke (opens one if none is). Non-finite positions are skipped.
+  TopologyChange add_sample(const StrokeSample& sample);
+  /// Gate closed: the cut reaches the last sample, the line's end is tidied. Nothing if no stroke is open.
+  TopologyChange end_stroke();
+
+  [[nodiscard]] bool stroke_open() const { return open_; }
+  /// The current (or last) stroke.
+  [[nodiscard]] const StrokeReport& report() const { return report_; }
+  /// Totals over every stroke.
+  [[nodiscard]] const StrokeReport& total() const { return total_; }
+  [[nodiscard]] const ClothCutter& cutter() const { return cutter_; }
+  [[nodiscard]] const StrokeOptions& options() const { return options_; }
+
+ private:
+  struct Point {
+    Eigen::Vector2d uv;
+    GridCoord grid;
+    Eigen::Vector3f world;
+    bool inside;
+  };
+  void commit(GridCoord g, const Eigen::Vector3f& direction, TopologyChange& change);
+  void start_line(GridCoord g, const Eigen::Vector3f& direction, TopologyChange& change);
+  void close_line();
+  void add_line_to_report(const std::vector<GridCoord>& line);
+  [[nodiscard]] GridCoord boundary_point(const Eigen::Vector2d& uv) const;
+
+  Cloth* cloth_;
+  StrokeOptions options_;
+  ClothCutter cutter_;
+  ClothLocator locator_;
+  bool open_ = false;
+  std::optional<CutLineBuilder> line_;      // while the stroke is inside the cloth
+  Eigen::Vector2d anchor_{0.0, 0.0};        // uv of the last point that joined the cut
+  std::vector<Point> pending_;              // samples since the anchor, not yet in the cut
+  std::optional<Point> previous_;           // the stroke's previous sample
+  Eigen::Vector3f last_direction_ = Eigen::Vector3f::Zero();  // hand motion, for the blade's drag
+  std::size_t committed_in_line_ = 0;       // line length already counted in the report
+  StrokeReport report_;
+  StrokeReport total_;
+  std::vector<float> drag_scratch_;
+};
+
+}  // namespace tachi::sim

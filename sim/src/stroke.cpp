@@ -1,0 +1,323 @@
+#include "tachi/sim/stroke.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cctype>
+#include <cmath>
+#include <cstdlib>
+#include <limits>
+#include <sstream>
+
+namespace tachi::sim {
+
+namespace {
+
+std::string strip(std::string s) {
+  s.erase(std::remove_if(s.begin(), s.end(), [](unsigned char c) { return std::isspace(c) != 0; }), s.end());
+  return s;
+}
+
+std::optional<double> parse_number(const std::string& field) {
+  if (field.empty()) return std::nullopt;
+  char* end = nullptr;
+  const double value = std::strtod(field.c_str(), &end);
+  if (end != field.c_str() + field.size() || !std::isfinite(value)) return std::nullopt;
+  return value;
+}
+
+/// Liang-Barsky: the part [t0, t1] of the segment a + t (b - a), t in [0, 1], inside the rectangle
+/// [0, max_u] x [0, max_v]; nothing when the segment misses it.
+std::optional<std::pair<double, double>> clip_to_rectangle(const Eigen::Vector2d& a, const Eigen::Vector2d& b,
+                                                            double max_u, double max_v) {
+  double t0 = 0.0;
+  double t1 = 1.0;
+  const Eigen::Vector2d d = b - a;
+  const std::array<double, 4> p{-d.x(), d.x(), -d.y(), d.y()};
+  const std::array<double, 4> q{a.x(), max_u - a.x(), a.y(), max_v - a.y()};
+  for (std::size_t i = 0; i < 4; ++i) {
+    if (p[i] == 0.0) {
+      if (q[i] < 0.0) return std::nullopt;
+      continue;
+    }
+    const double r = q[i] / p[i];
+    if (p[i] < 0.0) {
+      t0 = std::max(t0, r);
+    } else {
+      t1 = std::min(t1, r);
+    }
+  }
+  if (t0 > t1) return std::nullopt;
+  return std::pair{t0, t1};
+}
+
+}  // namespace
+
+StrokeFile parse_stroke_csv(std::istream& in) {
+  StrokeFile out;
+  std::string line;
+  bool header = false;
+  double last_t = -std::numeric_limits<double>::infinity();
+  while (std::getline(in, line)) {
+    line = strip(line);
+    if (line.empty()) continue;
+    if (!header) {
+      std::transform(line.begin(), line.end(), line.begin(), [](unsigned char c) { return std::tolower(c); });
+      if (line != "t,x,y,z") {
+        out.error = "the first line must be the header t,x,y,z";
+        return out;
+      }
+      header = true;
+      continue;
+    }
+    std::array<double, 4> values{};
+    std::istringstream fields{line};
+    std::string field;
+    std::size_t n = 0;
+    bool ok = true;
+    while (std::getline(fields, field, ',')) {
+      const auto value = parse_number(field);
+      if (n >= 4 || !value) {
+        ok = false;
+        break;
+      }
+      values[n++] = *value;
+    }
+    if (!ok || n != 4 || values[0] < last_t) {
+      ++out.skipped_rows;
+      continue;
+    }
+    last_t = values[0];
+    out.samples.push_back({values[0], Eigen::Vector3d{values[1], values[2], values[3]}.cast<float>()});
+  }
+  if (!header) {
+    out.error = "empty file: expected the header t,x,y,z";
+  } else if (out.samples.empty()) {
+    out.error = "no usable sample after the header";
+  }
+  return out;
+}
+
+ClothPoint ClothLocator::locate(const Cloth& cloth, const Eigen::Vector3f& point) {
+  ClothPoint out;
+  const std::size_t n = cloth.particle_count();
+  if (n == 0) return out;
+  const auto distance2 = [&](std::uint32_t i) { return (cloth.position[i] - point).squaredNorm(); };
+  const float spacing = std::max(cloth.spacing_x(), cloth.spacing_y());
+  std::optional<std::uint32_t> best;
+  if (hint_ && *hint_ < n) {
+    std::uint32_t p = *hint_;
+    for (bool improved = true; improved;) {
+      improved = false;
+      for (const std::uint32_t k : cloth.springs_of(p)) {
+        const std::uint32_t q = cloth.spring_a[k] == p ? cloth.spring_b[k] : cloth.spring_a[k];
+        if (distance2(q) < distance2(p)) {
+          p = q;
+          improved = true;
+        }
+      }
+    }
+    // Near the cloth a greedy descent is exact; far from it (or on a fold) check everything.
+    if (distance2(p) <= (1.5F * spacing) * (1.5F * spacing)) best = p;
+  }
+  if (!best) {
+    std::uint32_t p = 0;
+    float d = distance2(0);
+    for (std::uint32_t i = 1; i < n; ++i) {
+      const float di = distance2(i);
+      if (di < d) {
+        d = di;
+        p = i;
+      }
+    }
+    best = p;
+  }
+  hint_ = best;
+  const std::uint32_t p = *best;
+  out.particle = p;
+  out.grid = cloth.grid[p];
+  out.distance_m = std::sqrt(distance2(p));
+
+  // Local frame of the deformed grid at p (d position / du, d position / dv) from its structural
+  // springs; the flat rest frame where a direction has none.
+  Eigen::Vector3d eu = Eigen::Vector3d::Zero();
+  Eigen::Vector3d ev = Eigen::Vector3d::Zero();
+  int nu = 0;
+  int nv = 0;
+  for (const std::uint32_t k : cloth.springs_of(p)) {
+    if (cloth.kind[k] != SpringKind::Structural) continue;
+    const std::uint32_t q = cloth.spring_a[k] == p ? cloth.spring_b[k] : cloth.spring_a[k];
+    const Eigen::Vector3d e = (cloth.position[q] - cloth.position[p]).cast<double>();
+    const int du = cloth.grid[q].u - out.grid.u;
+    const int dv = cloth.grid[q].v - out.grid.v;
+    if (dv == 0) {
+      eu += du * e;
+      ++nu;
+    } else {
+      ev += dv * e;
+      ++nv;
+    }
+  }
+  eu = nu > 0 ? Eigen::Vector3d{eu / nu} : Eigen::Vector3d{cloth.spacing_x(), 0.0, 0.0};
+  ev = nv > 0 ? Eigen::Vector3d{ev / nv} : Eigen::Vector3d{0.0, -cloth.spacing_y(), 0.0};
+  const Eigen::Vector3d r = (point - cloth.position[p]).cast<double>();
+  Eigen::Matrix2d m;
+  m << eu.dot(eu), eu.dot(ev), ev.dot(eu), ev.dot(ev);
+  Eigen::Vector2d rhs{eu.dot(r), ev.dot(r)};
+  Eigen::Vector2d offset = Eigen::Vector2d::Zero();
+  if (std::abs(m.determinant()) > 1e-6 * m.squaredNorm()) offset = m.inverse() * rhs;
+  out.uv = Eigen::Vector2d{out.grid.u + offset.x(), out.grid.v + offset.y()};
+  out.inside = out.uv.x() >= -margin_ && out.uv.y() >= -margin_ && out.uv.x() <= cloth.columns - 1 + margin_ &&
+               out.uv.y() <= cloth.rows - 1 + margin_;
+  return out;
+}
+
+StrokeCutter::StrokeCutter(Cloth& cloth, StrokeOptions options)
+    : cloth_(&cloth), options_(options), cutter_(cloth), locator_(options.inside_margin_cells) {}
+
+TopologyChange StrokeCutter::begin_stroke() {
+  TopologyChange change = end_stroke();
+  open_ = true;
+  report_ = {};
+  previous_.reset();
+  pending_.clear();
+  line_.reset();
+  return change;
+}
+
+GridCoord StrokeCutter::boundary_point(const Eigen::Vector2d& uv) const {
+  return {std::clamp(static_cast<int>(std::lround(uv.x())), 0, cloth_->columns - 1),
+          std::clamp(static_cast<int>(std::lround(uv.y())), 0, cloth_->rows - 1)};
+}
+
+void StrokeCutter::commit(GridCoord g, const Eigen::Vector3f& direction, TopologyChange& change) {
+  const auto added = line_->append(g);
+  if (added.size() < 2) return;
+  const TopologyChange cut = cutter_.cut(added);
+  std::vector<std::uint32_t> cut_particles;
+  for (const GridCoord a : added) {
+    const auto same = cutter_.copies(a);
+    cut_particles.insert(cut_particles.end(), same.begin(), same.end());
+  }
+  apply_blade_drag(*cloth_, cut_particles, direction, options_.blade, options_.drag, drag_scratch_);
+  report_.particles_duplicated += cut.duplicated_from.size();
+  total_.particles_duplicated += cut.duplicated_from.size();
+  change.merge(cut);
+}
+
+void StrokeCutter::start_line(GridCoord g, const Eigen::Vector3f& direction, TopologyChange& change) {
+  line_.emplace(cloth_->columns, cloth_->rows);
+  commit(g, direction, change);
+  pending_.clear();
+}
+
+void StrokeCutter::close_line() {
+  if (!line_) return;
+  add_line_to_report(line_->finish());
+  line_.reset();
+  pending_.clear();
+}
+
+void StrokeCutter::add_line_to_report(const std::vector<GridCoord>& line) {
+  if (line.size() < 2) return;
+  const float length = cut_line_length(line, cloth_->spacing_x(), cloth_->spacing_y());
+  for (StrokeReport* r : {&report_, &total_}) {
+    r->cut_line.insert(r->cut_line.end(), line.begin(), line.end());
+    ++r->lines;
+    r->cut_length_m += length;
+  }
+}
+
+TopologyChange StrokeCutter::add_sample(const StrokeSample& sample) {
+  TopologyChange change;
+  if (!sample.position.allFinite()) return change;
+  if (!open_) change.merge(begin_stroke());
+  const ClothPoint at = locator_.locate(*cloth_, sample.position);
+  const Point point{at.uv, at.grid, sample.position, at.inside};
+  const Eigen::Vector3f direction = previous_ ? Eigen::Vector3f{sample.position - previous_->world}
+                                              : Eigen::Vector3f::Zero();
+  if (direction.squaredNorm() > 0.0F) last_direction_ = direction;
+  const double max_u = cloth_->columns - 1;
+  const double max_v = cloth_->rows - 1;
+
+  if (point.inside) {
+    if (!line_) {
+      // Entering: from the edge where the stroke crosses it (Figures 6-7), or from here on a first sample.
+      std::optional<std::pair<double, double>> entry;
+      if (previous_) entry = clip_to_rectangle(previous_->uv, point.uv, max_u, max_v);
+      if (entry && entry->first > 0.0) {
+        const Eigen::Vector2d at_edge = previous_->uv + entry->first * (point.uv - previous_->uv);
+        start_line(boundary_point(at_edge), last_direction_, change);
+        anchor_ = at_edge;
+        pending_.push_back(point);
+      } else {
+        start_line(point.grid, last_direction_, change);
+        anchor_ = point.uv;
+      }
+    } else {
+      pending_.push_back(point);
+    }
+    // Simplification (Figure 8): the previous sample joins the cut when this one no longer fits a straight
+    // chord from the anchor through all the samples since; a long chord joins as a whole.
+    const auto fits = [&](const Eigen::Vector2d& to) {
+      const Eigen::Vector2d chord = to - anchor_;
+      const double length = chord.norm();
+      for (std::size_t i = 0; i + 1 < pending_.size(); ++i) {
+        const Eigen::Vector2d rel = pending_[i].uv - anchor_;
+        if (length < 1e-9) {
+          if (rel.norm() > options_.tolerance_cells) return false;
+          continue;
+        }
+        const double along = rel.dot(chord) / length;
+        const double across = std::abs(rel.x() * chord.y() - rel.y() * chord.x()) / length;
+        if (across > options_.tolerance_cells || along < -options_.tolerance_cells) return false;
+      }
+      return true;
+    };
+    if (pending_.size() >= 2 && !fits(point.uv)) {
+      const Point keep = pending_[pending_.size() - 2];
+      commit(keep.grid, last_direction_, change);
+      anchor_ = keep.uv;
+      pending_.assign(1, point);
+    }
+    if (!pending_.empty() && (point.uv - anchor_).norm() >= options_.max_lag_cells) {
+      commit(point.grid, last_direction_, change);
+      anchor_ = point.uv;
+      pending_.clear();
+    }
+  } else if (line_) {
+    // Leaving: the cut goes to where the stroke crosses the edge, not along it.
+    if (!pending_.empty()) commit(pending_.back().grid, last_direction_, change);
+    const Eigen::Vector2d from = previous_ ? previous_->uv : anchor_;
+    const auto inside_part = clip_to_rectangle(from, point.uv, max_u, max_v);
+    const Eigen::Vector2d at_edge = inside_part ? Eigen::Vector2d{from + inside_part->second * (point.uv - from)} : from;
+    commit(boundary_point(at_edge), last_direction_, change);
+    close_line();
+  } else if (previous_ && !previous_->inside) {
+    // Both samples beyond the edge: a fast swipe may still cross the cloth between them.
+    const auto inside_part = clip_to_rectangle(previous_->uv, point.uv, max_u, max_v);
+    if (inside_part && inside_part->second - inside_part->first > 1e-9) {
+      const Eigen::Vector2d d = point.uv - previous_->uv;
+      start_line(boundary_point(previous_->uv + inside_part->first * d), last_direction_, change);
+      commit(boundary_point(previous_->uv + inside_part->second * d), last_direction_, change);
+      close_line();
+    }
+  }
+  previous_ = point;
+  return change;
+}
+
+TopologyChange StrokeCutter::end_stroke() {
+  TopologyChange change;
+  if (!open_) return change;
+  if (line_) {
+    // Figure 5: the cut reaches the stroke's end point.
+    if (!pending_.empty()) commit(pending_.back().grid, last_direction_, change);
+    close_line();
+  }
+  open_ = false;
+  pending_.clear();
+  previous_.reset();
+  return change;
+}
+
+}  // namespace tachi::sim

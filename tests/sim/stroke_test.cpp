@@ -1,0 +1,259 @@
+#include "tachi/sim/stroke.hpp"
+
+#include "tachi/sim/pieces.hpp"
+#include "tachi/sim/solver.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <random>
+#include <set>
+#include <sstream>
+
+namespace tachi::sim {
+namespace {
+
+Cloth flat_cloth(int n, PinMode pin = PinMode::TopEdge) {
+  ClothConfig config;
+  config.columns = n;
+  config.rows = n;
+  config.pin = pin;
+  return Cloth{config};
+}
+
+/// World point of the continuous grid coordinate (u, v) of a flat 1 m cloth with n particles a side.
+Eigen::Vector3f world(int n, double u, double v, float z = 0.02F) {
+  const double spacing = 1.0 / (n - 1);
+  return {static_cast<float>(u * spacing - 0.5), static_cast<float>(0.5 - v * spacing), z};
+}
+
+/// Feeds a polyline in grid coordinates as a stroke sampled every `step` cells.
+void stroke_through(StrokeCutter& cutter, int n, const std::vector<Eigen::Vector2d>& points, double step = 0.3,
+                    double jitter = 0.0, std::uint32_t seed = 1) {
+  std::mt19937 rng{seed};
+  std::uniform_real_distribution<double> noise{-jitter, jitter};
+  cutter.begin_stroke();
+  double t = 0.0;
+  for (std::size_t i = 0; i + 1 < points.size(); ++i) {
+    const Eigen::Vector2d d = points[i + 1] - points[i];
+    const int samples = std::max(1, static_cast<int>(d.norm() / step));
+    for (int s = 0; s < samples; ++s) {
+      const Eigen::Vector2d p = points[i] + d * (static_cast<double>(s) / samples);
+      cutter.add_sample({t += 0.01, world(n, p.x() + noise(rng), p.y() + noise(rng))});
+    }
+  }
+  cutter.add_sample({t + 0.01, world(n, points.back().x(), points.back().y())});
+  cutter.end_stroke();
+}
+
+TEST(StrokeCsv, ParsesSamplesAndSkipsBadRows) {
+  std::istringstream in{"t,x,y,z\n0,0.1,0.2,0\n\n0.1,abc,0,0\n0.2,1,2\n-0.1,0,0,0\n0.3, 0.5 ,-0.5,0.01\n0.4,nan,0,0\n"};
+  const StrokeFile f = parse_stroke_csv(in);
+  EXPECT_TRUE(f.error.empty());
+  ASSERT_EQ(f.samples.size(), 2U);
+  EXPECT_EQ(f.skipped_rows, 4U);  // not a number, 3 fields, time going back, nan
+  EXPECT_FLOAT_EQ(f.samples[1].position.x(), 0.5F);
+  EXPECT_DOUBLE_EQ(f.samples[1].t, 0.3);
+}
+
+TEST(StrokeCsv, RejectsAFileWithoutHeaderOrSamples) {
+  std::istringstream no_header{"0,0,0,0\n"};
+  EXPECT_FALSE(parse_stroke_csv(no_header).error.empty());
+  std::istringstream empty{""};
+  EXPECT_FALSE(parse_stroke_csv(empty).error.empty());
+  std::istringstream only_header{"t,x,y,z\n"};
+  EXPECT_FALSE(parse_stroke_csv(only_header).error.empty());
+}
+
+TEST(ClothLocator, FindsTheNearestParticleAndTheContinuousGridCoordinate) {
+  const Cloth cloth = flat_cloth(11);
+  ClothLocator locator;
+  const ClothPoint p = locator.locate(cloth, world(11, 3.3, 6.8));
+  EXPECT_EQ(p.grid, (GridCoord{3, 7}));
+  EXPECT_NEAR(p.uv.x(), 3.3, 1e-4);
+  EXPECT_NEAR(p.uv.y(), 6.8, 1e-4);
+  EXPECT_TRUE(p.inside);
+  // Warm-started from there, a far point still gets its true nearest particle.
+  const ClothPoint q = locator.locate(cloth, world(11, 9.0, 1.0));
+  EXPECT_EQ(q.grid, (GridCoord{9, 1}));
+  const ClothPoint out = locator.locate(cloth, world(11, 13.0, 5.0));
+  EXPECT_EQ(out.grid, (GridCoord{10, 5}));
+  EXPECT_NEAR(out.uv.x(), 13.0, 1e-3);
+  EXPECT_FALSE(out.inside);
+}
+
+TEST(StrokeCutter, HorizontalSwipeAcrossTheClothCutsItOffAndTheLowerPieceFalls) {
+  constexpr int n = 16;
+  Cloth cloth = flat_cloth(n);
+  StrokeCutter cutter{cloth, {}};
+  stroke_through(cutter, n, {{-3.0, 8.2}, {18.0, 8.2}});
+  const auto& line = cutter.report().cut_line;
+  ASSERT_FALSE(line.empty());
+  EXPECT_EQ(line.front(), (GridCoord{0, 8}));
+  EXPECT_EQ(line.back(), (GridCoord{n - 1, 8}));
+  for (const GridCoord g : line) EXPECT_EQ(g.v, 8);
+  EXPECT_EQ(cutter.report().lines, 1U);
+  EXPECT_NEAR(cutter.report().cut_length_m, 1.0F, 1e-5F);
+  const Pieces pieces = find_pieces(cloth);
+  ASSERT_EQ(pieces.count(), 2U);
+  EXPECT_EQ(pieces.fallen(), 1U);
+  Solver solver;
+  const float y0 = cloth.position[cloth.index(8, 14)].y();
+  for (int i = 0; i < 30; ++i) solver.step(cloth);
+  EXPECT_LT(cloth.position[cloth.index(8, 14)].y(), y0 - 0.5F);
+}
+
+TEST(StrokeCutter, CutReachesTheStrokesEndPoint) {
+  constexpr int n = 20;
+  Cloth cloth = flat_cloth(n);
+  StrokeCutter cutter{cloth, {}};
+  stroke_through(cutter, n, {{4.0, 5.0}, {12.0, 9.0}, {14.2, 13.1}});
+  ASSERT_FALSE(cutter.report().cut_line.empty());
+  EXPECT_EQ(cutter.report().cut_line.front(), (GridCoord{4, 5}));
+  EXPECT_EQ(cutter.report().cut_line.back(), (GridCoord{14, 13}));  // Figure 5: not short of the end
+  // The last cut edge is open: the particle before the end has two copies.
+  const GridCoord before_end = cutter.report().cut_line[cutter.report().cut_line.size() - 2];
+  EXPECT_EQ(cutter.cutter().copies(before_end).size(), 2U);
+  EXPECT_EQ(find_pieces(cloth).count(), 1U);  // a slit
+}
+
+TEST(StrokeCutter, StrokeRunningPastTheEdgeCutsThroughItInsteadOfFollowingIt) {
+  // Figures 6-7: in, out past the right edge, down outside, back in. The nearest particles of the
+  // outside samples are all on the right edge; the cut must not run along it.
+  constexpr int n = 16;
+  Cloth cloth = flat_cloth(n, PinMode::Corners);
+  StrokeCutter cutter{cloth, {}};
+  stroke_through(cutter, n, {{6.0, 4.0}, {19.0, 5.0}, {19.0, 11.0}, {7.0, 12.0}});
+  const auto& line = cutter.report().cut_line;
+  EXPECT_EQ(cutter.report().lines, 2U);
+  for (std::size_t i = 1; i < line.size(); ++i) {
+    if (!grid_adjacent(line[i - 1], line[i])) continue;  // the jump between the two lines
+    EXPECT_FALSE(boundary_edge(line[i - 1], line[i], n, n))
+        << "(" << line[i - 1].u << "," << line[i - 1].v << ")-(" << line[i].u << "," << line[i].v << ")";
+  }
+  // Both lines reach the right edge, so the right edge is cut twice: the band between them stays attached
+  // on the left only.
+  int on_right_edge = 0;
+  for (const GridCoord g : line) on_right_edge += g.u == n - 1 ? 1 : 0;
+  EXPECT_EQ(on_right_edge, 2);
+}
+
+TEST(StrokeCutter, JitteryStrokeGivesTheCleanLine) {
+  // Figure 8: a straight stroke with +-0.4 cell tremor. Simplified, it cuts a monotone staircase close to
+  // the straight line; cut sample by sample, it zig-zags.
+  constexpr int n = 32;
+  const std::vector<Eigen::Vector2d> path{{3.0, 10.0}, {28.0, 17.0}};
+  Cloth clean_cloth = flat_cloth(n);
+  StrokeCutter clean{clean_cloth, {}};
+  stroke_through(clean, n, path, 0.25, 0.4, 3);
+  StrokeOptions raw_options;
+  raw_options.tolerance_cells = 0.0;
+  raw_options.max_lag_cells = 0.0;
+  Cloth raw_cloth = flat_cloth(n);
+  StrokeCutter raw{raw_cloth, raw_options};
+  stroke_through(raw, n, path, 0.25, 0.4, 3);
+
+  const auto& line = clean.report().cut_line;
+  std::set<std::pair<int, int>> seen;
+  for (std::size_t i = 0; i < line.size(); ++i) {
+    EXPECT_TRUE(seen.insert({line[i].u, line[i].v}).second) << "particle visited twice";
+    if (i > 0) {
+      EXPECT_GE(line[i].u, line[i - 1].u) << "the line goes back";
+    }
+    const double exact = 10.0 + 7.0 * (line[i].u - 3.0) / 25.0;
+    EXPECT_LE(std::abs(line[i].v - exact), 1.6);
+  }
+  EXPECT_LT(line.size(), raw.report().cut_line.size());
+}
+
+TEST(StrokeCutter, CutsProgressivelyWhileTheStrokeIsOpen) {
+  constexpr int n = 24;
+  Cloth cloth = flat_cloth(n);
+  StrokeCutter cutter{cloth, {}};
+  cutter.begin_stroke();
+  double t = 0.0;
+  std::size_t duplicated = 0;
+  for (double u = 2.0; u <= 14.0; u += 0.3) duplicated += cutter.add_sample({t += 0.01, world(n, u, 11.0)}).duplicated_from.size();
+  EXPECT_TRUE(cutter.stroke_open());
+  // The hand is at u = 14: the cut is open to within the simplification's lag of it.
+  EXPECT_GT(duplicated, 9U);
+  EXPECT_EQ(cloth.particle_count(), static_cast<std::size_t>(n * n) + duplicated);
+  for (double u = 14.3; u <= 20.0; u += 0.3) duplicated += cutter.add_sample({t += 0.01, world(n, u, 11.0)}).duplicated_from.size();
+  duplicated += cutter.end_stroke().duplicated_from.size();
+  EXPECT_FALSE(cutter.stroke_open());
+  EXPECT_EQ(duplicated, 17U);  // (2, 11) .. (20, 11): 19 particles, the two tips stay whole
+  EXPECT_EQ(cutter.report().particles_duplicated, duplicated);
+}
+
+TEST(StrokeCutter, FastSwipeWithSamplesOnlyOutsideStillCuts) {
+  constexpr int n = 12;
+  Cloth cloth = flat_cloth(n);
+  StrokeCutter cutter{cloth, {}};
+  cutter.begin_stroke();
+  cutter.add_sample({0.0, world(n, -2.0, 7.0)});
+  cutter.add_sample({0.02, world(n, 14.0, 7.0)});
+  cutter.end_stroke();
+  EXPECT_EQ(find_pieces(cloth).count(), 2U);
+  EXPECT_EQ(cutter.report().cut_line.size(), static_cast<std::size_t>(n));
+}
+
+TEST(StrokeCutter, NonFiniteSamplesAreIgnored) {
+  Cloth cloth = flat_cloth(8);
+  StrokeCutter cutter{cloth, {}};
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  EXPECT_TRUE(cutter.add_sample({0.0, Eigen::Vector3f{nan, 0.0F, 0.0F}}).empty());
+  EXPECT_FALSE(cutter.stroke_open());
+  EXPECT_TRUE(cutter.end_stroke().empty());
+}
+
+TEST(Blade, TableIsSeed001Figure4) {
+  EXPECT_FLOAT_EQ(sharpness(Blade::Razor).min_n, 0.3F);
+  EXPECT_FLOAT_EQ(sharpness(Blade::Scalpel).max_n, 0.6F);
+  EXPECT_FLOAT_EQ(sharpness(Blade::Utility).force_n(), 1.2F);
+  EXPECT_FLOAT_EQ(sharpness(Blade::Kitchen).max_n, 3.0F);
+  EXPECT_FLOAT_EQ(sharpness(Blade::Hunting).min_n, 1.9F);
+  EXPECT_FLOAT_EQ(sharpness(Blade::Worn).force_n(), 8.5F);
+  for (const char* name : {"razor", "scalpel", "utility", "kitchen", "hunting", "worn"}) {
+    const auto blade = parse_blade(name);
+    ASSERT_TRUE(blade.has_value()) << name;
+    EXPECT_EQ(to_string(*blade), name);
+  }
+  EXPECT_FALSE(parse_blade("sword").has_value());
+}
+
+/// Mean displacement of the particles 2-4 rows below a horizontal cut, a short while after it.
+float drag_after_cut(Blade blade) {
+  constexpr int n = 24;
+  Cloth cloth = flat_cloth(n);
+  StrokeOptions options;
+  options.blade = blade;
+  StrokeCutter cutter{cloth, options};
+  const auto before = cloth.position;
+  stroke_through(cutter, n, {{4.0, 10.0}, {19.0, 10.0}});
+  Solver solver;
+  for (int i = 0; i < 3; ++i) solver.step(cloth);
+  float sum = 0.0F;
+  int count = 0;
+  for (int v = 12; v <= 14; ++v) {
+    for (int u = 6; u <= 17; ++u) {
+      const std::uint32_t p = cloth.index(u, v);
+      sum += std::abs(cloth.position[p].x() - before[p].x());
+      ++count;
+    }
+  }
+  return sum / static_cast<float>(count);
+}
+
+TEST(Blade, DullerBladeDragsTheNeighbourhoodMore) {
+  const float razor = drag_after_cut(Blade::Razor);
+  const float kitchen = drag_after_cut(Blade::Kitchen);
+  const float worn = drag_after_cut(Blade::Worn);
+  std::printf("drag razor %.5f kitchen %.5f worn %.5f m\n", static_cast<double>(razor), static_cast<double>(kitchen), static_cast<double>(worn));
+  EXPECT_LT(razor, kitchen);
+  EXPECT_LT(kitchen, worn);
+  EXPECT_GT(worn, 5.0F * razor);
+  EXPECT_GT(worn, 0.005F);  // visibly: more than a third of a cell
+}
+
+}  // namespace
+}  // namespace tachi::sim

@@ -1,0 +1,90 @@
+#include "tachi/sensor/voice_commands.hpp"
+
+#include <gtest/gtest.h>
+
+namespace tachi::sensor {
+namespace {
+
+TEST(VoiceCommands, DefaultsAreTwoWordPhrasesForStartAndStop) {
+  const VoiceConfig c;
+  ASSERT_EQ(c.phrases.size(), 2U);
+  EXPECT_EQ(c.phrases[0].phrase, "start cutting");
+  EXPECT_EQ(c.phrases[0].command, VoiceCommand::Start);
+  EXPECT_EQ(c.phrases[1].phrase, "stop cutting");
+  EXPECT_EQ(c.phrases[1].command, VoiceCommand::Stop);
+  EXPECT_FALSE(validate(c).has_value());
+}
+
+TEST(VoiceCommands, KeywordListHoldsEveryPhraseWithItsThreshold) {
+  VoiceConfig c;
+  c.phrases[1].threshold = 1e-30;
+  EXPECT_EQ(kws_file_text(c.phrases), "start cutting /1e-20/\nstop cutting /1e-30/\n");
+}
+
+TEST(VoiceCommands, HypothesisWithTrailingSpaceMapsToItsCommand) {
+  const VoiceConfig c;
+  const auto one = phrases_in_hypothesis("stop cutting ", c.phrases);
+  ASSERT_EQ(one.size(), 1U);
+  EXPECT_EQ(one[0].command, VoiceCommand::Stop);
+  const auto two = phrases_in_hypothesis("stop cutting start cutting ", c.phrases);
+  ASSERT_EQ(two.size(), 2U);
+  EXPECT_EQ(two[0].command, VoiceCommand::Stop);
+  EXPECT_EQ(two[1].command, VoiceCommand::Start);
+  EXPECT_TRUE(phrases_in_hypothesis("cutting stop", c.phrases).empty());
+}
+
+TEST(VoiceCommands, OverlappingPhrasesCountOnceWithTheLongestWinning) {
+  VoiceConfig c;
+  c.phrases.push_back({"stop", VoiceCommand::Stop, 1e-20});
+  const auto found = phrases_in_hypothesis("stop cutting ", c.phrases);
+  ASSERT_EQ(found.size(), 1U);
+  EXPECT_EQ(found[0].phrase, "stop cutting");
+}
+
+TEST(VoiceCommands, SetPhraseReplacesTheCommandsPhraseAndKeepsItsThreshold) {
+  VoiceConfig c;
+  c.phrases[0].threshold = 1e-10;
+  set_phrase(c, VoiceCommand::Start, "  Go   Forward ");
+  ASSERT_EQ(c.phrases.size(), 2U);
+  EXPECT_EQ(c.phrases[0].phrase, "stop cutting");
+  EXPECT_EQ(c.phrases[1].phrase, "go forward");
+  EXPECT_EQ(c.phrases[1].threshold, 1e-10);
+}
+
+TEST(VoiceCommands, ConfigParsesAndRejectsBadValuesByName) {
+  const VoiceConfig c = parse_voice_config(R"({"phrases": [
+      {"phrase": "begin cut", "command": "start", "threshold": 1e-25},
+      {"phrase": "end cut", "command": "stop"}]})");
+  ASSERT_EQ(c.phrases.size(), 2U);
+  EXPECT_EQ(c.phrases[0].threshold, 1e-25);
+  EXPECT_EQ(c.phrases[1].threshold, 1e-20);
+  const auto error_of = [](const std::string& json) -> std::string {
+    try {
+      parse_voice_config(json);
+    } catch (const std::invalid_argument& e) {
+      return e.what();
+    }
+    return "";
+  };
+  EXPECT_NE(error_of(R"({"phrases": [{"phrase": "go", "command": "start"}]})").find("stop"), std::string::npos);
+  EXPECT_NE(error_of(R"({"phrases": [{"phrase": "go", "command": "jump"}]})").find("command"), std::string::npos);
+  EXPECT_NE(error_of(R"({"phrases": [{"phrase": "a", "command": "start", "threshold": 2},
+                                     {"phrase": "b", "command": "stop"}]})").find("threshold"), std::string::npos);
+  EXPECT_NE(error_of(R"({"phrases": [{"phrase": "a", "command": "start"}, {"phrase": "a", "command": "stop"}]})")
+                .find("twice"), std::string::npos);
+  EXPECT_NE(error_of(R"({"phrases": [{"phrase": "a1", "command": "start"}, {"phrase": "b", "command": "stop"}]})")
+                .find("letters"), std::string::npos);
+  EXPECT_NE(error_of(R"({"model": "x"})").find("unknown key model"), std::string::npos);
+  EXPECT_NE(error_of("nope").find("JSON"), std::string::npos);
+}
+
+TEST(VoiceCommands, TheShippedConfigFileMatchesTheDefaults) {
+  const VoiceConfig file = load_voice_config(TACHI_SOURCE_DIR "/config/voice.json");
+  const VoiceConfig defaults;
+  EXPECT_EQ(file.model_dir, defaults.model_dir);
+  EXPECT_EQ(file.dictionary, defaults.dictionary);
+  EXPECT_EQ(kws_file_text(file.phrases), kws_file_text(defaults.phrases));
+}
+
+}  // namespace
+}  // namespace tachi::sensor

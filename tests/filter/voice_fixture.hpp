@@ -1,0 +1,76 @@
+// Audio for the voice tests and the voice evaluation: real speech from Debian's pocketsphinx-testdata,
+// and command phrases synthesised with flite's slt voice, laid out in sequences with pauses and noise.
+#pragma once
+
+#include "tachi/sensor/voice_audio.hpp"
+
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cstdlib>
+#include <filesystem>
+#include <random>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace tachi::sensor::testing {
+
+inline const std::string kTestData = "/usr/share/pocketsphinx/test/data";
+
+inline std::vector<std::string> librivox_clips() {
+  std::vector<std::string> clips;
+  for (const char* id : {"0870", "0880", "0890", "0920", "0930"})
+    clips.push_back(kTestData + "/librivox/sense_and_sensibility_01_austen_64kb-" + id + ".wav");
+  return clips;
+}
+
+/// Speaks `text` with flite's slt voice (`flite -voice slt`), returns 16 kHz mono samples.
+/// `stretch` > 1 speaks slower (flite's duration_stretch).
+inline std::vector<std::int16_t> flite_say(const std::string& text, double stretch = 1.0) {
+  const auto path = std::filesystem::temp_directory_path() /
+                    ("tachi_flite_" + std::to_string(::getpid()) + "_" + std::to_string(std::rand()) + ".wav");
+  const std::string cmd = std::string(TACHI_FLITE) + " -voice slt --setf duration_stretch=" + std::to_string(stretch) +
+                          " -t \"" + text + "\" -o " + path.string();
+  const int status = std::system(cmd.c_str());
+  if (status != 0) throw std::runtime_error("flite failed: " + cmd);
+  auto audio = read_wav_file(path.string());
+  std::filesystem::remove(path);
+  return resample_to_16k(audio);
+}
+
+/// Where an utterance sits in a sequence, in seconds.
+struct Placed {
+  std::string phrase;
+  double begin_s;
+  double end_s;
+};
+
+/// Concatenates utterances with pauses; adds white noise of the given RMS (in sample units) everywhere.
+class Sequence {
+ public:
+  explicit Sequence(unsigned seed = 1) : rng_(seed) {}
+  void pause(double seconds) { samples_.resize(samples_.size() + static_cast<std::size_t>(seconds * kVoiceSampleRate), 0); }
+  void say(const std::string& phrase, const std::vector<std::int16_t>& audio, double gain = 1.0) {
+    const double begin = seconds();
+    for (auto s : audio) samples_.push_back(clip(s * gain));
+    placed_.push_back({phrase, begin, seconds()});
+  }
+  void add(const std::vector<std::int16_t>& audio) { samples_.insert(samples_.end(), audio.begin(), audio.end()); }
+  void noise(double rms) {
+    std::normal_distribution<double> n{0.0, rms};
+    for (auto& s : samples_) s = clip(s + n(rng_));
+  }
+  double seconds() const { return static_cast<double>(samples_.size()) / kVoiceSampleRate; }
+  const std::vector<std::int16_t>& samples() const { return samples_; }
+  const std::vector<Placed>& placed() const { return placed_; }
+
+ private:
+  static std::int16_t clip(double v) { return static_cast<std::int16_t>(std::clamp(v, -32768.0, 32767.0)); }
+  std::mt19937 rng_;
+  std::vector<std::int16_t> samples_;
+  std::vector<Placed> placed_;
+};
+
+}  // namespace tachi::sensor::testing

@@ -1,0 +1,15 @@
+// The one place where the sensor's types meet the generated DDS types (tachi.idl).
+#pragma once
+
+#include <cstdint>
+
+#include "tachi.h"
+#include "tachi/sensor/hand_finder.hpp"
+
+namespace tachi::sensor {
+
+/// A RawHandSample for one depth frame (position and pixel are zero when the hand is lost).
+tachi_msg_RawHandSample to_msg(const HandObservation& hand, std::uint32_t sensor_id, std::uint64_t frame,
+                               std::int64_t capture_time_ns);
+
+}  // namespace tachi::sensor

@@ -1,6 +1,7 @@
 #include "tachi/sim/solver.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <functional>
 #include <limits>
@@ -40,6 +41,7 @@ std::optional<const char*> validate(const SolverParams& p) {
   if (!(p.damping >= 0.0F) || !std::isfinite(p.damping)) return "damping must be >= 0";
   if (!(p.shear_compliance >= 0.0F) || !(p.bend_compliance >= 0.0F)) return "compliance must be >= 0";
   if (!(p.max_strain > 0.0F) || !(p.max_strain < 10.0F)) return "max_strain must be in (0, 10)";
+  if (p.strain_limit_passes < 1 || p.strain_limit_passes > 100) return "strain_limit_passes must be in [1, 100]";
   return std::nullopt;
 }
 
@@ -56,28 +58,24 @@ void Solver::refresh_caches(const Cloth& cloth) {
   if (topology_same && pins == cached_pins_) return;
 
   if (!topology_same) {
-    struct Keyed {
-      int colour;
-      std::uint32_t first;
-      std::uint32_t k;
-    };
-    std::vector<Keyed> keyed[3];
+    // Bucket by (family, colour), keeping spring-index order inside a bucket: the grid is built in
+    // row-major order, so a bucket walks memory forwards. Linear time, unlike a sort.
+    constexpr std::size_t kColours = 8;
+    std::array<std::vector<std::uint32_t>, 3 * kColours> buckets;
     for (std::size_t k = 0; k < cloth.spring_count(); ++k) {
       if (cloth.alive[k] == 0) continue;
-      const std::uint32_t a = cloth.spring_a[k], b = cloth.spring_b[k];
       const auto family = static_cast<std::size_t>(cloth.kind[k]);
-      keyed[family].push_back({spring_colour(cloth.kind[k], cloth.grid[a], cloth.grid[b]), std::min(a, b),
-                               static_cast<std::uint32_t>(k)});
+      const auto colour = static_cast<std::size_t>(
+          spring_colour(cloth.kind[k], cloth.grid[cloth.spring_a[k]], cloth.grid[cloth.spring_b[k]]));
+      buckets[family * kColours + colour].push_back(static_cast<std::uint32_t>(k));
     }
     std::vector<PackedSpring>* out[3] = {&structural_, &shear_, &bend_};
     for (std::size_t f = 0; f < 3; ++f) {
-      std::sort(keyed[f].begin(), keyed[f].end(), [](const Keyed& l, const Keyed& r) {
-        return std::tie(l.colour, l.first, l.k) < std::tie(r.colour, r.first, r.k);
-      });
       out[f]->clear();
-      out[f]->reserve(keyed[f].size());
-      for (const Keyed& e : keyed[f]) {
-        out[f]->push_back({cloth.spring_a[e.k], cloth.spring_b[e.k], cloth.rest_length[e.k]});
+      for (std::size_t c = 0; c < kColours; ++c) {
+        for (const std::uint32_t k : buckets[f * kColours + c]) {
+          out[f]->push_back({cloth.spring_a[k], cloth.spring_b[k], cloth.rest_length[k]});
+        }
       }
     }
   }
@@ -93,8 +91,12 @@ void Solver::build_attachments(const Cloth& cloth) {
   attach_particle_.clear();
   attach_pin_.clear();
   attach_length_.clear();
-  if (!params_.long_range_attachments || cached_pins_.empty()) return;
+  strain_limit_.clear();
   const std::size_t n = cloth.particle_count();
+  if (cached_pins_.empty()) {
+    strain_limit_ = structural_;
+    return;
+  }
   // Adjacency over live structural and shear springs (rest geometry), CSR form.
   std::vector<std::uint32_t> offsets(n + 1, 0);
   for (const auto* family : {&structural_, &shear_}) {
@@ -164,14 +166,41 @@ void Solver::build_attachments(const Cloth& cloth) {
   // its nearest, as Kim et al. do, which keeps the cost at one tether per particle.
   constexpr std::size_t kAllPinsUpTo = 4;
   if (cached_pins_.size() <= kAllPinsUpTo) {
+    // One search per pin; the distance to the nearest pin is their minimum.
+    std::vector<float> nearest(n, std::numeric_limits<float>::infinity());
     for (const std::uint32_t pin : cached_pins_) {
       dijkstra({pin});
-      collect();
+      if (params_.long_range_attachments) collect();
+      for (std::size_t i = 0; i < n; ++i) nearest[i] = std::min(nearest[i], dist[i]);
     }
+    dist.swap(nearest);
   } else {
     dijkstra(cached_pins_);
-    collect();
+    if (params_.long_range_attachments) collect();
   }
+
+  // Provot's deformation constraint is swept outwards from the pins (by geodesic distance of the
+  // spring's nearer end): a correction near a pin then reaches the far edge within one sweep more often
+  // than in grid order (measured in docs/sim.md). Pieces no pin holds (+inf) come last, in grid order.
+  // Counting sort on the distance in half-spacings: linear time, stable, so ties keep grid order.
+  const float unit = 0.5F * std::min(cloth.spacing_x(), cloth.spacing_y());
+  std::vector<std::uint32_t> level(structural_.size());
+  std::uint32_t top = 0;
+  for (std::size_t k = 0; k < structural_.size(); ++k) {
+    const float key = std::min(dist[structural_[k].a], dist[structural_[k].b]);
+    level[k] = std::isfinite(key) ? static_cast<std::uint32_t>(key / unit) : std::numeric_limits<std::uint32_t>::max();
+    if (level[k] != std::numeric_limits<std::uint32_t>::max()) top = std::max(top, level[k]);
+  }
+  std::vector<std::uint32_t> start(static_cast<std::size_t>(top) + 3, 0);
+  for (std::uint32_t& l : level) {
+    if (l == std::numeric_limits<std::uint32_t>::max()) l = top + 1;  // unpinned pieces last
+    ++start[l + 1];
+  }
+  for (std::size_t l = 1; l < start.size(); ++l) start[l] += start[l - 1];
+  std::vector<std::uint32_t> keyed(structural_.size());
+  for (std::size_t k = 0; k < structural_.size(); ++k) keyed[start[level[k]]++] = static_cast<std::uint32_t>(k);
+  strain_limit_.reserve(keyed.size());
+  for (const std::uint32_t k : keyed) strain_limit_.push_back(structural_[k]);
 }
 
 void Solver::step(Cloth& cloth, const Colliders& colliders) {
@@ -269,12 +298,23 @@ void Solver::substep(Cloth& cloth, const Colliders& colliders, float h, bool fir
   }
 
   // 5. Provot's deformation constraint: a structural spring longer than (1 + max_strain) L is brought
-  // back to exactly that length (Provot 1995, section 4).
+  // back to exactly that length (Provot 1995, section 4), sweeping outwards from the pins.
+  // The target sits a hair under the limit so that float rounding never leaves a corrected spring over it.
   const float limit = 1.0F + params_.max_strain;
-  for (const PackedSpring& s : structural_) {
-    const Vec4 d = (x[s.b] - x[s.a]).cwiseProduct(kXyz);
-    const float target = limit * s.rest;
-    if (d.squaredNorm() > target * target) project_exact(x[s.a], x[s.b], target, 0.0F);
+  const float corrected = limit - 1e-5F;
+  // A correction can stretch a spring swept earlier, so sweeps repeat until one finds nothing to
+  // correct (usually the first: the scan without a square root is cheap) or the budget is spent.
+  for (int pass = 0; pass < params_.strain_limit_passes; ++pass) {
+    std::size_t corrections = 0;
+    for (const PackedSpring& s : strain_limit_) {
+      const Vec4 d = (x[s.b] - x[s.a]).cwiseProduct(kXyz);
+      const float target = limit * s.rest;
+      if (d.squaredNorm() > target * target) {
+        project_exact(x[s.a], x[s.b], corrected * s.rest, 0.0F);
+        ++corrections;
+      }
+    }
+    if (corrections == 0) break;
   }
 
   // 6. Collisions by projection, then velocities from the positions actually reached.
@@ -292,6 +332,7 @@ void Solver::substep(Cloth& cloth, const Colliders& colliders, float h, bool fir
     if (x[i].w() == 0.0F) continue;
     v[i] = (x[i].head<3>() - old_work_[i].head<3>()) * inv_h;
   }
+
 }
 
 double mechanical_energy(const Cloth& cloth, const Eigen::Vector3f& gravity, double k_structural) {

@@ -29,6 +29,7 @@ struct SolverParams {
   float shear_compliance = 0.2F;   ///< XPBD compliance, m/N (inverse spring stiffness)
   float bend_compliance = 2.0F;    ///< XPBD compliance, m/N
   float max_strain = 0.10F;        ///< Provot's critical deformation rate (10%)
+  int strain_limit_passes = 4;     ///< at most this many strain-limit sweeps per sub-step (stops when clean)
   bool long_range_attachments = true;
   bool soft_every_substep = true;   ///< project shear/bend in every sub-step, not only the first
 };
@@ -74,6 +75,8 @@ class Solver {
   std::vector<PackedSpring> structural_;
   std::vector<PackedSpring> shear_;
   std::vector<PackedSpring> bend_;
+  // Structural springs again, ordered outwards from the pins, for the strain limit.
+  std::vector<PackedSpring> strain_limit_;
   // Long-range attachments: particle, pin, maximal distance.
   std::vector<std::uint32_t> attach_particle_;
   std::vector<std::uint32_t> attach_pin_;

@@ -1,0 +1,206 @@
+#include "tachi/sim/solver.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+
+namespace {
+
+using namespace tachi::sim;
+
+Cloth make(int n, PinMode pin) {
+  ClothConfig c;
+  c.columns = n;
+  c.rows = n;
+  c.pin = pin;
+  return Cloth{c};
+}
+
+double kinetic(const Cloth& cloth) {
+  double e = 0.0;
+  for (std::size_t i = 0; i < cloth.particle_count(); ++i) {
+    e += 0.5 * cloth.mass[i] * static_cast<double>(cloth.velocity[i].squaredNorm());
+  }
+  return e;
+}
+
+/// Turns the cloth to lie horizontally, its top edge (with the pins) staying where it is, so that
+/// gravity swings it down: the hardest start for the strain limit.
+void lay_horizontal(Cloth& cloth) {
+  for (auto& p : cloth.position) p = Eigen::Vector3f{p.x(), 0.5F, 0.5F - p.y()};
+}
+
+float max_displacement(const Cloth& a, const Cloth& b) {
+  float d = 0.0F;
+  for (std::size_t i = 0; i < a.particle_count(); ++i) d = std::max(d, (a.position[i] - b.position[i]).norm());
+  return d;
+}
+
+TEST(Solver, ClothAtRestWithoutGravityStaysExactlyAtRest) {
+  Cloth cloth = make(24, PinMode::None);
+  const Cloth start = cloth;
+  SolverParams p;
+  p.gravity.setZero();
+  Solver solver{p};
+  for (int s = 0; s < 120; ++s) solver.step(cloth);
+  EXPECT_LT(max_displacement(cloth, start), 1e-6F);
+  EXPECT_LT(kinetic(cloth), 1e-12);
+}
+
+TEST(Solver, ClothLyingOnTheGroundStaysAtRest) {
+  Cloth cloth = make(24, PinMode::None);
+  Colliders colliders;
+  colliders.ground = GroundPlane{-0.5F};
+  // Lay the cloth flat (x-z plane) exactly on the ground, at the collision margin.
+  for (auto& p : cloth.position) p = Eigen::Vector3f{p.x(), -0.5F + colliders.thickness_m, p.y()};
+  const Cloth start = cloth;
+  Solver solver;
+  for (int s = 0; s < 120; ++s) solver.step(cloth, colliders);
+  EXPECT_LT(max_displacement(cloth, start), 1e-4F);
+  EXPECT_LT(kinetic(cloth), 1e-9);
+}
+
+TEST(Solver, ClothPinnedAtTwoCornersSettlesWithinTenPercentStrain) {
+  // Released from horizontal, it swings down under its two pins and comes to rest hanging.
+  Cloth cloth = make(64, PinMode::Corners);
+  lay_horizontal(cloth);
+  Solver solver;
+  for (int s = 0; s < 900; ++s) solver.step(cloth);
+  EXPECT_LE(cloth.max_structural_strain(), 0.10F);
+  EXPECT_LT(cloth.position[cloth.index(32, 63)].y(), -0.3F);
+  EXPECT_LT(kinetic(cloth), 1e-4);
+  // The pins did not move.
+  EXPECT_FLOAT_EQ(cloth.position[0].x(), -0.5F);
+  EXPECT_FLOAT_EQ(cloth.position[0].y(), 0.5F);
+  EXPECT_FLOAT_EQ(cloth.position[0].z(), 0.0F);
+}
+
+TEST(Solver, FoldingHangingClothStaysNearTenPercentStrainAtEveryStep) {
+  // Provot's limit is swept a bounded number of times per sub-step, so while the cloth folds a spring
+  // may end a step slightly over 10 % (11.5 % measured, docs/sim.md); without the limit it is > 16 %.
+  Cloth cloth = make(96, PinMode::Corners);
+  for (std::size_t i = 0; i < cloth.particle_count(); ++i) {
+    cloth.position[i].z() += 1e-4F * std::sin(static_cast<float>(i));  // break the symmetry: it folds
+  }
+  Solver solver;
+  for (int s = 0; s < 240; ++s) {
+    solver.step(cloth);
+    ASSERT_LE(cloth.max_structural_strain(), 0.12F) << "step " << s;
+  }
+}
+
+TEST(Solver, ClothPinnedAlongTheTopEdgeSettlesWithinTenPercentStrain) {
+  Cloth cloth = make(48, PinMode::TopEdge);
+  lay_horizontal(cloth);
+  Solver solver;
+  for (int s = 0; s < 600; ++s) solver.step(cloth);
+  EXPECT_LE(cloth.max_structural_strain(), 0.10F);
+  EXPECT_LT(kinetic(cloth), 1e-3);
+}
+
+TEST(Solver, WithoutAttachmentsTheSameStepSagsFarBeyondTenPercent) {
+  // The reason long-range attachments are on: plain Gauss-Seidel leaves the chain from the pins stretched.
+  Cloth cloth = make(64, PinMode::Corners);
+  SolverParams p;
+  p.long_range_attachments = false;
+  Solver solver{p};
+  for (int s = 0; s < 300; ++s) solver.step(cloth);
+  EXPECT_GT(cloth.max_structural_strain(), 0.5F);
+}
+
+TEST(Solver, EnergyDoesNotGrowWithoutInput) {
+  Cloth cloth = make(32, PinMode::Corners);
+  lay_horizontal(cloth);
+  SolverParams p;
+  Solver solver{p};
+  const double start = mechanical_energy(cloth, p.gravity, 0.0);
+  double previous_max = start;
+  for (int s = 0; s < 300; ++s) {
+    solver.step(cloth);
+    const double e = mechanical_energy(cloth, p.gravity, 0.0);
+    EXPECT_LE(e, start + 1e-6) << "step " << s;
+    previous_max = std::max(previous_max, e);
+  }
+  // Released from rest, it must have converted potential energy and lost some of it.
+  EXPECT_LT(mechanical_energy(cloth, p.gravity, 0.0), start - 0.5);
+}
+
+TEST(Solver, EnergyOfAKickedFreeClothDoesNotGrow) {
+  Cloth cloth = make(24, PinMode::None);
+  for (std::size_t i = 0; i < cloth.particle_count(); ++i) {
+    // A deterministic, uneven velocity field: stretches and shears the cloth.
+    const float s = std::sin(static_cast<float>(i) * 0.7F);
+    cloth.velocity[i] = Eigen::Vector3f{s, 0.5F * std::cos(static_cast<float>(i) * 1.3F), s * s};
+  }
+  SolverParams p;
+  p.gravity.setZero();
+  Solver solver{p};
+  double previous = mechanical_energy(cloth, p.gravity, 0.0);
+  const double start = previous;
+  for (int s = 0; s < 120; ++s) {
+    solver.step(cloth);
+    const double e = mechanical_energy(cloth, p.gravity, 0.0);
+    EXPECT_LE(e, previous * (1.0 + 1e-6) + 1e-12) << "step " << s;
+    previous = e;
+  }
+  EXPECT_LT(previous, start);
+}
+
+TEST(Solver, SameInputsGiveBitIdenticalResults) {
+  Cloth a = make(20, PinMode::Corners);
+  Cloth b = make(20, PinMode::Corners);
+  Solver sa, sb;
+  for (int s = 0; s < 60; ++s) {
+    sa.step(a);
+    sb.step(b);
+  }
+  for (std::size_t i = 0; i < a.particle_count(); ++i) {
+    ASSERT_EQ(a.position[i], b.position[i]) << i;
+    ASSERT_EQ(a.velocity[i], b.velocity[i]) << i;
+  }
+}
+
+TEST(Solver, UnpinnedClothFallsFreelyUnderGravity) {
+  Cloth cloth = make(16, PinMode::None);
+  const float start_y = cloth.position[100].y();
+  SolverParams p;
+  p.damping = 0.0F;
+  Solver solver{p};
+  for (int s = 0; s < 60; ++s) solver.step(cloth);
+  // One second of free fall: v = -g t, drop = g t^2 / 2 (symplectic Euler: within a step's worth).
+  EXPECT_NEAR(cloth.velocity[100].y(), -9.81F, 1e-3F);
+  EXPECT_NEAR(cloth.position[100].y() - start_y, -0.5F * 9.81F, 0.1F);
+  EXPECT_LT(cloth.max_structural_strain(), 1e-4F);
+}
+
+TEST(Solver, PicksUpParticlesAndSpringsAddedBetweenSteps) {
+  Cloth cloth = make(16, PinMode::Corners);
+  Solver solver;
+  for (int s = 0; s < 30; ++s) solver.step(cloth);
+  // Detach the bottom-right corner: a copy takes over its springs, the original keeps none.
+  const std::uint32_t corner = cloth.index(15, 15);
+  const auto copy = static_cast<std::uint32_t>(cloth.duplicate_particle(corner));
+  const std::vector<std::uint32_t> springs(cloth.springs_of(corner).begin(), cloth.springs_of(corner).end());
+  for (const std::uint32_t k : springs) cloth.rewire_spring(k, corner, copy);
+  cloth.velocity[corner] = Eigen::Vector3f{0.0F, 0.0F, 1.0F};
+  const Eigen::Vector3f before = cloth.position[corner];
+  for (int s = 0; s < 30; ++s) solver.step(cloth);
+  // The isolated original flies off on its own; the copy stays attached to the cloth.
+  EXPECT_GT(cloth.position[corner].z() - before.z(), 0.3F);
+  EXPECT_LE(cloth.max_structural_strain(), 0.10F);
+  EXPECT_LT((cloth.position[copy] - cloth.position[cloth.index(14, 15)]).norm(), 1.11F * cloth.spacing_x());
+}
+
+TEST(Solver, RejectsBadParameters) {
+  SolverParams p;
+  EXPECT_FALSE(validate(p).has_value());
+  p.substeps = 0;
+  EXPECT_TRUE(validate(p).has_value());
+  p = {};
+  p.dt = -1.0F;
+  EXPECT_TRUE(validate(p).has_value());
+}
+
+}  // namespace

@@ -48,9 +48,11 @@ std::optional<const char*> validate(const SolverParams& p) {
 Solver::Solver(SolverParams params) : params_(std::move(params)) {}
 
 void Solver::refresh_caches(const Cloth& cloth) {
+  // Anchors: every particle that does not move by itself, pinned or held by the hand (a held particle
+  // drags the cloth like a pin, so it gets attachments and the strain limit sweeps out from it too).
   std::vector<std::uint32_t> pins;
   for (std::size_t i = 0; i < cloth.particle_count(); ++i) {
-    if (cloth.pinned[i] != 0) pins.push_back(static_cast<std::uint32_t>(i));
+    if (cloth.inverse_mass[i] == 0.0F) pins.push_back(static_cast<std::uint32_t>(i));
   }
   const bool topology_same = cache_valid_ && cached_version_ == cloth.topology_version &&
                              cached_springs_ == cloth.spring_count() &&
@@ -153,7 +155,7 @@ void Solver::build_attachments(const Cloth& cloth) {
   };
   auto collect = [&] {
     for (std::size_t i = 0; i < n; ++i) {
-      if (cloth.pinned[i] != 0 || !std::isfinite(dist[i])) continue;
+      if (cloth.inverse_mass[i] == 0.0F || !std::isfinite(dist[i])) continue;
       const GridCoord gi = cloth.grid[i];
       const GridCoord gp = cloth.grid[owner[i]];
       const bool unobstructed = dist[i] <= octile(gi, gp) * (1.0F + 1e-4F) + 1e-6F;

@@ -9,7 +9,6 @@ RecordingSource::RecordingSource(const std::filesystem::path& dir, Playback play
   if (playback_.rate < 0.0) throw RecordingError("recording " + dir.string() + ": playback rate must be >= 0");
   for (auto& e : read_index(dir))
     if (e.kind == EntryKind::Depth) depth_entries_.push_back(std::move(e));
-  sleep_ = [](std::chrono::nanoseconds d) { std::this_thread::sleep_for(d); };
 }
 
 std::optional<DepthFrame> RecordingSource::next() {
@@ -39,7 +38,7 @@ std::optional<DepthFrame> RecordingSource::next() {
     } else {
       const auto due = *start_wall_ + std::chrono::nanoseconds(static_cast<std::int64_t>(
                                           static_cast<double>(frame.stamp_ns - start_host_ns_) / playback_.rate));
-      if (due > now) sleep_(due - now);
+      if (due > now) std::this_thread::sleep_until(due);
     }
   }
   ++position_;

@@ -5,7 +5,6 @@
 
 #include <chrono>
 #include <filesystem>
-#include <functional>
 #include <optional>
 #include <vector>
 
@@ -40,9 +39,6 @@ class RecordingSource final : public DepthSource {
   const DepthModel& model() const override { return model_; }
   std::size_t depth_frame_count() const noexcept { return depth_entries_.size(); }
 
-  /// Replaces the sleep used for pacing (tests).
-  void set_sleep(std::function<void(std::chrono::nanoseconds)> sleep) { sleep_ = std::move(sleep); }
-
  private:
   std::filesystem::path dir_;
   Playback playback_;
@@ -53,7 +49,6 @@ class RecordingSource final : public DepthSource {
   std::int64_t loop_offset_ns_ = 0;
   std::optional<std::chrono::steady_clock::time_point> start_wall_;
   std::int64_t start_host_ns_ = 0;
-  std::function<void(std::chrono::nanoseconds)> sleep_;
 };
 
 }  // namespace tachi::sensor

@@ -1,0 +1,129 @@
+#include "tachi/sensor/hand_finder.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+
+#include "tachi/sensor/depth_source.hpp"
+#include "tachi/sensor/hand_csv.hpp"
+#include "tachi/sensor/synthetic.hpp"
+#include "test_util.hpp"
+
+namespace tachi::sensor {
+namespace {
+
+struct ScenarioRun {
+  std::vector<HandRow> hands;
+  std::vector<TruthRow> truth;
+  std::vector<std::uint16_t> nearest_raw;  // nearest valid reading of each frame
+};
+
+ScenarioRun run_scenario(const std::string& name) {
+  const auto dir = std::filesystem::path(test::recordings_dir()) / name;
+  ScenarioRun run;
+  run.truth = read_truth_csv(dir / "ground_truth.csv");
+  RecordingSource source(dir, Playback{0.0, false});
+  HandFinder finder(source.model());
+  while (auto frame = source.next()) {
+    const auto hand = finder.find(*frame);
+    HandRow row;
+    row.frame = frame->frame;
+    row.tracked = hand.tracked;
+    row.position = hand.position_m.cast<double>();
+    run.hands.push_back(row);
+    run.nearest_raw.push_back(*std::min_element(frame->raw.begin(), frame->raw.end()));
+  }
+  return run;
+}
+
+class ScenarioAccuracy : public ::testing::TestWithParam<const char*> {};
+
+TEST_P(ScenarioAccuracy, MeetsTheTargets) {
+  const auto run = run_scenario(GetParam());
+  const Evaluation e = evaluate(run.hands, run.truth);
+  EXPECT_EQ(e.missing_frames, 0u);
+  EXPECT_GE(e.visible, 100u);  // enough visible frames for a 99% ratio to mean something
+  EXPECT_LE(e.rms_m, 0.010);
+  EXPECT_GE(e.tracked_ratio, 0.99);
+  EXPECT_EQ(e.phantoms, 0u);
+  RecordProperty("rms_mm", std::to_string(e.rms_m * 1000));
+}
+
+INSTANTIATE_TEST_SUITE_P(Bundled, ScenarioAccuracy, ::testing::Values("push", "jitter", "straight_cut", "curve", "top_edge"));
+
+TEST(HandFinder, StaticObjectNearerThanTheHandDoesNotStealTheTrack) {
+  const auto run = run_scenario("straight_cut");
+  const DepthModel model;
+  int checked = 0, missed = 0;
+  for (std::size_t i = 0; i < run.truth.size(); ++i) {
+    if (!run.truth[i].visible) continue;
+    // The box in the corner is nearer than the hand in every frame: a nearest-blob rule fails.
+    ASSERT_LT(model.metres(run.nearest_raw[i]) + 0.1, run.truth[i].position.z()) << "frame " << i;
+    if (!run.hands[i].tracked) {
+      ++missed;  // the palm circle at the image edge, as the hand leaves
+      continue;
+    }
+    EXPECT_LT((run.hands[i].position - run.truth[i].position).norm(), 0.02) << "frame " << i;
+    ++checked;
+  }
+  EXPECT_GT(checked, 95);
+  EXPECT_LE(missed, 1);
+}
+
+TEST(HandFinder, PausingHandStaysTracked) {
+  const auto run = run_scenario("straight_cut");
+  // The scenario holds the hand nearly still for 1 s at the end of the cut (t 2.6-3.6 s).
+  int still = 0;
+  for (std::size_t i = 80; i < 106; ++i) {
+    ASSERT_TRUE(run.truth[i].visible);
+    EXPECT_LT((run.truth[i].position - run.truth[i - 1].position).norm(), 0.003);
+    EXPECT_TRUE(run.hands[i].tracked) << "frame " << i;
+    ++still;
+  }
+  EXPECT_EQ(still, 26);
+}
+
+TEST(HandFinder, NoPhantomWhenNoHandIsRaised) {
+  ScenarioSpec spec;
+  spec.name = "idle";
+  spec.seed = 11;
+  spec.path = {{0.0, Eigen::Vector3d::Zero(), true}, {1.5, Eigen::Vector3d::Zero(), true}};
+  SyntheticScene scene(spec);
+  HandFinder finder{DepthModel{}};
+  GroundTruth truth;
+  for (std::uint64_t i = 0; i < scene.frame_count(); ++i) {
+    const auto hand = finder.find(scene.render(i, truth));
+    EXPECT_FALSE(hand.tracked) << "frame " << i;
+    EXPECT_EQ(hand.confidence, 0.0f);
+  }
+}
+
+TEST(HandFinder, ReportsPalmCentreInMetresWithConfidence) {
+  const auto dir = std::filesystem::path(test::recordings_dir()) / "jitter";
+  RecordingSource source(dir, Playback{0.0, false});
+  const auto truth = read_truth_csv(dir / "ground_truth.csv");
+  HandFinder finder(source.model());
+  HandObservation last;
+  std::size_t i = 0;
+  for (; i < 60; ++i) last = finder.find(*source.next());
+  ASSERT_TRUE(last.tracked);
+  EXPECT_GT(last.confidence, 0.5f);
+  EXPECT_LE(last.confidence, 1.0f);
+  EXPECT_NEAR(last.palm_radius_m, 0.041, 0.008);
+  EXPECT_LT((last.position_m.cast<double>() - truth[i - 1].position).norm(), 0.01);
+  const Eigen::Vector3d back = source.model().back_project(last.u, last.v, last.position_m.z());
+  EXPECT_LT((back.cast<float>() - last.position_m).norm(), 1e-5f);
+}
+
+TEST(HandFinder, WrongSizedFrameIsUntrackedNotACrash) {
+  HandFinder finder{DepthModel{}};
+  std::vector<std::uint16_t> small(100, 800);
+  EXPECT_FALSE(finder.find(small).tracked);
+  std::vector<std::uint16_t> empty;
+  EXPECT_FALSE(finder.find(empty).tracked);
+  std::vector<std::uint16_t> blank(kDepthPixels, kNoReading);
+  for (int i = 0; i < 3; ++i) EXPECT_FALSE(finder.find(blank).tracked);
+}
+
+}  // namespace
+}  // namespace tachi::sensor

@@ -1,0 +1,57 @@
+// Helpers shared by the sensor tests: scratch folders and hand-made fakenect files.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "tachi/sensor/depth_frame.hpp"
+
+namespace tachi::sensor::test {
+
+/// A fresh folder under the system temp dir, removed when the object goes.
+class ScratchDir {
+ public:
+  explicit ScratchDir(const std::string& name) {
+    std::random_device rd;
+    path_ = std::filesystem::temp_directory_path() / ("tachi_sensor_" + name + "_" + std::to_string(rd()));
+    std::filesystem::create_directories(path_);
+  }
+  ~ScratchDir() {
+    std::error_code ec;
+    std::filesystem::remove_all(path_, ec);
+  }
+  ScratchDir(const ScratchDir&) = delete;
+  ScratchDir& operator=(const ScratchDir&) = delete;
+  const std::filesystem::path& path() const { return path_; }
+
+ private:
+  std::filesystem::path path_;
+};
+
+inline void write_text(const std::filesystem::path& file, const std::string& text) {
+  std::ofstream(file, std::ios::binary) << text;
+}
+
+/// A depth file exactly as fakenect-record writes it (header + little-endian uint16).
+inline std::string fakenect_depth_bytes(const std::vector<std::uint16_t>& raw, const std::string& header = "P5 640 480 65535\n") {
+  std::string bytes = header;
+  for (const std::uint16_t v : raw) {
+    bytes.push_back(static_cast<char>(v & 0xff));
+    bytes.push_back(static_cast<char>(v >> 8));
+  }
+  return bytes;
+}
+
+inline std::vector<std::uint16_t> ramp_frame(std::uint16_t offset) {
+  std::vector<std::uint16_t> raw(kDepthPixels);
+  for (std::size_t i = 0; i < raw.size(); ++i) raw[i] = static_cast<std::uint16_t>((i + offset) % 2048);
+  return raw;
+}
+
+inline std::string recordings_dir() { return TACHI_RECORDINGS_DIR; }
+
+}  // namespace tachi::sensor::test

@@ -1,0 +1,243 @@
+// sim_bench: time of one 1/60 s step of the tachi cloth against Bullet 3's soft body on the same grid,
+// in the same process, pinned the same way (the two top corners), from the same start (hanging flat
+// in the z = 0 plane). Prints medians, the speed ratio and both max structural stretches.
+// Bullet: btSoftBodyHelpers::CreatePatch with diagonals + bending constraints (Provot's spring set),
+// piterations = 4 (with 1 it explodes for N >= 32 and disables the body), deactivation off so that
+// it is never timed asleep; its activation state is checked and printed.
+//
+// Usage: sim_bench [--grids 32,64,128,256] [--warmup 60] [--steps 120] [--variants]
+//   --variants: also print the solver-design table of docs/sim.md (sub-steps x passes, attachments).
+#include "tachi/sim/cloth.hpp"
+#include "tachi/sim/solver.hpp"
+
+#include <BulletSoftBody/btDefaultSoftBodySolver.h>
+#include <BulletSoftBody/btSoftBody.h>
+#include <BulletSoftBody/btSoftBodyHelpers.h>
+#include <BulletSoftBody/btSoftBodyRigidBodyCollisionConfiguration.h>
+#include <BulletSoftBody/btSoftRigidDynamicsWorld.h>
+#include <btBulletDynamicsCommon.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <memory>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+constexpr btScalar kDt = btScalar(1) / btScalar(60);
+using tachi::sim::Cloth;
+using tachi::sim::ClothConfig;
+using tachi::sim::PinMode;
+using tachi::sim::Solver;
+using tachi::sim::SolverParams;
+
+double ms_since(Clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+}
+
+double median(std::vector<double> v) {
+  if (v.empty()) return 0.0;
+  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
+  return v[v.size() / 2];
+}
+
+struct Run {
+  double step_ms = 0.0;      ///< median wall time of one 1/60 s step
+  double max_strain = 0.0;   ///< at the end of the run, over structural springs
+  double peak_strain = 0.0;  ///< largest seen after any timed step
+  std::string note;
+};
+
+Cloth make_cloth(int n) {
+  ClothConfig c;
+  c.columns = n;
+  c.rows = n;
+  c.pin = PinMode::Corners;
+  return Cloth{c};
+}
+
+Run run_tachi(int n, int warmup, int steps, const SolverParams& params, bool horizontal = false) {
+  Cloth cloth = make_cloth(n);
+  if (horizontal) {
+    for (auto& p : cloth.position) p = Eigen::Vector3f{p.x(), 0.5F, 0.5F - p.y()};
+  }
+  Solver solver{params};
+  Run r;
+  for (int s = 0; s < warmup; ++s) solver.step(cloth);
+  std::vector<double> ms;
+  for (int s = 0; s < steps; ++s) {
+    const auto t0 = Clock::now();
+    solver.step(cloth);
+    ms.push_back(ms_since(t0));
+    r.peak_strain = std::max(r.peak_strain, static_cast<double>(cloth.max_structural_strain()));
+  }
+  r.step_ms = median(ms);
+  r.max_strain = cloth.max_structural_strain();
+  return r;
+}
+
+/// Bullet soft-body world with one patch, owned together.
+struct BulletCloth {
+  btSoftBodyRigidBodyCollisionConfiguration configuration;
+  btCollisionDispatcher dispatcher{&configuration};
+  btDbvtBroadphase broadphase;
+  btSequentialImpulseConstraintSolver constraint_solver;
+  btDefaultSoftBodySolver soft_solver;
+  btSoftRigidDynamicsWorld world{&dispatcher, &broadphase, &constraint_solver, &configuration, &soft_solver};
+  btSoftBody* patch = nullptr;
+  float spacing = 0.0F;
+
+  explicit BulletCloth(int n) {
+    world.setGravity(btVector3(0, -9.81F, 0));
+    btSoftBodyWorldInfo& info = world.getWorldInfo();
+    info.m_gravity.setValue(0, -9.81F, 0);
+    info.m_sparsesdf.Initialize();
+    // corner00 = top-left, corner10 = top-right: fixeds 1 + 2 pins the two top corners, as --pin corners.
+    patch = btSoftBodyHelpers::CreatePatch(info, btVector3(-0.5F, 0.5F, 0), btVector3(0.5F, 0.5F, 0),
+                                           btVector3(-0.5F, -0.5F, 0), btVector3(0.5F, -0.5F, 0), n, n, 1 + 2,
+                                           /*gendiags=*/true);
+    patch->generateBendingConstraints(2, patch->m_materials[0]);
+    patch->m_cfg.piterations = 4;
+    patch->setTotalMass(0.2F);
+    patch->setActivationState(DISABLE_DEACTIVATION);
+    world.addSoftBody(patch);
+    spacing = 1.0F / static_cast<float>(n - 1);
+  }
+  ~BulletCloth() {
+    world.removeSoftBody(patch);
+    delete patch;
+  }
+  BulletCloth(const BulletCloth&) = delete;
+  BulletCloth& operator=(const BulletCloth&) = delete;
+
+  /// Max over structural links (rest length = grid spacing) of length / rest - 1.
+  [[nodiscard]] double max_strain() const {
+    double worst = 0.0;
+    for (int i = 0; i < patch->m_links.size(); ++i) {
+      const btSoftBody::Link& l = patch->m_links[i];
+      if (std::abs(l.m_rl - spacing) > 0.01F * spacing) continue;  // diagonal or bending link
+      const double len = (l.m_n[0]->m_x - l.m_n[1]->m_x).length();
+      worst = std::max(worst, len / static_cast<double>(l.m_rl) - 1.0);
+    }
+    return worst;
+  }
+};
+
+Run run_bullet(int n, int warmup, int steps) {
+  BulletCloth b{n};
+  Run r;
+  for (int s = 0; s < warmup; ++s) b.world.stepSimulation(kDt, 1, kDt);
+  std::vector<double> ms;
+  for (int s = 0; s < steps; ++s) {
+    const auto t0 = Clock::now();
+    b.world.stepSimulation(kDt, 1, kDt);
+    ms.push_back(ms_since(t0));
+    r.peak_strain = std::max(r.peak_strain, b.max_strain());
+  }
+  r.step_ms = median(ms);
+  r.max_strain = b.max_strain();
+  const int state = b.patch->getActivationState();
+  // A body Bullet disabled (5) or put to sleep (2) costs ~0 per step: such a time is not a measurement.
+  r.note = state == DISABLE_SIMULATION ? "DISABLED by Bullet: time invalid"
+           : state == ISLAND_SLEEPING  ? "asleep: time invalid"
+                                       : "active (state " + std::to_string(state) + ")";
+  return r;
+}
+
+std::vector<int> parse_list(const std::string& text) {
+  std::vector<int> out;
+  std::stringstream ss{text};
+  std::string item;
+  while (std::getline(ss, item, ',')) {
+    const int v = std::atoi(item.c_str());
+    if (v >= 2 && v <= 1024) out.push_back(v);
+  }
+  return out;
+}
+
+void print_variants(int warmup) {
+  struct Variant {
+    const char* name;
+    int substeps;
+    int iterations;
+    bool attachments;
+    int strain_passes;
+  };
+  const Variant variants[] = {
+      {"1 sub-step x 4 passes, attachments", 1, 4, true, 4},
+      {"1 sub-step x 1 pass, attachments", 1, 1, true, 4},
+      {"2 sub-steps x 1 pass, no attachments", 2, 1, false, 4},
+      {"2 sub-steps x 1 pass, attachments, 1 limit sweep", 2, 1, true, 1},
+      {"2 sub-steps x 1 pass, attachments (default)", 2, 1, true, 4},
+      {"2 sub-steps x 2 passes, attachments", 2, 2, true, 4},
+      {"3 sub-steps x 1 pass, attachments", 3, 1, true, 4},
+      {"4 sub-steps x 1 pass, attachments", 4, 1, true, 4},
+  };
+  std::printf("\nSolver variants, 128x128, corners pinned (hanging: warm-up %d + 120 steps; swing: released\n"
+              "from horizontal, 300 steps):\n",
+              warmup);
+  std::printf("%-52s %10s %10s %12s %12s\n", "variant", "ms/step", "strain", "swing ms", "swing peak");
+  for (const Variant& v : variants) {
+    SolverParams p;
+    p.substeps = v.substeps;
+    p.iterations = v.iterations;
+    p.long_range_attachments = v.attachments;
+    p.strain_limit_passes = v.strain_passes;
+    const Run hang = run_tachi(128, warmup, 120, p);
+    const Run swing = run_tachi(128, 0, 300, p, /*horizontal=*/true);
+    std::printf("%-52s %10.3f %9.1f%% %12.3f %11.1f%%\n", v.name, hang.step_ms, 100.0 * hang.max_strain,
+                swing.step_ms, 100.0 * swing.peak_strain);
+  }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::vector<int> grids{32, 64, 128, 256};
+  int warmup = 60;
+  int steps = 120;
+  bool variants = false;
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    const bool has_value = i + 1 < argc;
+    if (arg == "--grids" && has_value) {
+      grids = parse_list(argv[++i]);
+    } else if (arg == "--warmup" && has_value) {
+      warmup = std::max(0, std::atoi(argv[++i]));
+    } else if (arg == "--steps" && has_value) {
+      steps = std::max(1, std::atoi(argv[++i]));
+    } else if (arg == "--variants") {
+      variants = true;
+    } else {
+      std::fprintf(stderr, "sim_bench: unknown or incomplete argument '%s'\n"
+                           "usage: sim_bench [--grids 32,64,128,256] [--warmup 60] [--steps 120] [--variants]\n",
+                   arg.c_str());
+      return 2;
+    }
+  }
+  if (grids.empty()) {
+    std::fprintf(stderr, "sim_bench: --grids needs sizes in 2..1024\n");
+    return 2;
+  }
+
+  std::printf("sim_bench: one 1/60 s step, corners pinned, hanging start; warm-up %d steps, median of %d\n", warmup,
+              steps);
+  std::printf("%6s %12s %12s %12s %12s %10s  %s\n", "grid", "tachi ms", "tachi strain", "bullet ms", "bullet strain",
+              "speed-up", "bullet body");
+  const SolverParams defaults;
+  for (const int n : grids) {
+    const Run t = run_tachi(n, warmup, steps, defaults);
+    const Run b = run_bullet(n, warmup, steps);
+    std::printf("%6s %12.3f %11.1f%% %12.3f %12.1f%% %9.1fx  %s\n", (std::to_string(n) + "^2").c_str(), t.step_ms,
+                100.0 * t.max_strain, b.step_ms, 100.0 * b.max_strain, b.step_ms / t.step_ms, b.note.c_str());
+    std::fflush(stdout);
+  }
+  if (variants) print_variants(warmup);
+  return 0;
+}

@@ -74,7 +74,8 @@ FilterConfig parse_filter_config(const std::string& json_text) {
   check_keys(root, {"workspace", "smoother", "gate", "cloth"}, "");
   check_keys(section(root, "workspace"), {"rotation", "translation_m", "scale"}, "workspace.");
   check_keys(section(root, "smoother"),
-             {"kind", "moving_average_window", "min_cutoff_hz", "beta", "d_cutoff_hz", "nominal_rate_hz", "reset_after_gap_s"},
+             {"kind", "moving_average_window", "min_cutoff_hz", "beta", "d_cutoff_hz", "lag_compensation", "nominal_rate_hz",
+              "reset_after_gap_s"},
              "smoother.");
   check_keys(section(root, "gate"), {"mode", "enter_distance_m", "exit_distance_m", "enter_dwell_samples", "exit_dwell_samples"},
              "gate.");
@@ -94,6 +95,7 @@ FilterConfig parse_filter_config(const std::string& json_text) {
   read(s, "min_cutoff_hz", "smoother.", c.smoother.one_euro.min_cutoff_hz);
   read(s, "beta", "smoother.", c.smoother.one_euro.beta);
   read(s, "d_cutoff_hz", "smoother.", c.smoother.one_euro.d_cutoff_hz);
+  read(s, "lag_compensation", "smoother.", c.smoother.one_euro.lag_compensation);
   read(s, "nominal_rate_hz", "smoother.", c.smoother.nominal_rate_hz);
   read(s, "reset_after_gap_s", "smoother.", c.smoother.reset_after_gap_s);
   if (const auto why = validate(c.smoother)) fail("smoother." + *why);
@@ -147,6 +149,7 @@ std::string to_json(const FilterConfig& c) {
         {"min_cutoff_hz", c.smoother.one_euro.min_cutoff_hz},
         {"beta", c.smoother.one_euro.beta},
         {"d_cutoff_hz", c.smoother.one_euro.d_cutoff_hz},
+        {"lag_compensation", c.smoother.one_euro.lag_compensation},
         {"nominal_rate_hz", c.smoother.nominal_rate_hz},
         {"reset_after_gap_s", c.smoother.reset_after_gap_s}}},
       {"gate",

@@ -33,7 +33,14 @@ double OneEuroScalar::filter(double x, double dt_s) {
   const double dx = x_.initialised() ? (x - x_.last()) / dt_s : 0.0;
   const double edx = dx_.filter(dx, one_euro_alpha(params_.d_cutoff_hz, dt_s));
   const double cutoff = params_.min_cutoff_hz + params_.beta * std::abs(edx);
-  return x_.filter(x, one_euro_alpha(cutoff, dt_s));
+  const bool first = !x_.initialised();
+  const double previous = x_.last();
+  const double alpha = one_euro_alpha(cutoff, dt_s);
+  const double x_hat = x_.filter(x, alpha);
+  if (params_.lag_compensation <= 0.0) return x_hat;
+  // A first-order low-pass trails a constant velocity v by v * tau; add back the estimate of that lag.
+  const double v_hat = v_.filter(first ? 0.0 : (x_hat - previous) / dt_s, alpha);
+  return x_hat + params_.lag_compensation * v_hat / (2.0 * std::numbers::pi * cutoff);
 }
 
 OneEuroFilter::OneEuroFilter(const OneEuroParams& params) : x_(params), y_(params), z_(params) {}
@@ -66,13 +73,15 @@ std::string to_string(SmootherKind kind) {
 }
 
 std::optional<std::string> validate(const SmootherParams& p) {
-  if (p.moving_average_window < 1 || p.moving_average_window > 1000) return "moving_average.window must be in [1, 1000]";
+  if (p.moving_average_window < 1 || p.moving_average_window > 1000) return "moving_average_window must be in [1, 1000]";
   const auto positive = [](double v) { return std::isfinite(v) && v > 0.0; };
   if (!positive(p.one_euro.min_cutoff_hz) || p.one_euro.min_cutoff_hz > 1000.0)
-    return "one_euro.min_cutoff_hz must be in (0, 1000]";
+    return "min_cutoff_hz must be in (0, 1000]";
   if (!std::isfinite(p.one_euro.beta) || p.one_euro.beta < 0.0 || p.one_euro.beta > 1e6)
-    return "one_euro.beta must be in [0, 1e6]";
-  if (!positive(p.one_euro.d_cutoff_hz) || p.one_euro.d_cutoff_hz > 1000.0) return "one_euro.d_cutoff_hz must be in (0, 1000]";
+    return "beta must be in [0, 1e6]";
+  if (!positive(p.one_euro.d_cutoff_hz) || p.one_euro.d_cutoff_hz > 1000.0) return "d_cutoff_hz must be in (0, 1000]";
+  if (!std::isfinite(p.one_euro.lag_compensation) || p.one_euro.lag_compensation < 0.0 || p.one_euro.lag_compensation > 1.0)
+    return "lag_compensation must be in [0, 1]";
   if (!positive(p.nominal_rate_hz) || p.nominal_rate_hz > 10000.0) return "nominal_rate_hz must be in (0, 10000]";
   if (!positive(p.reset_after_gap_s)) return "reset_after_gap_s must be > 0";
   return std::nullopt;

@@ -32,8 +32,8 @@ TEST(MovingAverage, ResetForgetsThePast) {
 
 // Reference vectors: an independent Python implementation of Algorithm 1 of Casiez, Roussel, Vogel
 // (CHI 2012) -- alpha = 1/(1 + tau/Te), tau = 1/(2 pi fc), dx = (x_i - x_hat_{i-1})/Te low-passed at
-// d_cutoff, fc = min_cutoff + beta |dx_hat| -- run once on x = 0, 1, 1, 1, 0.5, 2, 2 and printed with
-// 9 decimals (the script is in docs/filter.md, "One Euro reference vectors").
+// d_cutoff, fc = min_cutoff + beta |dx_hat| -- plus the lag compensation (last case), run once on
+// x = 0, 1, 1, 1, 0.5, 2, 2 and printed with 9 decimals (the script is in docs/filter.md).
 struct OneEuroCase {
   OneEuroParams params;
   std::array<double, 7> t;
@@ -42,23 +42,27 @@ struct OneEuroCase {
 
 TEST(OneEuroScalar, MatchesIndependentReferenceVectors) {
   const std::array<double, 7> x{0.0, 1.0, 1.0, 1.0, 0.5, 2.0, 2.0};
-  const std::array<OneEuroCase, 3> cases{{
-      {{1.0, 0.5, 1.0},
+  const std::array<OneEuroCase, 4> cases{{
+      {{1.0, 0.5, 1.0, 0.0},
        {0, 1.0 / 30, 2.0 / 30, 3.0 / 30, 4.0 / 30, 5.0 / 30, 6.0 / 30},
        {0.000000000, 0.429702693, 0.710438559, 0.854887530, 0.712986093, 1.437326262, 1.766212441}},
-      {{2.0, 0.0, 1.0},
+      {{2.0, 0.0, 1.0, 0.0},
        {0, 0.02, 0.05, 0.1, 0.11, 0.2, 0.25},
        {0.000000000, 0.200848643, 0.419639425, 0.643582896, 0.627553989, 1.355953463, 1.604471407}},
-      {{0.5, 10.0, 2.0},
+      {{0.5, 10.0, 2.0, 0.0},
        {0, 1.0 / 30, 2.0 / 30, 3.0 / 30, 4.0 / 30, 5.0 / 30, 6.0 / 30},
        {0.000000000, 0.949119335, 0.996635230, 0.999695385, 0.648400077, 1.945014736, 1.997054949}},
+      {{1.0, 3.0, 1.0, 1.0},
+       {0, 1.0 / 30, 2.0 / 30, 3.0 / 30, 4.0 / 30, 5.0 / 30, 6.0 / 30},
+       {0.000000000, 0.950033406, 1.025339931, 1.017157322, 0.652269630, 1.962741459, 2.023973484}},
   }};
   for (const auto& c : cases) {
     OneEuroScalar f{c.params};
     for (std::size_t i = 0; i < x.size(); ++i) {
       const double dt = i == 0 ? 1.0 / 30 : c.t[i] - c.t[i - 1];
       EXPECT_NEAR(f.filter(x[i], dt), c.expected[i], 1e-8)
-          << "min_cutoff " << c.params.min_cutoff_hz << " beta " << c.params.beta << " sample " << i;
+          << "min_cutoff " << c.params.min_cutoff_hz << " beta " << c.params.beta << " compensation "
+          << c.params.lag_compensation << " sample " << i;
     }
   }
 }
@@ -73,7 +77,7 @@ TEST(OneEuroFilter, SmoothsMoreWhenSlowThanWhenFast) {
   // Held still with noise, the filter removes most jitter; moving fast, beta opens the cutoff.
   std::mt19937 rng{7};
   std::normal_distribution<float> noise{0.0F, 0.005F};
-  OneEuroFilter still{{1.0, 1.0, 1.0}};
+  OneEuroFilter still{{1.0, 1.0, 1.0, 0.0}};
   double raw_sq = 0, filtered_sq = 0;
   for (int i = 0; i < 300; ++i) {
     const Eigen::Vector3f n{noise(rng), noise(rng), noise(rng)};
@@ -85,8 +89,8 @@ TEST(OneEuroFilter, SmoothsMoreWhenSlowThanWhenFast) {
   }
   EXPECT_LT(filtered_sq, 0.25 * raw_sq);
 
-  OneEuroFilter fast{{1.0, 1.0, 1.0}};
-  OneEuroFilter no_beta{{1.0, 0.0, 1.0}};
+  OneEuroFilter fast{{1.0, 1.0, 1.0, 0.0}};
+  OneEuroFilter no_beta{{1.0, 0.0, 1.0, 0.0}};
   Eigen::Vector3f a, b;
   for (int i = 0; i < 30; ++i) {  // 1.5 m/s ramp
     const Eigen::Vector3f x{0.05F * static_cast<float>(i), 0, 0};
@@ -95,6 +99,22 @@ TEST(OneEuroFilter, SmoothsMoreWhenSlowThanWhenFast) {
   }
   const float target = 0.05F * 29;
   EXPECT_LT(target - a.x(), 0.5F * (target - b.x()));
+}
+
+TEST(OneEuroFilter, LagCompensationRemovesTheLagBehindAConstantVelocity) {
+  // A hand moving at 0.2 m/s: the paper's filter trails it by about v * tau; compensated, it does not.
+  const OneEuroParams paper{1.0, 0.0, 1.0, 0.0};
+  const OneEuroParams compensated{1.0, 0.0, 1.0, 1.0};
+  OneEuroScalar a{paper}, b{compensated};
+  double x = 0, ya = 0, yb = 0;
+  for (int i = 0; i < 300; ++i) {
+    x = 0.2 * i / 30.0;
+    ya = a.filter(x, 1.0 / 30);
+    yb = b.filter(x, 1.0 / 30);
+  }
+  const double tau = 1.0 / (2.0 * 3.14159265358979);
+  EXPECT_NEAR(x - ya, 0.2 * tau, 1e-3);  // ~32 mm behind
+  EXPECT_NEAR(x - yb, 0.0, 1e-3);
 }
 
 TEST(Smoother, LongGapRestartsTheFilter) {

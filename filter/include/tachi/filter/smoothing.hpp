@@ -46,26 +46,34 @@ class LowPass {
   double value_ = 0.0;
 };
 
+/// Defaults: chosen on recordings/jitter (docs/benchmarks.md, "Filter and voice").
 struct OneEuroParams {
   double min_cutoff_hz = 1.0;
-  double beta = 0.5;
+  double beta = 3.0;
   double d_cutoff_hz = 1.0;
+  /// Lag compensation in [0, 1] (an extension, not in Casiez et al.): adds lag_compensation * tau * v_hat,
+  /// where tau = 1 / (2 pi fc) is the low-pass's steady-state lag behind a constant-velocity hand and v_hat
+  /// the filtered output's velocity low-passed at the same cutoff. 1 removes the lag on ramps (transfer
+  /// (1 + 2 tau s) / (1 + tau s)^2); 0 is the paper's filter.
+  double lag_compensation = 1.0;
 };
 
 /// The One Euro filter for one scalar, Algorithm 1 of Casiez, Roussel, Vogel, CHI 2012:
 /// alpha = 1 / (1 + tau / Te), tau = 1 / (2 pi fc), fc = fcmin + beta |dx_hat|,
-/// dx = (x_i - x_hat_{i-1}) / Te as in the paper (the authors' later C++ code differentiates the raw signal).
+/// dx = (x_i - x_hat_{i-1}) / Te as in the paper's pseudocode (the authors' C++ code does the same since
+/// 2023; MediaPipe differentiates the raw signal). Optional lag compensation: see OneEuroParams.
 class OneEuroScalar {
  public:
   explicit OneEuroScalar(const OneEuroParams& params) : params_(params) {}
   /// dt_s > 0: time since the previous sample.
   double filter(double x, double dt_s);
-  void reset() { x_.reset(); dx_.reset(); }
+  void reset() { x_.reset(); dx_.reset(); v_.reset(); }
 
  private:
   OneEuroParams params_;
   LowPass x_;
   LowPass dx_;
+  LowPass v_;
 };
 
 /// Smoothing factor of a first-order low-pass with cutoff `cutoff_hz` sampled every `dt_s` (Casiez et al. eq. (4)).

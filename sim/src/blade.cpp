@@ -2,7 +2,6 @@
 
 #include <array>
 #include <cmath>
-#include <deque>
 
 namespace tachi::sim {
 
@@ -38,49 +37,45 @@ std::optional<Blade> parse_blade(std::string_view name) {
 }
 
 void apply_blade_drag(Cloth& cloth, std::span<const std::uint32_t> cut_particles, const Eigen::Vector3f& direction,
-                      Blade blade, const BladeDrag& drag, std::vector<float>& scratch) {
+                      Blade blade, const BladeDrag& drag, BladeScratch& scratch) {
   const float norm = direction.norm();
   if (!(norm > 0.0F) || !std::isfinite(norm) || cut_particles.empty()) return;
   const Eigen::Vector3f unit = direction / norm;
   const float force = sharpness(blade).force_n();
   const float reach = drag.radius_cells(force) + 1.0F;
-  if (scratch.size() < cloth.particle_count()) scratch.resize(cloth.particle_count(), 0.0F);
+  auto& weight = scratch.weight;
+  auto& queue = scratch.queue;
+  auto& touched = scratch.touched;
+  if (weight.size() < cloth.particle_count()) weight.resize(cloth.particle_count(), 0.0F);
+  queue.clear();
+  touched.clear();
 
   // Spread from every cut particle through live springs, keeping for each particle the largest weight
   // 1 - d / reach, d its grid distance to the cut particle the spread came from.
-  struct Item {
-    std::uint32_t particle;
-    GridCoord source;
-  };
-  std::deque<Item> queue;
-  std::vector<std::uint32_t> touched;
   for (const std::uint32_t p : cut_particles) {
     if (p >= cloth.particle_count()) continue;
-    if (scratch[p] < 1.0F) {
-      if (scratch[p] == 0.0F) touched.push_back(p);
-      scratch[p] = 1.0F;
-    }
+    if (weight[p] == 0.0F) touched.push_back(p);
+    weight[p] = 1.0F;
     queue.push_back({p, cloth.grid[p]});
   }
-  while (!queue.empty()) {
-    const Item item = queue.front();
-    queue.pop_front();
+  for (std::size_t head = 0; head < queue.size(); ++head) {
+    const BladeScratch::Item item = queue[head];
     for (const std::uint32_t k : cloth.springs_of(item.particle)) {
-      if (cloth.kind[k] == SpringKind::Bend) continue;
+      if (cloth.kind[k] != SpringKind::Structural) continue;  // diagonals reach nothing the grid does not
       const std::uint32_t q = cloth.spring_a[k] == item.particle ? cloth.spring_b[k] : cloth.spring_a[k];
       const float du = static_cast<float>(cloth.grid[q].u - item.source.u);
       const float dv = static_cast<float>(cloth.grid[q].v - item.source.v);
-      const float weight = 1.0F - std::sqrt(du * du + dv * dv) / reach;
-      if (weight <= scratch[q]) continue;
-      if (scratch[q] == 0.0F) touched.push_back(q);
-      scratch[q] = weight;
+      const float w = 1.0F - std::sqrt(du * du + dv * dv) / reach;
+      if (w <= weight[q]) continue;
+      if (weight[q] == 0.0F) touched.push_back(q);
+      weight[q] = w;
       queue.push_back({q, item.source});
     }
   }
   const float peak = std::min(drag.gain_mps_per_n * force, drag.max_speed_mps);
   for (const std::uint32_t p : touched) {
-    if (cloth.inverse_mass[p] > 0.0F) cloth.velocity[p] += (peak * scratch[p]) * unit;
-    scratch[p] = 0.0F;
+    if (cloth.inverse_mass[p] > 0.0F) cloth.velocity[p] += (peak * weight[p]) * unit;
+    weight[p] = 0.0F;
   }
 }
 

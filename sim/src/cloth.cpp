@@ -106,6 +106,37 @@ std::size_t Cloth::alive_triangle_count() const {
   return static_cast<std::size_t>(std::count(triangle_alive.begin(), triangle_alive.end(), std::uint8_t{1}));
 }
 
+namespace {
+
+/// Reserves and touches the room (grow, then shrink back: capacity stays), so the pages are mapped now
+/// and not faulted in one by one by later push_backs.
+template <typename T>
+void reserve_touched(std::vector<T>& v, std::size_t n) {
+  if (n <= v.capacity()) return;
+  const std::size_t size = v.size();
+  v.reserve(n);
+  v.resize(n);
+  v.resize(size);
+}
+
+}  // namespace
+
+void Cloth::reserve(std::size_t particles, std::size_t springs) {
+  reserve_touched(position, particles);
+  reserve_touched(velocity, particles);
+  reserve_touched(mass, particles);
+  reserve_touched(inverse_mass, particles);
+  reserve_touched(grid, particles);
+  reserve_touched(pinned, particles);
+  reserve_touched(spring_incidence_, particles);
+  reserve_touched(triangle_incidence_, particles);
+  reserve_touched(spring_a, springs);
+  reserve_touched(spring_b, springs);
+  reserve_touched(rest_length, springs);
+  reserve_touched(kind, springs);
+  reserve_touched(alive, springs);
+}
+
 std::size_t Cloth::duplicate_particle(std::size_t i) {
   const std::size_t copy = position.size();
   // Copy by value first: push_back may reallocate and invalidate references into the same vector.

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <optional>
 #include <utility>
 
 namespace tachi::sim {
@@ -25,7 +26,7 @@ double ccw_turn(double from, double to) {
   return d;
 }
 
-/// The grid cell (top-left corner) a triangle lies in.
+/// The grid cell (top-left corner) a triangle lies in (fixed: rewiring keeps the grid coordinates).
 GridCoord cell_of(const Cloth& cloth, std::uint32_t t) {
   const auto& tri = cloth.triangles[t];
   GridCoord c = cloth.grid[tri[0]];
@@ -36,9 +37,6 @@ GridCoord cell_of(const Cloth& cloth, std::uint32_t t) {
   return c;
 }
 
-std::uint8_t slot_of(const std::array<std::uint32_t, 3>& tri, std::uint32_t p) {
-  return static_cast<std::uint8_t>(tri[0] == p ? 0 : tri[1] == p ? 1 : 2);
-}
 
 void sort_unique(std::vector<std::uint32_t>& v) {
   std::sort(v.begin(), v.end());
@@ -91,6 +89,29 @@ ClothCutter::ClothCutter(Cloth& cloth)
       horizontal_cut_(static_cast<std::size_t>(std::max(cloth.columns - 1, 0) * cloth.rows), 0),
       vertical_cut_(static_cast<std::size_t>(cloth.columns * std::max(cloth.rows - 1, 0)), 0),
       vertex_stamp_(static_cast<std::size_t>(cloth.columns * cloth.rows), 0) {
+  // Room for cuts to come, reserved now rather than reallocated in the middle of a stroke: half the grid
+  // again in duplicates, and a spring per duplicate or two.
+  const std::size_t grid_size = static_cast<std::size_t>(cloth.columns) * static_cast<std::size_t>(cloth.rows);
+  cloth.reserve(cloth.particle_count() + grid_size / 2, cloth.spring_count() + grid_size);
+  // Static lookups: rewiring never changes which cell a triangle lies in or where a bend is centred.
+  const auto cells = static_cast<std::size_t>(std::max(cloth.columns - 1, 0) * std::max(cloth.rows - 1, 0));
+  cell_triangles_.assign(cells, {kNone, kNone});
+  for (std::uint32_t t = 0; t < cloth.triangle_count(); ++t) {
+    const GridCoord c = cell_of(cloth, t);
+    if (c.u < 0 || c.v < 0 || c.u >= cloth.columns - 1 || c.v >= cloth.rows - 1) continue;
+    auto& slot = cell_triangles_[static_cast<std::size_t>(c.v * (cloth.columns - 1) + c.u)];
+    (slot[0] == kNone ? slot[0] : slot[1]) = t;
+  }
+  bend_through_.assign(grid_size, {kNone, kNone});
+  for (std::uint32_t k = 0; k < cloth.spring_count(); ++k) {
+    if (cloth.kind[k] != SpringKind::Bend) continue;
+    const GridCoord a = cloth.grid[cloth.spring_a[k]];
+    const GridCoord b = cloth.grid[cloth.spring_b[k]];
+    const GridCoord m{(a.u + b.u) / 2, (a.v + b.v) / 2};
+    if (!inside(m)) continue;
+    bend_through_[cloth.index(m.u, m.v)][a.v == b.v ? 0 : 1] = k;
+  }
+  spring_stamp_.reserve(cloth.spring_count() + grid_size);
   sync_particles();
 }
 
@@ -110,9 +131,13 @@ void ClothCutter::sync_particles() {
 
 std::vector<std::uint32_t> ClothCutter::copies(GridCoord g) const {
   std::vector<std::uint32_t> out;
-  if (!inside(g)) return out;
-  for (std::uint32_t p = cloth_->index(g.u, g.v); p != kNone; p = next_copy_[p]) out.push_back(p);
+  append_copies(g, out);
   return out;
+}
+
+void ClothCutter::append_copies(GridCoord g, std::vector<std::uint32_t>& out) const {
+  if (!inside(g)) return;
+  for (std::uint32_t p = cloth_->index(g.u, g.v); p != kNone; p = next_copy_[p]) out.push_back(p);
 }
 
 const std::uint8_t* ClothCutter::edge_flag(GridCoord a, GridCoord b) const {
@@ -184,20 +209,15 @@ TopologyChange ClothCutter::cut(std::span<const GridCoord> line) {
   anchors_.clear();
   bends_.clear();
   for (const LineVertex& lv : vertices) {
+    // The two bends centred here (their ends are not on the line, so no incidence list names them).
+    for (const std::uint32_t k : bend_through_[cloth.index(lv.g.u, lv.g.v)]) {
+      if (k != kNone && cloth.alive[k] != 0 && mark_spring(k)) bends_.push_back(k);
+    }
     for (std::uint32_t c = cloth.index(lv.g.u, lv.g.v); c != kNone; c = next_copy_[c]) {
       for (const std::uint32_t k : cloth.springs_of(c)) {
         if (cloth.kind[k] == SpringKind::Bend) {
           if (mark_spring(k)) bends_.push_back(k);
           continue;
-        }
-        if (cloth.kind[k] == SpringKind::Structural) {
-          const std::uint32_t x = cloth.spring_a[k] == c ? cloth.spring_b[k] : cloth.spring_a[k];
-          const GridCoord far{2 * lv.g.u - cloth.grid[x].u, 2 * lv.g.v - cloth.grid[x].v};
-          for (const std::uint32_t k2 : cloth.springs_of(x)) {
-            if (cloth.kind[k2] != SpringKind::Bend) continue;
-            const std::uint32_t y = cloth.spring_a[k2] == x ? cloth.spring_b[k2] : cloth.spring_a[k2];
-            if (cloth.grid[y] == far && mark_spring(k2)) bends_.push_back(k2);
-          }
         }
         if (!mark_spring(k)) continue;
         record_anchor(k);
@@ -207,8 +227,10 @@ TopologyChange ClothCutter::cut(std::span<const GridCoord> line) {
 
   // 3. Split the triangle fans (Figure 3 picks which side gets the new particle).
   for (const LineVertex& lv : vertices) {
-    const auto same_grid = copies(lv.g);  // snapshot: new copies already have separated fans
-    for (const std::uint32_t c : same_grid) split_fan(c, lv.to_previous, lv.to_next, change);
+    // Snapshot first: the copies made here already have separated fans.
+    copy_scratch_.clear();
+    append_copies(lv.g, copy_scratch_);
+    for (const std::uint32_t c : copy_scratch_) split_fan(c, lv.to_previous, lv.to_next, change);
   }
 
   // 4. Springs follow their triangles; bends that cross the cut go; completeCUT.
@@ -236,42 +258,72 @@ TopologyChange ClothCutter::cut(std::span<const GridCoord> line) {
   return change;
 }
 
+const std::array<std::uint32_t, 2>* ClothCutter::triangles_in_cell(GridCoord cell) const {
+  if (cell.u < 0 || cell.v < 0 || cell.u >= cloth_->columns - 1 || cell.v >= cloth_->rows - 1) return nullptr;
+  return &cell_triangles_[static_cast<std::size_t>(cell.v * (cloth_->columns - 1) + cell.u)];
+}
+
+std::array<GridCoord, 2> ClothCutter::cells_beside(GridCoord a, GridCoord b, int& sides) {
+  sides = 2;
+  if (a.v == b.v) {
+    const int u0 = std::min(a.u, b.u);
+    return {GridCoord{u0, a.v - 1}, GridCoord{u0, a.v}};
+  }
+  if (a.u == b.u) {
+    const int v0 = std::min(a.v, b.v);
+    return {GridCoord{a.u - 1, v0}, GridCoord{a.u, v0}};
+  }
+  sides = 1;
+  return {GridCoord{std::min(a.u, b.u), std::min(a.v, b.v)}, GridCoord{}};
+}
+
 void ClothCutter::record_anchor(std::uint32_t k) {
   const Cloth& cloth = *cloth_;
   const std::uint32_t a = cloth.spring_a[k];
   const std::uint32_t b = cloth.spring_b[k];
-  const GridCoord ga = cloth.grid[a];
-  const GridCoord gb = cloth.grid[b];
-  std::array<GridCoord, 2> cells{};
-  int sides = 2;
-  if (ga.v == gb.v) {
-    const int u0 = std::min(ga.u, gb.u);
-    cells = {GridCoord{u0, ga.v - 1}, GridCoord{u0, ga.v}};
-  } else if (ga.u == gb.u) {
-    const int v0 = std::min(ga.v, gb.v);
-    cells = {GridCoord{ga.u - 1, v0}, GridCoord{ga.u, v0}};
-  } else {
-    cells[0] = {std::min(ga.u, gb.u), std::min(ga.v, gb.v)};
-    sides = 1;
-  }
+  int sides = 0;
+  const auto cells = cells_beside(cloth.grid[a], cloth.grid[b], sides);
   SpringAnchor anchor{k, {kNone, kNone}, {kNone, kNone}, {0, 0}, {0, 0}};
-  for (int s = 0; s < sides; ++s) {
-    for (const std::uint32_t t : cloth.triangles_of(a)) {
-      if (cell_of(cloth, t) == cells[static_cast<std::size_t>(s)]) {
-        anchor.triangle_a[static_cast<std::size_t>(s)] = t;
-        anchor.slot_a[static_cast<std::size_t>(s)] = slot_of(cloth.triangles[t], a);
-        break;
-      }
-    }
-    for (const std::uint32_t t : cloth.triangles_of(b)) {
-      if (cell_of(cloth, t) == cells[static_cast<std::size_t>(s)]) {
-        anchor.triangle_b[static_cast<std::size_t>(s)] = t;
-        anchor.slot_b[static_cast<std::size_t>(s)] = slot_of(cloth.triangles[t], b);
-        break;
+  // Per side, the cell's triangles that hold THESE particles (an earlier cut may have given the other
+  // side its own copies and its own spring).
+  for (std::size_t s = 0; s < static_cast<std::size_t>(sides); ++s) {
+    const auto* in_cell = triangles_in_cell(cells[s]);
+    if (in_cell == nullptr) continue;
+    for (const std::uint32_t t : *in_cell) {
+      if (t == kNone || cloth.triangle_alive[t] == 0) continue;
+      const auto& tri = cloth.triangles[t];
+      for (std::uint8_t i = 0; i < 3; ++i) {
+        if (tri[i] == a && anchor.triangle_a[s] == kNone) {
+          anchor.triangle_a[s] = t;
+          anchor.slot_a[s] = i;
+        } else if (tri[i] == b && anchor.triangle_b[s] == kNone) {
+          anchor.triangle_b[s] = t;
+          anchor.slot_b[s] = i;
+        }
       }
     }
   }
   anchors_.push_back(anchor);
+}
+
+std::optional<std::array<std::uint32_t, 2>> ClothCutter::edge_particles(GridCoord a, GridCoord b) const {
+  const Cloth& cloth = *cloth_;
+  int sides = 0;
+  const auto cells = cells_beside(a, b, sides);
+  for (std::size_t s = 0; s < static_cast<std::size_t>(sides); ++s) {
+    const auto* in_cell = triangles_in_cell(cells[s]);
+    if (in_cell == nullptr) continue;
+    for (const std::uint32_t t : *in_cell) {
+      if (t == kNone || cloth.triangle_alive[t] == 0) continue;
+      std::array<std::uint32_t, 2> found{kNone, kNone};
+      for (const std::uint32_t p : cloth.triangles[t]) {
+        if (cloth.grid[p] == a) found[0] = p;
+        if (cloth.grid[p] == b) found[1] = p;
+      }
+      if (found[0] != kNone && found[1] != kNone) return found;
+    }
+  }
+  return std::nullopt;
 }
 
 void ClothCutter::split_fan(std::uint32_t c, GridCoord to_previous, GridCoord to_next, TopologyChange& change) {
@@ -279,8 +331,10 @@ void ClothCutter::split_fan(std::uint32_t c, GridCoord to_previous, GridCoord to
   const auto incident = cloth.triangles_of(c);
   const std::size_t m = incident.size();
   if (m < 2) return;
-  std::vector<std::uint32_t> tris(incident.begin(), incident.end());
-  std::vector<std::size_t> parent(m);
+  auto& tris = fan_triangles_;
+  tris.assign(incident.begin(), incident.end());
+  auto& parent = fan_parent_;
+  parent.resize(m);
   for (std::size_t i = 0; i < m; ++i) parent[i] = i;
   const auto find = [&](std::size_t i) {
     while (parent[i] != i) i = parent[i] = parent[parent[i]];
@@ -300,7 +354,8 @@ void ClothCutter::split_fan(std::uint32_t c, GridCoord to_previous, GridCoord to
       }
     }
   }
-  std::vector<std::size_t> roots;
+  auto& roots = fan_roots_;
+  roots.clear();
   for (std::size_t i = 0; i < m; ++i) {
     const std::size_t r = find(i);
     if (std::find(roots.begin(), roots.end(), r) == roots.end()) roots.push_back(r);
@@ -384,45 +439,25 @@ void ClothCutter::resolve_bend(std::uint32_t k, TopologyChange& change) {
   const GridCoord ga = cloth.grid[a];
   const GridCoord gb = cloth.grid[b];
   const GridCoord gm{(ga.u + gb.u) / 2, (ga.v + gb.v) / 2};
-  const auto other_end = [&](std::uint32_t s, std::uint32_t p) {
-    return cloth.spring_a[s] == p ? cloth.spring_b[s] : cloth.spring_a[s];
-  };
-  // Seed 001: a bend goes with the structural springs it spans; it survives only as a chain of two live
-  // structural springs meeting at one particle (a cut through the middle particle splits that particle).
-  std::uint32_t found_a = kNone;
-  std::uint32_t found_b = kNone;
+  // Seed 001: a bend goes with the structural springs it spans. It survives only if neither is cut and
+  // the triangles along both halves meet at the same copy of the middle particle (a cut through the
+  // middle splits it); its ends are then the copies those triangles hold.
+  std::optional<std::array<std::uint32_t, 2>> first;
+  std::optional<std::array<std::uint32_t, 2>> second;
   if (!edge_cut(ga, gm) && !edge_cut(gm, gb)) {
-    std::vector<std::uint32_t> candidates{a};
-    for (const std::uint32_t p : copies(ga)) {
-      if (p != a) candidates.push_back(p);
-    }
-    for (const std::uint32_t a_star : candidates) {
-      for (const std::uint32_t s1 : cloth.springs_of(a_star)) {
-        if (cloth.kind[s1] != SpringKind::Structural) continue;
-        const std::uint32_t m_star = other_end(s1, a_star);
-        if (!(cloth.grid[m_star] == gm)) continue;
-        for (const std::uint32_t s2 : cloth.springs_of(m_star)) {
-          if (cloth.kind[s2] != SpringKind::Structural) continue;
-          const std::uint32_t b_star = other_end(s2, m_star);
-          if (cloth.grid[b_star] == gb) {
-            found_a = a_star;
-            found_b = b_star;
-            break;
-          }
-        }
-        if (found_a != kNone) break;
-      }
-      if (found_a != kNone) break;
-    }
+    first = edge_particles(ga, gm);
+    second = edge_particles(gm, gb);
   }
-  if (found_a == kNone) {
+  if (!first || !second || (*first)[1] != (*second)[0]) {
     cloth.remove_spring(k);
     change.changed_springs.push_back(k);
     return;
   }
-  if (found_a == a && found_b == b) return;
-  if (found_a != a) cloth.rewire_spring(k, a, found_a);
-  if (found_b != b) cloth.rewire_spring(k, b, found_b);
+  const std::uint32_t new_a = (*first)[0];
+  const std::uint32_t new_b = (*second)[1];
+  if (new_a == a && new_b == b) return;
+  if (new_a != a) cloth.rewire_spring(k, a, new_a);
+  if (new_b != b) cloth.rewire_spring(k, b, new_b);
   change.changed_springs.push_back(k);
 }
 

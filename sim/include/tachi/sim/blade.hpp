@@ -40,10 +40,21 @@ struct BladeDrag {
   [[nodiscard]] float radius_cells(float force_n) const { return 1.0F + 0.5F * force_n; }
 };
 
+/// Working memory of apply_blade_drag, reused between calls (no allocation in steady state).
+struct BladeScratch {
+  struct Item {
+    std::uint32_t particle;
+    GridCoord source;
+  };
+  std::vector<float> weight;  // per particle, 0 outside the current call
+  std::vector<Item> queue;
+  std::vector<std::uint32_t> touched;
+};
+
 /// Applies the drag of `blade` cutting through `cut_particles` while moving along `direction` (world,
 /// any length; a zero direction does nothing). Reaches particles through live springs only (the far side
-/// of an earlier cut is not dragged). Pinned particles do not move. `scratch` is reused between calls.
+/// of an earlier cut is not dragged). Pinned particles do not move.
 void apply_blade_drag(Cloth& cloth, std::span<const std::uint32_t> cut_particles, const Eigen::Vector3f& direction,
-                      Blade blade, const BladeDrag& drag, std::vector<float>& scratch);
+                      Blade blade, const BladeDrag& drag, BladeScratch& scratch);
 
 }  // namespace tachi::sim

@@ -155,6 +155,12 @@ class Cloth {
     return static_cast<std::uint32_t>(v * columns + u);
   }
 
+  /// Reserves room for `particles` particles and `springs` springs, so that cuts appending particles and
+  /// springs do not reallocate every array mid-frame (a first reallocation of a 128 x 128 cloth costs ~20 ms
+  /// here, mostly page faults). The room is touched now, so later appends do not fault pages in either.
+  /// Never shrinks.
+  void reserve(std::size_t particles, std::size_t springs);
+
   /// Appends a copy of particle i (position, velocity, grid coordinate, pinned) and splits i's mass
   /// in half between i and the copy, so total mass is conserved. Returns the copy's index.
   std::size_t duplicate_particle(std::size_t i);

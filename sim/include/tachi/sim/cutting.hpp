@@ -24,6 +24,7 @@
 
 #include <array>
 #include <cstdint>
+#include <optional>
 #include <span>
 #include <vector>
 
@@ -68,6 +69,8 @@ class ClothCutter {
   [[nodiscard]] bool edge_cut(GridCoord a, GridCoord b) const;
   /// Particles sharing the grid coordinate g (the original first).
   [[nodiscard]] std::vector<std::uint32_t> copies(GridCoord g) const;
+  /// Appends the particles sharing g to `out` (no allocation once `out` has grown).
+  void append_copies(GridCoord g, std::vector<std::uint32_t>& out) const;
   [[nodiscard]] const Cloth& cloth() const { return *cloth_; }
   [[nodiscard]] Cloth& cloth() { return *cloth_; }
 
@@ -92,6 +95,11 @@ class ClothCutter {
   void resolve_springs(TopologyChange& change);
   void resolve_bend(std::uint32_t k, TopologyChange& change);
   bool mark_spring(std::uint32_t k);
+  [[nodiscard]] const std::array<std::uint32_t, 2>* triangles_in_cell(GridCoord cell) const;
+  /// The cells on either side of a structural edge (sides = 2), or the one cell of a diagonal (sides = 1).
+  static std::array<GridCoord, 2> cells_beside(GridCoord a, GridCoord b, int& sides);
+  /// The particles a live triangle along the structural edge a-b holds for a and b.
+  [[nodiscard]] std::optional<std::array<std::uint32_t, 2>> edge_particles(GridCoord a, GridCoord b) const;
 
   Cloth* cloth_;
   std::vector<std::uint8_t> horizontal_cut_;  // edge (u,v)-(u+1,v) at v*(columns-1)+u
@@ -104,6 +112,12 @@ class ClothCutter {
   std::uint32_t stamp_ = 0;
   std::vector<SpringAnchor> anchors_;
   std::vector<std::uint32_t> bends_;
+  std::vector<std::array<std::uint32_t, 2>> cell_triangles_;  // per cell (v*(columns-1)+u): its two triangles
+  std::vector<std::array<std::uint32_t, 2>> bend_through_;    // per grid coordinate: bends centred there (h, v)
+  std::vector<std::uint32_t> copy_scratch_;
+  std::vector<std::uint32_t> fan_triangles_;
+  std::vector<std::size_t> fan_parent_;
+  std::vector<std::size_t> fan_roots_;
 };
 
 }  // namespace tachi::sim

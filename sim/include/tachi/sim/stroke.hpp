@@ -130,7 +130,8 @@ class StrokeCutter {
   std::size_t committed_in_line_ = 0;       // line length already counted in the report
   StrokeReport report_;
   StrokeReport total_;
-  std::vector<float> drag_scratch_;
+  BladeScratch drag_scratch_;
+  std::vector<std::uint32_t> cut_particles_;
 };
 
 }  // namespace tachi::sim

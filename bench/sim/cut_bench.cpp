@@ -1,0 +1,146 @@
+// Cutting benchmark (issue 4): time to apply a 64-segment stroke to a 128 x 128 cloth, target <= 0.5 ms.
+// Baseline in the same process: Bullet 3.24's btSoftBody::cutLink on a 128 x 128 patch, which splits ONE
+// link per call (~0.5 ms each at that size, FIELD_NOTES). Figures are medians of thread CPU time over repetitions,
+// each on a fresh copy of the cloth (the copy is not timed).
+#include "tachi/sim/cloth.hpp"
+#include "tachi/sim/cut_line.hpp"
+#include "tachi/sim/cutting.hpp"
+#include "tachi/sim/pieces.hpp"
+#include "tachi/sim/stroke.hpp"
+
+#include <BulletSoftBody/btSoftBody.h>
+#include <BulletSoftBody/btSoftBodyHelpers.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <ctime>
+#include <memory>
+#include <vector>
+
+namespace {
+
+using tachi::sim::Cloth;
+
+/// CPU time of this thread, ms: the machine is shared, and time spent descheduled is not the code's.
+double cpu_ms() {
+  timespec ts{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return static_cast<double>(ts.tv_sec) * 1e3 + static_cast<double>(ts.tv_nsec) * 1e-6;
+}
+
+double ms_since(double t0) { return cpu_ms() - t0; }
+
+double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return v.empty() ? 0.0 : v[v.size() / 2];
+}
+
+/// 65 samples (64 segments) of a wavy stroke from beyond the left edge to beyond the right one, world metres.
+std::vector<tachi::sim::StrokeSample> wavy_stroke() {
+  std::vector<tachi::sim::StrokeSample> out;
+  for (int i = 0; i <= 64; ++i) {
+    const double s = i / 64.0;
+    const double x = -0.52 + 1.04 * s;
+    const double y = -0.05 + 0.2 * std::sin(2.0 * 3.14159265358979 * 1.5 * s);
+    out.push_back({s, Eigen::Vector3f{static_cast<float>(x), static_cast<float>(y), 0.01F}});
+  }
+  return out;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const int reps = argc > 1 ? std::max(1, std::atoi(argv[1])) : 30;
+  constexpr int n = 128;
+  tachi::sim::ClothConfig config;
+  config.columns = n;
+  config.rows = n;
+  config.pin = tachi::sim::PinMode::TopEdge;
+  const Cloth prototype{config};
+  const auto stroke = wavy_stroke();
+
+  // The cut line that stroke gives (for the topological-cut-only figure).
+  std::vector<tachi::sim::GridCoord> line;
+  std::size_t duplicated = 0;
+  std::size_t pieces = 0;
+  {
+    Cloth cloth = prototype;
+    tachi::sim::StrokeCutter cutter{cloth, {}};
+    for (const auto& s : stroke) cutter.add_sample(s);
+    cutter.end_stroke();
+    line = cutter.report().cut_line;
+    duplicated = cutter.report().particles_duplicated;
+    pieces = tachi::sim::find_pieces(cloth).count();
+  }
+
+  std::vector<double> stroke_ms;
+  std::vector<double> cut_ms;
+  std::vector<double> pieces_ms;
+  for (int r = 0; r < reps; ++r) {
+    {
+      Cloth cloth = prototype;
+      tachi::sim::StrokeCutter cutter{cloth, {}};
+      const auto t0 = cpu_ms();
+      for (const auto& s : stroke) cutter.add_sample(s);
+      cutter.end_stroke();
+      stroke_ms.push_back(ms_since(t0));
+      const auto t1 = cpu_ms();
+      const auto p = tachi::sim::find_pieces(cloth);
+      pieces_ms.push_back(ms_since(t1));
+      if (p.count() != pieces) std::abort();
+    }
+    {
+      Cloth cloth = prototype;
+      tachi::sim::ClothCutter cutter{cloth};
+      const auto t0 = cpu_ms();
+      cutter.cut(line);
+      cut_ms.push_back(ms_since(t0));
+    }
+  }
+
+  // Bullet baseline: cutLink across the vertical links under one row of a 128 x 128 patch.
+  btSoftBodyWorldInfo info;
+  info.m_gravity.setValue(0.0F, -9.81F, 0.0F);
+  info.m_sparsesdf.Initialize();
+  constexpr int bullet_edges = 24;
+  std::vector<double> bullet_ms;
+  double bullet_first_ms = 0.0;
+  {
+    std::unique_ptr<btSoftBody> patch{btSoftBodyHelpers::CreatePatch(info, btVector3(-0.5, 0.5, 0), btVector3(0.5, 0.5, 0),
+                                                                     btVector3(-0.5, -0.5, 0), btVector3(0.5, -0.5, 0), n,
+                                                                     n, 1 + 2, true)};
+    const int row = n / 2;
+    for (int i = 0; i <= bullet_edges; ++i) {
+      const int x = 20 + i;
+      const auto t0 = cpu_ms();
+      const bool ok = patch->cutLink(row * n + x, (row + 1) * n + x, 0.5);
+      const double ms = ms_since(t0);
+      if (!ok) std::fprintf(stderr, "cut_bench: Bullet cutLink refused link %d\n", x);
+      if (i == 0) {
+        bullet_first_ms = ms;  // first call builds caches: reported apart
+      } else {
+        bullet_ms.push_back(ms);
+      }
+    }
+  }
+
+  const double stroke_median = median(stroke_ms);
+  const double cut_median = median(cut_ms);
+  const double bullet_median = median(bullet_ms);
+  const std::size_t edges = line.size() > 0 ? line.size() - 1 : 0;
+  std::printf("cut_bench: %dx%d cloth, 64-segment stroke -> %zu cut-line particles, %zu duplicated, %zu pieces, %d reps\n",
+              n, n, line.size(), duplicated, pieces, reps);
+  std::printf("  stroke applied (locate + simplify + rasterise + cut + blade drag): median %.3f ms  (target <= 0.5 ms)\n",
+              stroke_median);
+  std::printf("  topological cut of the line alone:                               median %.3f ms  = %.2f us per cut edge\n",
+              cut_median, 1000.0 * cut_median / static_cast<double>(std::max<std::size_t>(edges, 1)));
+  std::printf("  pieces (union-find over all springs, once per stroke):          median %.3f ms\n", median(pieces_ms));
+  std::printf("  Bullet btSoftBody::cutLink, one link:                           median %.3f ms  (first call %.1f ms)\n",
+              bullet_median, bullet_first_ms);
+  std::printf("  ratio per cut edge, Bullet / ours: %.0fx; whole stroke (%zu edges) vs Bullet at %zu links: %.0fx\n",
+              bullet_median / (cut_median / static_cast<double>(std::max<std::size_t>(edges, 1))), edges, edges,
+              bullet_median * static_cast<double>(edges) / stroke_median);
+  return 0;
+}

@@ -1,0 +1,129 @@
+// Multi-process: runs the real tachi-sim --offline with a --stroke and checks what it writes.
+#include "process.hpp"
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <unistd.h>
+
+namespace {
+
+namespace fs = std::filesystem;
+using namespace std::chrono_literals;
+
+class CutCli : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("tachi_cut_cli_" + std::to_string(::getpid()) + "_" +
+                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  /// A horizontal stroke at height y from x = -0.6 to 0.6 (past both edges of the 1 m cloth), 1 s long.
+  fs::path write_stroke(double y, const std::string& extra_rows = "") {
+    const fs::path file = dir_ / "stroke.csv";
+    std::ofstream out{file};
+    out << "t,x,y,z\n" << extra_rows;
+    for (int i = 0; i <= 60; ++i) out << 0.2 + i / 60.0 << ',' << -0.6 + 1.2 * i / 60.0 << ',' << y << ",0.01\n";
+    return file;
+  }
+
+  tachi::test::RunResult sim(const std::vector<std::string>& args) {
+    std::vector<std::string> argv{TACHI_SIM_EXE};
+    argv.insert(argv.end(), args.begin(), args.end());
+    return tachi::test::run(argv, 60s);
+  }
+
+  fs::path dir_;
+};
+
+TEST_F(CutCli, FullWidthStrokeCutsOffTheLowerPieceWhichFalls) {
+  const fs::path stroke = write_stroke(-0.1);
+  const fs::path out = dir_ / "out";
+  const auto r = sim({"--offline", "--grid", "64", "--pin", "top-edge", "--stroke", stroke.string(), "--blade",
+                      "scalpel", "--steps", "300", "--export", out.string()});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  std::ifstream in{out / "summary.json"};
+  ASSERT_TRUE(in.good());
+  const auto j = nlohmann::json::parse(in);
+  EXPECT_EQ(j.at("pieces").get<int>(), 2);
+  EXPECT_EQ(j.at("fallen_pieces").get<int>(), 1);
+  EXPECT_EQ(j.at("cut_particles").get<int>(), 64);  // every particle of the row, edges included
+  EXPECT_NEAR(j.at("cut_length_m").get<double>(), 1.0, 1e-4);
+  const auto& line = j.at("cut_line");
+  ASSERT_EQ(line.size(), 64U);
+  EXPECT_EQ(line.front(), (nlohmann::json{0, 38}));  // y = -0.1 m is row 37.8
+  EXPECT_EQ(line.back(), (nlohmann::json{63, 38}));
+  EXPECT_EQ(j.at("particles").get<int>(), 64 * 64 + 64);
+  EXPECT_EQ(j.at("blade").get<std::string>(), "scalpel");
+  // The mesh holds every particle and the cut-off piece fell far below the pinned one.
+  std::ifstream obj{out / "cloth.obj"};
+  ASSERT_TRUE(obj.good());
+  std::string text;
+  int vertices = 0;
+  double lowest = 0.0;
+  while (std::getline(obj, text)) {
+    if (text.rfind("v ", 0) == 0) {
+      ++vertices;
+      double x = 0.0;
+      double y = 0.0;
+      double z = 0.0;
+      std::sscanf(text.c_str(), "v %lf %lf %lf", &x, &y, &z);
+      lowest = std::min(lowest, y);
+    }
+  }
+  EXPECT_EQ(vertices, 64 * 64 + 64);
+  EXPECT_LT(lowest, -5.0);  // ~4 s of free fall
+}
+
+TEST_F(CutCli, NoStrokeMeansNoCut) {
+  const fs::path out = dir_ / "out";
+  const auto r = sim({"--offline", "--grid", "16", "--pin", "top-edge", "--steps", "10", "--export", out.string()});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  std::ifstream in{out / "summary.json"};
+  const auto j = nlohmann::json::parse(in);
+  EXPECT_EQ(j.at("pieces").get<int>(), 1);
+  EXPECT_EQ(j.at("fallen_pieces").get<int>(), 0);
+  EXPECT_EQ(j.at("cut_particles").get<int>(), 0);
+  EXPECT_TRUE(j.at("cut_line").empty());
+}
+
+TEST_F(CutCli, BadBladeIsAUsageError) {
+  const auto r = sim({"--offline", "--grid", "8", "--blade", "sword", "--steps", "1"});
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("--blade"), std::string::npos) << r.err;
+}
+
+TEST_F(CutCli, MissingStrokeFileIsAUsageError) {
+  const auto r = sim({"--offline", "--grid", "8", "--stroke", (dir_ / "nope.csv").string(), "--steps", "1"});
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("--stroke"), std::string::npos) << r.err;
+}
+
+TEST_F(CutCli, StrokeWithoutHeaderFailsWithTheReason) {
+  const fs::path file = dir_ / "bad.csv";
+  std::ofstream{file} << "0,0,0,0\n";
+  const auto r = sim({"--offline", "--grid", "8", "--stroke", file.string(), "--steps", "1"});
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("t,x,y,z"), std::string::npos) << r.err;
+}
+
+TEST_F(CutCli, BadRowsAreSkippedAndCounted) {
+  const fs::path stroke = write_stroke(0.0, "0.1,oops,0,0\n");
+  const fs::path out = dir_ / "out";
+  const auto r = sim({"--offline", "--grid", "16", "--pin", "top-edge", "--stroke", stroke.string(), "--steps", "90",
+                      "--export", out.string()});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  std::ifstream in{out / "summary.json"};
+  const auto j = nlohmann::json::parse(in);
+  EXPECT_EQ(j.at("stroke_rows_skipped").get<int>(), 1);
+  EXPECT_EQ(j.at("pieces").get<int>(), 2);
+}
+
+}  // namespace

@@ -258,7 +258,7 @@ HandObservation HandFinder::Impl::find(std::span<const std::uint16_t> raw) {
   roi_closed = roi_mask.clone();
   cv::floodFill(roi_closed, cv::Point(0, 0), cv::Scalar(128));
   cv::compare(roi_closed, 128, roi_closed, cv::CMP_NE);
-  cv::distanceTransform(roi_closed, roi_dist, cv::DIST_L2, cv::DIST_MASK_PRECISE);
+  cv::distanceTransform(roi_closed, roi_dist, cv::DIST_L2, cv::DIST_MASK_5);
   double max_dist = 0;
   cv::Point max_at;
   cv::minMaxLoc(roi_dist, nullptr, &max_dist, nullptr, &max_at);

@@ -112,11 +112,13 @@ TEST(RecordingSource, PacesByRecordedHostTimeAndRate) {
     return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   };
   const double real = play(1.0), doubled = play(2.0), max = play(0.0);
-  EXPECT_GE(real, 199.0);  // never early; late only by the machine's load
-  EXPECT_LT(real, 600.0);
+  // Never early; late only by the machine's load (the tests share two cores), so the upper
+  // bounds compare the runs with each other rather than with the clock.
+  EXPECT_GE(real, 199.0);
+  EXPECT_LT(real, 1500.0);
   EXPECT_GE(doubled, 99.0);
   EXPECT_LT(doubled, real);
-  EXPECT_LT(max, 90.0);  // seven 614 KB reads, no waiting
+  EXPECT_LT(max, doubled);  // seven 614 KB reads from the page cache, no waiting
 }
 
 TEST(RecordingSource, LoopsWithAMonotonicTimeline) {

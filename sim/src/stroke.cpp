@@ -185,8 +185,10 @@ TopologyChange StrokeCutter::begin_stroke() {
 }
 
 GridCoord StrokeCutter::boundary_point(const Eigen::Vector2d& uv) const {
-  return {std::clamp(static_cast<int>(std::lround(uv.x())), 0, cloth_->columns - 1),
-          std::clamp(static_cast<int>(std::lround(uv.y())), 0, cloth_->rows - 1)};
+  // Clamped before rounding: a hand metres away must not overflow the conversion.
+  const double u = std::clamp(uv.x(), 0.0, static_cast<double>(cloth_->columns - 1));
+  const double v = std::clamp(uv.y(), 0.0, static_cast<double>(cloth_->rows - 1));
+  return {static_cast<int>(std::lround(u)), static_cast<int>(std::lround(v))};
 }
 
 void StrokeCutter::commit(GridCoord g, const Eigen::Vector3f& direction, TopologyChange& change) {

@@ -3,10 +3,12 @@
 #include "tachi/sim/cut_line.hpp"
 #include "tachi/sim/pieces.hpp"
 #include "tachi/sim/solver.hpp"
+#include "tachi/sim/stroke.hpp"
 
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cstdio>
 #include <map>
 #include <numeric>
 #include <random>
@@ -387,6 +389,51 @@ TEST(Cutting, ThousandsOfRandomLinesKeepTheInvariants) {
     }
   }
   EXPECT_GT(cuts, 1000);
+}
+
+TEST(Cutting, RandomHandStrokesOnAMovingClothKeepTheInvariants) {
+  // Whole pipeline: world-space strokes (inside, outside, jittery, looping) through the StrokeCutter on
+  // random grids, the cloth stepping between samples so it is deformed and partly falling.
+  std::mt19937 rng{99};
+  int strokes_done = 0;
+  std::size_t total_duplicated = 0;
+  for (int cloth_i = 0; cloth_i < 120; ++cloth_i) {
+    const int columns = std::uniform_int_distribution<int>{2, 16}(rng);
+    const int rows = std::uniform_int_distribution<int>{2, 16}(rng);
+    Cloth cloth = make_cloth(columns, rows, static_cast<PinMode>(std::uniform_int_distribution<int>{0, 2}(rng)));
+    StrokeOptions options;
+    options.blade = static_cast<Blade>(std::uniform_int_distribution<int>{0, 5}(rng));
+    StrokeCutter cutter{cloth, options};
+    Solver solver;
+    std::uniform_real_distribution<float> coord{-0.7F, 0.7F};
+    std::normal_distribution<float> wobble{0.0F, 0.02F};
+    const int strokes = std::uniform_int_distribution<int>{1, 6}(rng);
+    for (int s = 0; s < strokes; ++s) {
+      const std::size_t before = cloth.particle_count();
+      const double mass = total_mass(cloth);
+      std::size_t duplicated = 0;
+      duplicated += cutter.begin_stroke().duplicated_from.size();
+      Eigen::Vector3f p{coord(rng), coord(rng), wobble(rng)};
+      const Eigen::Vector3f target{coord(rng), coord(rng), 0.0F};
+      const int samples = std::uniform_int_distribution<int>{1, 40}(rng);
+      for (int i = 0; i < samples; ++i) {
+        p += (target - p) * 0.15F + Eigen::Vector3f{wobble(rng), wobble(rng), wobble(rng)};
+        duplicated += cutter.add_sample({0.01 * i, p}).duplicated_from.size();
+        if (i % 8 == 0) solver.step(cloth);
+      }
+      duplicated += cutter.end_stroke().duplicated_from.size();
+      expect_invariants(cloth, cutter.cutter(), before, duplicated, mass);
+      ++strokes_done;
+      total_duplicated += duplicated;
+      if (HasFatalFailure()) {
+        ADD_FAILURE() << "cloth " << cloth_i << " (" << columns << "x" << rows << ") stroke " << s;
+        return;
+      }
+    }
+  }
+  EXPECT_GT(strokes_done, 300);
+  std::printf("random hand strokes: %d strokes duplicated %zu particles\n", strokes_done, total_duplicated);
+  EXPECT_GT(total_duplicated, 1000U);  // the strokes really cut
 }
 
 }  // namespace

@@ -206,6 +206,22 @@ TEST(StrokeCutter, NonFiniteSamplesAreIgnored) {
   EXPECT_TRUE(cutter.end_stroke().empty());
 }
 
+TEST(StrokeCutter, AbsurdlyFarSamplesDoNotBreakTheCut) {
+  constexpr int n = 10;
+  Cloth cloth = flat_cloth(n);
+  StrokeCutter cutter{cloth, {}};
+  cutter.begin_stroke();
+  cutter.add_sample({0.0, Eigen::Vector3f{-1e30F, 0.0F, 0.0F}});
+  cutter.add_sample({0.01, world(n, 4.0, 4.0)});
+  cutter.add_sample({0.02, Eigen::Vector3f{1e30F, -1e30F, 1e30F}});
+  cutter.add_sample({0.03, world(n, 6.0, 6.0)});
+  cutter.end_stroke();
+  EXPECT_EQ(cloth.particle_count(), static_cast<std::size_t>(n * n) + cutter.report().particles_duplicated);
+  for (const GridCoord g : cutter.report().cut_line) {
+    EXPECT_TRUE(g.u >= 0 && g.u < n && g.v >= 0 && g.v < n);
+  }
+}
+
 TEST(Blade, TableIsSeed001Figure4) {
   EXPECT_FLOAT_EQ(sharpness(Blade::Razor).min_n, 0.3F);
   EXPECT_FLOAT_EQ(sharpness(Blade::Scalpel).max_n, 0.6F);

@@ -52,6 +52,7 @@ std::unique_ptr<tachi::sensor::DepthSource> open_source(const Options& o) {
     spdlog::info("playing {} ({} depth frames, rate {})", o.recording, source->depth_frame_count(), o.rate);
     return source;
   }
+  if (o.loop || o.rate != "1") spdlog::warn("--rate and --loop apply to recordings; the live Kinect runs at its own 30 Hz");
   const DepthModel model = o.calibration.empty() ? DepthModel{} : load_calibration(o.calibration);
   return std::make_unique<KinectSource>(o.device, model, [] { return tachi::common::stop_requested(); });
 }

@@ -72,9 +72,9 @@ TEST(HandFinder, StaticObjectNearerThanTheHandDoesNotStealTheTrack) {
 
 TEST(HandFinder, PausingHandStaysTracked) {
   const auto run = run_scenario("straight_cut");
-  // The scenario holds the hand nearly still for 1 s at the end of the cut (t 2.6-3.6 s).
+  // The scenario holds the hand nearly still for 1 s at the end of the cut (t 3.0-4.0 s).
   int still = 0;
-  for (std::size_t i = 80; i < 106; ++i) {
+  for (std::size_t i = 92; i < 118; ++i) {
     ASSERT_TRUE(run.truth[i].visible);
     EXPECT_LT((run.truth[i].position - run.truth[i - 1].position).norm(), 0.003);
     EXPECT_TRUE(run.hands[i].tracked) << "frame " << i;

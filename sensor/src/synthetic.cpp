@@ -199,6 +199,7 @@ ScenarioSpec load_scenario(const std::filesystem::path& path) {
     if (!j["distractor"].is_boolean()) throw std::runtime_error("scenario " + file + ": \"distractor\" must be true or false");
     s.distractor = j["distractor"].get<bool>();
   }
+  s.distractor_from_s = number(j, "distractor_from_s", 0.0, file);
   if (!(s.fps > 0 && s.fps <= 120)) throw std::runtime_error("scenario " + file + ": \"fps\" must be in (0, 120]");
   if (s.jitter_m < 0 || s.noise_raw < 0 || s.edge_dropout < 0 || s.edge_dropout > 1 || s.dropout_blobs < 0)
     throw std::runtime_error("scenario " + file + ": jitter_m, noise_raw, dropout_blobs must be >= 0 and edge_dropout in [0, 1]");
@@ -371,7 +372,7 @@ struct SyntheticScene::Impl {
     const Vec3 thumb_base = palm + 0.036 * r - 0.015 * w - 0.010 * n;
     const Vec3 thumb_dir = (std::cos(40 * deg) * r + std::sin(40 * deg) * w).normalized();
     prims.push_back(capsule(kFinger, thumb_base, thumb_base + 0.055 * thumb_dir, 0.010));
-    if (spec.distractor)
+    if (spec.distractor && t >= spec.distractor_from_s - 1e-9)
       prims.push_back({Primitive::Box, kDistractor, Vec3(0.28, 0.12, 0.66), Vec3(0.46, 0.60, 0.80), {}, {}, {}, {}});
     return prims;
   }

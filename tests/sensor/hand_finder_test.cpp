@@ -83,6 +83,49 @@ TEST(HandFinder, PausingHandStaysTracked) {
   EXPECT_EQ(still, 26);
 }
 
+TEST(HandFinder, ObjectPutDownNearerThanTheHandMidTakeDoesNotStealTheTrack) {
+  ScenarioSpec spec;
+  spec.name = "box_appears";
+  spec.seed = 12;
+  spec.distractor_from_s = 1.0;  // the box appears while the hand is up, nearer than it
+  spec.path = {{0.0, Eigen::Vector3d::Zero(), true},
+               {0.5, Eigen::Vector3d(-0.25, 0.0, 0.98), false},
+               {2.0, Eigen::Vector3d(0.15, -0.05, 0.98), false}};
+  SyntheticScene scene(spec);
+  HandFinder finder{DepthModel{}};
+  GroundTruth truth;
+  int tracked_after = 0;
+  for (std::uint64_t i = 0; i < scene.frame_count(); ++i) {
+    const auto frame = scene.render(i, truth);
+    const auto hand = finder.find(frame);
+    if (static_cast<double>(i) / spec.fps < 1.0 || !truth.visible) continue;
+    ASSERT_TRUE(hand.tracked) << "frame " << i;
+    EXPECT_LT((hand.position_m.cast<double>() - truth.palm).norm(), 0.02) << "frame " << i;
+    ++tracked_after;
+  }
+  EXPECT_GT(tracked_after, 25);
+  // And a finder that only starts once the box is there does not take the box for a hand either.
+  HandFinder late{DepthModel{}};
+  SyntheticScene again(spec);
+  const DepthModel model;
+  int late_tracked = 0;
+  for (std::uint64_t i = 0; i < again.frame_count(); ++i) {
+    const auto frame = again.render(i, truth);
+    const float nearest = model.metres(*std::min_element(frame.raw.begin(), frame.raw.end()));
+    if (static_cast<double>(i) / spec.fps < 1.0) {
+      EXPECT_GT(nearest, 0.85f) << "frame " << i << ": the box is there too early";
+      continue;
+    }
+    EXPECT_LT(nearest, 0.81f) << "frame " << i << ": the box (nearer than the hand) is missing";
+    const auto hand = late.find(frame);
+    if (hand.tracked) {
+      EXPECT_LT((hand.position_m.cast<double>() - truth.palm).norm(), 0.02) << "frame " << i;
+      ++late_tracked;
+    }
+  }
+  EXPECT_GT(late_tracked, 10);  // once the hand has moved off its first place
+}
+
 TEST(HandFinder, NoPhantomWhenNoHandIsRaised) {
   ScenarioSpec spec;
   spec.name = "idle";

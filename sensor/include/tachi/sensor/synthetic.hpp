@@ -42,6 +42,7 @@ struct ScenarioSpec {
   double palm_pitch_deg = 0.0;    ///< about x
   double palm_roll_deg = 0.0;     ///< fingers turned about the view axis (0 = fingers up)
   bool distractor = true;         ///< the static box nearer than the hand
+  double distractor_from_s = 0.0; ///< the box appears at this time (put down mid-take)
   double noise_raw = 0.35;        ///< sigma of disparity noise, raw units
   double edge_dropout = 0.35;     ///< chance that a pixel on a depth edge has no reading
   double dropout_blobs = 6.0;     ///< mean number of small no-reading blobs per frame

@@ -26,12 +26,12 @@ inline std::vector<std::string> librivox_clips() {
   return clips;
 }
 
-/// Speaks `text` with flite's slt voice (`flite -voice slt`), returns 16 kHz mono samples.
+/// Speaks `text` with a flite voice (slt by default), returns 16 kHz mono samples.
 /// `stretch` > 1 speaks slower (flite's duration_stretch).
-inline std::vector<std::int16_t> flite_say(const std::string& text, double stretch = 1.0) {
+inline std::vector<std::int16_t> flite_say(const std::string& text, double stretch = 1.0, const std::string& voice = "slt") {
   const auto path = std::filesystem::temp_directory_path() /
                     ("tachi_flite_" + std::to_string(::getpid()) + "_" + std::to_string(std::rand()) + ".wav");
-  const std::string cmd = std::string(TACHI_FLITE) + " -voice slt --setf duration_stretch=" + std::to_string(stretch) +
+  const std::string cmd = std::string(TACHI_FLITE) + " -voice " + voice + " --setf duration_stretch=" + std::to_string(stretch) +
                           " -t \"" + text + "\" -o " + path.string();
   const int status = std::system(cmd.c_str());
   if (status != 0) throw std::runtime_error("flite failed: " + cmd);

@@ -1,5 +1,6 @@
 // tachi-filter: raw hand samples -> smoothed, gated strokes. Offline (CSV in, CSV out) or on the DDS bus.
 #include "bus_adapter.hpp"
+#include "tachi/bus/heartbeat.hpp"
 #include "tachi/bus/topics.hpp"
 #include "tachi/common/app.hpp"
 #include "tachi/filter/config.hpp"
@@ -104,6 +105,7 @@ int run_bus(const Options& o, const tachi::filter::FilterConfig& config) {
   waitset.attach(voice);
   waitset.attach(cloth);
 
+  bus::Heartbeat heartbeat{dds, "tachi-filter"};
   tachi::filter::StrokeFilter filter{config};
   std::uint64_t in_count = 0;
   std::uint64_t out_count = 0;
@@ -128,6 +130,7 @@ int run_bus(const Options& o, const tachi::filter::FilterConfig& config) {
       strokes.write(tachi::filter::to_msg(stroke, h->sensor_id));
       ++out_count;
     }
+    heartbeat.update(tachi_msg_NODE_RUNNING, in_count, out_count, "gate " + tachi::filter::to_string(config.gate.mode));
     return true;
   });
   spdlog::info("stopping: {} hand samples in, {} stroke samples out", in_count, out_count);

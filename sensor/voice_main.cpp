@@ -1,6 +1,7 @@
 // tachi-voice: spots "start cutting" / "stop cutting" (configurable) in a WAV file, a raw file, an ALSA
 // capture device or the Kinect's microphones; prints time_s,command,phrase per command and publishes
 // tachi_msg_VoiceCommand on the bus unless --no-dds.
+#include "tachi/bus/heartbeat.hpp"
 #include "tachi/bus/topics.hpp"
 #include "tachi/common/app.hpp"
 #include "tachi/sensor/voice_audio.hpp"
@@ -44,6 +45,11 @@ class CommandPublisher {
     if (o.no_dds) return;
     dds_.emplace(o.bus.domain, o.bus.dds_config);
     writer_.emplace(*dds_, tachi::bus::topics::voice_command);
+    heartbeat_.emplace(*dds_, "tachi-voice");
+  }
+  /// Heartbeat on tachi/node/status (no-op without DDS).
+  void alive(std::uint64_t samples_in) {
+    if (heartbeat_) heartbeat_->update(tachi_msg_NODE_RUNNING, samples_in, published_);
   }
   void wait_for_readers(double seconds) {
     if (writer_ && seconds > 0 && !writer_->wait_for_readers(1, std::chrono::milliseconds(static_cast<long>(seconds * 1000))))
@@ -57,6 +63,7 @@ class CommandPublisher {
     msg.command = d.command == tachi::sensor::VoiceCommand::Start ? tachi_msg_VOICE_START : tachi_msg_VOICE_STOP;
     std::snprintf(msg.phrase, sizeof msg.phrase, "%s", d.phrase.c_str());
     writer_->write(msg);
+    ++published_;
   }
   /// Reliable delivery of what was written before the process exits.
   void flush() {
@@ -67,6 +74,8 @@ class CommandPublisher {
   std::uint32_t source_id_;
   std::optional<tachi::bus::Participant> dds_;
   std::optional<tachi::bus::Writer<tachi_msg_VoiceCommand>> writer_;
+  std::optional<tachi::bus::Heartbeat> heartbeat_;
+  std::uint64_t published_ = 0;
 };
 
 void report(const tachi::sensor::VoiceDetection& d) {
@@ -104,9 +113,12 @@ int run_live(const Options& o, const tachi::sensor::VoiceConfig& config) {
   CommandPublisher publisher{o};
   spdlog::info("listening on {}", o.kinect_mic ? "the Kinect's microphones" : "audio device '" + o.device + "'");
   std::vector<std::int16_t> buffer(512);
+  std::uint64_t samples_in = 0;
   tachi::common::run_until_stopped([&] {
     const long n = source->read(buffer);
     if (n < 0) return false;
+    samples_in += static_cast<std::uint64_t>(n);
+    publisher.alive(samples_in);
     for (const auto& d : spotter.process({buffer.data(), static_cast<std::size_t>(n)})) {
       report(d);
       publisher.publish(d, now_ns());

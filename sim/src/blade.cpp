@@ -50,8 +50,8 @@ void apply_blade_drag(Cloth& cloth, std::span<const std::uint32_t> cut_particles
   queue.clear();
   touched.clear();
 
-  // Spread from every cut particle through live springs, keeping for each particle the largest weight
-  // 1 - d / reach, d its grid distance to the cut particle the spread came from.
+  // Breadth-first from all cut particles at once through live springs: each particle is reached once, from
+  // the nearest cut particle (in springs), and weighs 1 - d / reach, d its grid distance to that particle.
   for (const std::uint32_t p : cut_particles) {
     if (p >= cloth.particle_count()) continue;
     if (weight[p] == 0.0F) touched.push_back(p);
@@ -65,9 +65,10 @@ void apply_blade_drag(Cloth& cloth, std::span<const std::uint32_t> cut_particles
       const std::uint32_t q = cloth.spring_a[k] == item.particle ? cloth.spring_b[k] : cloth.spring_a[k];
       const float du = static_cast<float>(cloth.grid[q].u - item.source.u);
       const float dv = static_cast<float>(cloth.grid[q].v - item.source.v);
+      if (weight[q] != 0.0F) continue;
       const float w = 1.0F - std::sqrt(du * du + dv * dv) / reach;
-      if (w <= weight[q]) continue;
-      if (weight[q] == 0.0F) touched.push_back(q);
+      if (w <= 0.0F) continue;
+      touched.push_back(q);
       weight[q] = w;
       queue.push_back({q, item.source});
     }

@@ -4,7 +4,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <numbers>
 #include <optional>
 #include <utility>
 
@@ -13,16 +12,22 @@ namespace tachi::sim {
 namespace {
 
 constexpr std::uint32_t kNone = 0xFFFFFFFFU;
-constexpr double kTwoPi = 2.0 * std::numbers::pi;
+constexpr double kFullTurn = 4.0;  // of the diamond angle below
 constexpr double kEps = 1e-9;
 
-/// Angle of a grid direction seen from +z (v grows downwards, so y = -v).
-double grid_angle(double du, double dv) { return std::atan2(-dv, du); }
+/// Angle of a grid direction seen from +z (v grows downwards, so y = -v), as a "diamond angle" in [0, 4):
+/// monotone in the true angle and exact for the grid's small integer directions, without atan2.
+double grid_angle(double du, double dv) {
+  const double x = du;
+  const double y = -dv;
+  if (y >= 0.0) return x >= 0.0 ? y / (x + y) : 1.0 - x / (y - x);
+  return x < 0.0 ? 2.0 - y / (-x - y) : 3.0 + x / (x - y);
+}
 
-/// Counter-clockwise turn from angle `from` to angle `to`, in [0, 2 pi).
+/// Counter-clockwise turn from angle `from` to angle `to`, in [0, kFullTurn).
 double ccw_turn(double from, double to) {
-  double d = std::fmod(to - from, kTwoPi);
-  if (d < 0.0) d += kTwoPi;
+  double d = to - from;
+  if (d < 0.0) d += kFullTurn;
   return d;
 }
 
@@ -69,7 +74,7 @@ void TopologyChange::merge(const TopologyChange& later) {
 bool left_of_cut(GridCoord to_previous, GridCoord to_next, double du, double dv) {
   const double next_angle = grid_angle(to_next.u, to_next.v);
   double sector = ccw_turn(next_angle, grid_angle(to_previous.u, to_previous.v));
-  if (sector < kEps) sector = kTwoPi;  // the line doubles back on itself: all but the cut edge is left
+  if (sector < kEps) sector = kFullTurn;  // the line doubles back on itself: all but the cut edge is left
   const double d = ccw_turn(next_angle, grid_angle(du, dv));
   return d > kEps && d < sector - kEps;
 }

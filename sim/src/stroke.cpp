@@ -97,48 +97,11 @@ StrokeFile parse_stroke_csv(std::istream& in) {
   return out;
 }
 
-ClothPoint ClothLocator::locate(const Cloth& cloth, const Eigen::Vector3f& point) {
-  ClothPoint out;
-  const std::size_t n = cloth.particle_count();
-  if (n == 0) return out;
-  const auto distance2 = [&](std::uint32_t i) { return (cloth.position[i] - point).squaredNorm(); };
-  const float spacing = std::max(cloth.spacing_x(), cloth.spacing_y());
-  std::optional<std::uint32_t> best;
-  if (hint_ && *hint_ < n) {
-    std::uint32_t p = *hint_;
-    for (bool improved = true; improved;) {
-      improved = false;
-      for (const std::uint32_t k : cloth.springs_of(p)) {
-        const std::uint32_t q = cloth.spring_a[k] == p ? cloth.spring_b[k] : cloth.spring_a[k];
-        if (distance2(q) < distance2(p)) {
-          p = q;
-          improved = true;
-        }
-      }
-    }
-    // Near the cloth a greedy descent is exact; far from it (or on a fold) check everything.
-    if (distance2(p) <= (1.5F * spacing) * (1.5F * spacing)) best = p;
-  }
-  if (!best) {
-    std::uint32_t p = 0;
-    float d = distance2(0);
-    for (std::uint32_t i = 1; i < n; ++i) {
-      const float di = distance2(i);
-      if (di < d) {
-        d = di;
-        p = i;
-      }
-    }
-    best = p;
-  }
-  hint_ = best;
-  const std::uint32_t p = *best;
-  out.particle = p;
-  out.grid = cloth.grid[p];
-  out.distance_m = std::sqrt(distance2(p));
+namespace {
 
-  // Local frame of the deformed grid at p (d position / du, d position / dv) from its structural
-  // springs; the flat rest frame where a direction has none.
+/// Offset of `point` from particle p in the local frame of the deformed grid (d position / du, d position / dv,
+/// from p's structural springs; the flat rest frame where a direction has none), in grid cells.
+Eigen::Vector2d grid_offset(const Cloth& cloth, std::uint32_t p, const Eigen::Vector3f& point) {
   Eigen::Vector3d eu = Eigen::Vector3d::Zero();
   Eigen::Vector3d ev = Eigen::Vector3d::Zero();
   int nu = 0;
@@ -147,8 +110,8 @@ ClothPoint ClothLocator::locate(const Cloth& cloth, const Eigen::Vector3f& point
     if (cloth.kind[k] != SpringKind::Structural) continue;
     const std::uint32_t q = cloth.spring_a[k] == p ? cloth.spring_b[k] : cloth.spring_a[k];
     const Eigen::Vector3d e = (cloth.position[q] - cloth.position[p]).cast<double>();
-    const int du = cloth.grid[q].u - out.grid.u;
-    const int dv = cloth.grid[q].v - out.grid.v;
+    const int du = cloth.grid[q].u - cloth.grid[p].u;
+    const int dv = cloth.grid[q].v - cloth.grid[p].v;
     if (dv == 0) {
       eu += du * e;
       ++nu;
@@ -162,9 +125,81 @@ ClothPoint ClothLocator::locate(const Cloth& cloth, const Eigen::Vector3f& point
   const Eigen::Vector3d r = (point - cloth.position[p]).cast<double>();
   Eigen::Matrix2d m;
   m << eu.dot(eu), eu.dot(ev), ev.dot(eu), ev.dot(ev);
-  Eigen::Vector2d rhs{eu.dot(r), ev.dot(r)};
-  Eigen::Vector2d offset = Eigen::Vector2d::Zero();
-  if (std::abs(m.determinant()) > 1e-6 * m.squaredNorm()) offset = m.inverse() * rhs;
+  const Eigen::Vector2d rhs{eu.dot(r), ev.dot(r)};
+  if (!(std::abs(m.determinant()) > 1e-6 * m.squaredNorm())) return Eigen::Vector2d::Zero();
+  return m.inverse() * rhs;
+}
+
+/// The particle nearest to `point`, by looking at every one.
+std::uint32_t scan_nearest(const Cloth& cloth, const Eigen::Vector3f& point) {
+  static_assert(sizeof(Eigen::Vector3f) == 3 * sizeof(float), "positions must be packed x, y, z");
+  // A plain float loop over the interleaved coordinates, which the compiler vectorises.
+  const float* xyz = cloth.position.front().data();
+  const float px = point.x();
+  const float py = point.y();
+  const float pz = point.z();
+  std::uint32_t best = 0;
+  float d = std::numeric_limits<float>::infinity();
+  const std::size_t n = cloth.particle_count();
+  for (std::uint32_t i = 0; i < n; ++i) {
+    const float dx = xyz[3 * i] - px;
+    const float dy = xyz[3 * i + 1] - py;
+    const float dz = xyz[3 * i + 2] - pz;
+    const float di = dx * dx + dy * dy + dz * dz;
+    if (di < d) {
+      d = di;
+      best = i;
+    }
+  }
+  return best;
+}
+
+}  // namespace
+
+ClothPoint ClothLocator::locate(const Cloth& cloth, const Eigen::Vector3f& point) {
+  ClothPoint out;
+  const std::size_t n = cloth.particle_count();
+  if (n == 0) return out;
+  const auto distance2 = [&](std::uint32_t i) { return (cloth.position[i] - point).squaredNorm(); };
+  if (!hint_ || *hint_ >= n) {
+    // No previous answer: start where the point would be on the flat, uncut grid.
+    const float u = (point.x() - cloth.position[0].x()) / cloth.spacing_x();
+    const float v = (cloth.position[0].y() - point.y()) / cloth.spacing_y();
+    const int gu = std::isfinite(u) ? static_cast<int>(std::clamp(u, 0.0F, static_cast<float>(cloth.columns - 1)) + 0.5F) : 0;
+    const int gv = std::isfinite(v) ? static_cast<int>(std::clamp(v, 0.0F, static_cast<float>(cloth.rows - 1)) + 0.5F) : 0;
+    hint_ = cloth.index(gu, gv);
+  }
+  // Greedy descent over live springs from the previous answer (a hand moves little between samples).
+  std::uint32_t p = *hint_;
+  float dp = distance2(p);
+  for (bool improved = true; improved;) {
+    improved = false;
+    const std::uint32_t from = p;
+    for (const std::uint32_t k : cloth.springs_of(from)) {
+      const std::uint32_t q = cloth.spring_a[k] == from ? cloth.spring_b[k] : cloth.spring_a[k];
+      const float dq = distance2(q);
+      if (dq < dp) {
+        p = q;
+        dp = dq;
+        improved = true;
+      }
+    }
+  }
+  // The descent's minimum is the nearest particle when the point projects onto the sheet next to it (the
+  // hand may be centimetres in front of the cloth). Otherwise (off the edge, a fold, a piece cut off between
+  // the hint and the hand) look at every particle.
+  Eigen::Vector2d offset = grid_offset(cloth, p, point);
+  if (!(std::abs(offset.x()) <= 1.0 && std::abs(offset.y()) <= 1.0)) {
+    const std::uint32_t scanned = scan_nearest(cloth, point);
+    if (scanned != p) {
+      p = scanned;
+      offset = grid_offset(cloth, p, point);
+    }
+  }
+  hint_ = p;
+  out.particle = p;
+  out.grid = cloth.grid[p];
+  out.distance_m = std::sqrt(distance2(p));
   out.uv = Eigen::Vector2d{out.grid.u + offset.x(), out.grid.v + offset.y()};
   out.inside = out.uv.x() >= -margin_ && out.uv.y() >= -margin_ && out.uv.x() <= cloth.columns - 1 + margin_ &&
                out.uv.y() <= cloth.rows - 1 + margin_;

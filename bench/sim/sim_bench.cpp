@@ -1,12 +1,14 @@
 // sim_bench: time of one 1/60 s step of the tachi cloth against Bullet 3's soft body on the same grid,
 // in the same process, pinned the same way (the two top corners), from the same start (hanging flat
 // in the z = 0 plane). Prints medians, the speed ratio and both max structural stretches.
-// Bullet: btSoftBodyHelpers::CreatePatch with diagonals + bending constraints (Provot's spring set),
+// Bullet: btSoftBodyHelpers::CreatePatch with diagonals + links two apart (Provot's spring set),
 // piterations = 4 (with 1 it explodes for N >= 32 and disables the body), deactivation off so that
 // it is never timed asleep; its activation state is checked and printed.
 //
 // Usage: sim_bench [--grids 32,64,128,256] [--warmup 60] [--steps 120] [--variants]
 //   --variants: also print the solver-design table of docs/sim.md (sub-steps x passes, attachments).
+//   --bullet-bending-helper: give Bullet generateBendingConstraints(2) instead of the same bend links as
+//     ours (more links, slower; needs nodes^2 ints while building: up to 128^2 only).
 #include "tachi/sim/cloth.hpp"
 #include "tachi/sim/solver.hpp"
 
@@ -93,7 +95,9 @@ struct BulletCloth {
   btSoftBody* patch = nullptr;
   float spacing = 0.0F;
 
-  explicit BulletCloth(int n) {
+  /// bending_helper: Bullet's generateBendingConstraints(2) instead of Provot's bend links. It links every
+  /// pair of nodes two links apart (diagonals included): more links, and a nodes^2 matrix while building.
+  BulletCloth(int n, bool bending_helper) {
     world.setGravity(btVector3(0, -9.81F, 0));
     btSoftBodyWorldInfo& info = world.getWorldInfo();
     info.m_gravity.setValue(0, -9.81F, 0);
@@ -102,13 +106,26 @@ struct BulletCloth {
     patch = btSoftBodyHelpers::CreatePatch(info, btVector3(-0.5F, 0.5F, 0), btVector3(0.5F, 0.5F, 0),
                                            btVector3(-0.5F, -0.5F, 0), btVector3(0.5F, -0.5F, 0), n, n, 1 + 2,
                                            /*gendiags=*/true);
-    patch->generateBendingConstraints(2, patch->m_materials[0]);
+    // Bend links two nodes apart along rows and columns (Provot's bend springs). Added by hand:
+    // generateBendingConstraints builds a nodes^2 adjacency matrix (1 GB at 128^2, 17 GB at 256^2).
+    if (bending_helper) {
+      patch->generateBendingConstraints(2, patch->m_materials[0]);
+    } else {
+      for (int v = 0; v < n; ++v) {
+        for (int u = 0; u < n; ++u) {
+          if (u + 2 < n) append_bend(v * n + u, v * n + u + 2);
+          if (v + 2 < n) append_bend(v * n + u, (v + 2) * n + u);
+        }
+      }
+    }
     patch->m_cfg.piterations = 4;
     patch->setTotalMass(0.2F);
     patch->setActivationState(DISABLE_DEACTIVATION);
     world.addSoftBody(patch);
     spacing = 1.0F / static_cast<float>(n - 1);
   }
+  void append_bend(int a, int b) { patch->appendLink(a, b, patch->m_materials[0]); }
+
   ~BulletCloth() {
     world.removeSoftBody(patch);
     delete patch;
@@ -129,8 +146,8 @@ struct BulletCloth {
   }
 };
 
-Run run_bullet(int n, int warmup, int steps) {
-  BulletCloth b{n};
+Run run_bullet(int n, int warmup, int steps, bool bending_helper) {
+  BulletCloth b{n, bending_helper};
   Run r;
   for (int s = 0; s < warmup; ++s) b.world.stepSimulation(kDt, 1, kDt);
   std::vector<double> ms;
@@ -203,6 +220,7 @@ int main(int argc, char** argv) {
   int warmup = 60;
   int steps = 120;
   bool variants = false;
+  bool bending_helper = false;
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
     const bool has_value = i + 1 < argc;
@@ -214,9 +232,12 @@ int main(int argc, char** argv) {
       steps = std::max(1, std::atoi(argv[++i]));
     } else if (arg == "--variants") {
       variants = true;
+    } else if (arg == "--bullet-bending-helper") {
+      bending_helper = true;
     } else {
       std::fprintf(stderr, "sim_bench: unknown or incomplete argument '%s'\n"
-                           "usage: sim_bench [--grids 32,64,128,256] [--warmup 60] [--steps 120] [--variants]\n",
+                           "usage: sim_bench [--grids 32,64,128,256] [--warmup 60] [--steps 120] [--variants]\n"
+                           "                 [--bullet-bending-helper]\n",
                    arg.c_str());
       return 2;
     }
@@ -228,12 +249,14 @@ int main(int argc, char** argv) {
 
   std::printf("sim_bench: one 1/60 s step, corners pinned, hanging start; warm-up %d steps, median of %d\n", warmup,
               steps);
+  std::printf("Bullet springs: %s\n", bending_helper ? "CreatePatch diagonals + generateBendingConstraints(2)"
+                                                     : "CreatePatch diagonals + bend links two apart (same set as tachi)");
   std::printf("%6s %12s %12s %12s %12s %10s  %s\n", "grid", "tachi ms", "tachi strain", "bullet ms", "bullet strain",
               "speed-up", "bullet body");
   const SolverParams defaults;
   for (const int n : grids) {
     const Run t = run_tachi(n, warmup, steps, defaults);
-    const Run b = run_bullet(n, warmup, steps);
+    const Run b = run_bullet(n, warmup, steps, bending_helper);
     std::printf("%6s %12.3f %11.1f%% %12.3f %12.1f%% %9.1fx  %s\n", (std::to_string(n) + "^2").c_str(), t.step_ms,
                 100.0 * t.max_strain, b.step_ms, 100.0 * b.max_strain, b.step_ms / t.step_ms, b.note.c_str());
     std::fflush(stdout);

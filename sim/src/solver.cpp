@@ -90,9 +90,7 @@ void Solver::refresh_caches(const Cloth& cloth) {
 }
 
 void Solver::build_attachments(const Cloth& cloth) {
-  attach_particle_.clear();
-  attach_pin_.clear();
-  attach_length_.clear();
+  attachments_.clear();
   strain_limit_.clear();
   const std::size_t n = cloth.particle_count();
   if (cached_pins_.empty()) {
@@ -159,9 +157,8 @@ void Solver::build_attachments(const Cloth& cloth) {
       const GridCoord gi = cloth.grid[i];
       const GridCoord gp = cloth.grid[owner[i]];
       const bool unobstructed = dist[i] <= octile(gi, gp) * (1.0F + 1e-4F) + 1e-6F;
-      attach_particle_.push_back(static_cast<std::uint32_t>(i));
-      attach_pin_.push_back(owner[i]);
-      attach_length_.push_back(unobstructed ? cloth.grid_rest_length(gi, gp) : dist[i]);
+      const float length = unobstructed ? cloth.grid_rest_length(gi, gp) : dist[i];
+      attachments_.push_back({static_cast<std::uint32_t>(i), owner[i], length * length});
     }
   };
   // A few pins (corners): every particle is tethered to each of them. Many pins (an edge): only to
@@ -239,6 +236,21 @@ inline void project_exact(Vec4& pa, Vec4& pb, float target, float alpha) {
   pb -= (wb * c) * d;
 }
 
+/// The same projection with |d| replaced by its first-order expansion around L, |d| ~ (|d|^2 + L^2) / 2L
+/// (Jakobsen 2001, "Advanced Character Physics"): no square root, the same fixed point |d| = L, and a
+/// correction that stays bounded (< |d|) however far the spring is compressed or stretched.
+inline void project_near_rest(Vec4& pa, Vec4& pb, float rest, float alpha) {
+  const float wa = pa.w(), wb = pb.w();
+  const float wsum = wa + wb;
+  if (wsum == 0.0F) return;
+  const Vec4 d = (pb - pa).cwiseProduct(kXyz);
+  const float len2 = d.squaredNorm();
+  const float rest2 = rest * rest;
+  const float c = (len2 - rest2) / ((len2 + rest2) * (wsum + alpha));
+  pa += (wa * c) * d;
+  pb -= (wb * c) * d;
+}
+
 }  // namespace
 
 void Solver::substep(Cloth& cloth, const Colliders& colliders, float h, bool first) {
@@ -261,14 +273,13 @@ void Solver::substep(Cloth& cloth, const Colliders& colliders, float h, bool fir
 
   // 2. Long-range attachments (unilateral): a particle may not be farther from a pin than its rest
   // distance, which removes in one pass the sag that Gauss-Seidel needs O(N^2) passes for.
-  for (std::size_t t = 0; t < attach_particle_.size(); ++t) {
-    Vec4& p = x[attach_particle_[t]];
+  for (const Attachment& a : attachments_) {
+    Vec4& p = x[a.particle];
     if (p.w() == 0.0F) continue;
-    const Vec4& anchor = x[attach_pin_[t]];
+    const Vec4& anchor = x[a.pin];
     const Vec4 d = (p - anchor).cwiseProduct(kXyz);
     const float len2 = d.squaredNorm();
-    const float limit = attach_length_[t];
-    if (len2 > limit * limit) p.head<3>() = anchor.head<3>() + d.head<3>() * (limit / std::sqrt(len2));
+    if (len2 > a.length2) p.head<3>() = anchor.head<3>() + d.head<3>() * std::sqrt(a.length2 / len2);
   }
 
   // 4. Soft shear and bend springs, one XPBD pass per step (they are soft: more passes buy nothing visible).
@@ -276,27 +287,15 @@ void Solver::substep(Cloth& cloth, const Colliders& colliders, float h, bool fir
     const float full_h = params_.soft_every_substep ? h : params_.dt;
     const float shear_alpha = params_.shear_compliance / (full_h * full_h);
     const float bend_alpha = params_.bend_compliance / (full_h * full_h);
-    for (const PackedSpring& s : shear_) project_exact(x[s.a], x[s.b], s.rest, shear_alpha);
-    for (const PackedSpring& s : bend_) project_exact(x[s.a], x[s.b], s.rest, bend_alpha);
+    for (const PackedSpring& s : shear_) project_near_rest(x[s.a], x[s.b], s.rest, shear_alpha);
+    for (const PackedSpring& s : bend_) project_near_rest(x[s.a], x[s.b], s.rest, bend_alpha);
   }
 
   // 3. Structural springs, hard, Gauss-Seidel. Near rest length the square root is replaced by its
   // first-order expansion, |d| ~ (|d|^2 + L^2) / 2L (Jakobsen 2001, "Advanced Character Physics"):
   // the fixed point is still |d| = L, and step 5 below is exact.
   for (int it = 0; it < params_.iterations; ++it) {
-    for (const PackedSpring& s : structural_) {
-      Vec4& pa = x[s.a];
-      Vec4& pb = x[s.b];
-      const float wa = pa.w(), wb = pb.w();
-      const float wsum = wa + wb;
-      if (wsum == 0.0F) continue;
-      const Vec4 d = (pb - pa).cwiseProduct(kXyz);
-      const float len2 = d.squaredNorm();
-      const float rest2 = s.rest * s.rest;
-      const float c = (len2 - rest2) / ((len2 + rest2) * wsum);
-      pa += (wa * c) * d;
-      pb -= (wb * c) * d;
-    }
+    for (const PackedSpring& s : structural_) project_near_rest(x[s.a], x[s.b], s.rest, 0.0F);
   }
 
   // 5. Provot's deformation constraint: a structural spring longer than (1 + max_strain) L is brought

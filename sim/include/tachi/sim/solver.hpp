@@ -49,7 +49,7 @@ class Solver {
 
   [[nodiscard]] const SolverParams& params() const { return params_; }
   /// Number of long-range attachments in use (0 when disabled or nothing is pinned).
-  [[nodiscard]] std::size_t attachment_count() const { return attach_particle_.size(); }
+  [[nodiscard]] std::size_t attachment_count() const { return attachments_.size(); }
 
  /// A live spring copied out of the Cloth arrays, in the solver's sweep order.
   struct PackedSpring {
@@ -78,9 +78,12 @@ class Solver {
   // Structural springs again, ordered outwards from the pins, for the strain limit.
   std::vector<PackedSpring> strain_limit_;
   // Long-range attachments: particle, pin, maximal distance.
-  std::vector<std::uint32_t> attach_particle_;
-  std::vector<std::uint32_t> attach_pin_;
-  std::vector<float> attach_length_;
+  struct Attachment {
+    std::uint32_t particle;
+    std::uint32_t pin;
+    float length2;  ///< squared maximal distance
+  };
+  std::vector<Attachment> attachments_;
   // Positions with the inverse mass in w, during a step.
   std::vector<Eigen::Vector4f> work_;
   std::vector<Eigen::Vector4f> old_work_;

@@ -1,4 +1,5 @@
 // Runs the real tachi-filter executable offline on a synthetic recording and checks what it writes.
+#include "scratch_dir.hpp"
 #include "synthetic_hands.hpp"
 
 #include <gtest/gtest.h>
@@ -50,14 +51,10 @@ std::vector<std::vector<std::string>> read_rows(const fs::path& path) {
 class FilterCli : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("tachi_filter_cli_" + std::to_string(::getpid()) + "_" +
-                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::create_directories(dir_);
     std::ofstream out(dir_ / "hands.csv");
     tachi::filter::testing::write_hand_csv(out, tachi::filter::testing::push_and_back(3));
   }
-  void TearDown() override { fs::remove_all(dir_); }
-  fs::path dir_;
+  tachi::filter::testing::ScratchDir dir_{"tachi_filter_cli"};
 };
 
 TEST_F(FilterCli, OfflinePushWritesOneStrokeInTheWorldFrame) {

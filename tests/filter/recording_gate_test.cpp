@@ -1,6 +1,7 @@
 // Threshold gating on the sensor's synthetic recordings, end to end through the real executables:
 // tachi-sensor (depth frames -> hand CSV) then tachi-filter --offline (-> strokes).
 #include "process.hpp"
+#include "scratch_dir.hpp"
 
 #include <gtest/gtest.h>
 
@@ -69,12 +70,6 @@ std::map<std::string, Interval> strokes(const Table& out) {
 
 class RecordingGate : public ::testing::Test {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("tachi_recording_gate_" + std::to_string(::getpid()) + "_" +
-                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
 
   /// Plays a recording through the sensor and the filter; returns (ground truth, filter output).
   std::pair<Table, Table> run(const std::string& scenario) {
@@ -90,7 +85,7 @@ class RecordingGate : public ::testing::Test {
     EXPECT_EQ(r.exit_code, 0) << r.err;
     return {read_csv(recording / "ground_truth.csv"), read_csv(dir_ / "strokes.csv")};
   }
-  fs::path dir_;
+  tachi::filter::testing::ScratchDir dir_{"tachi_recording_gate"};
 };
 
 // recordings/push: the hand pushes through the cloth plane (1.0 m from the sensor) and back, twice.

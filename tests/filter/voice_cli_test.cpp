@@ -1,5 +1,6 @@
 // Runs the real tachi-voice executable: file mode output, missing devices, bad input, DDS publication.
 #include "process.hpp"
+#include "scratch_dir.hpp"
 #include "tachi/bus/topics.hpp"
 #include "voice_fixture.hpp"
 
@@ -38,9 +39,6 @@ void write_wav(const fs::path& path, const std::vector<std::int16_t>& samples) {
 class VoiceCli : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("tachi_voice_cli_" + std::to_string(::getpid()) + "_" +
-                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::create_directories(dir_);
     tachi::sensor::testing::Sequence seq{5};
     seq.pause(0.5);
     seq.say("start cutting", tachi::sensor::testing::flite_say("start cutting"));
@@ -50,8 +48,7 @@ class VoiceCli : public ::testing::Test {
     seq.noise(100.0);
     write_wav(dir_ / "commands.wav", seq.samples());
   }
-  void TearDown() override { fs::remove_all(dir_); }
-  fs::path dir_;
+  tachi::filter::testing::ScratchDir dir_{"tachi_voice_cli"};
 };
 
 TEST_F(VoiceCli, WavModePrintsOneLinePerCommand) {

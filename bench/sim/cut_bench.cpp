@@ -49,6 +49,32 @@ std::vector<tachi::sim::StrokeSample> wavy_stroke() {
   return out;
 }
 
+/// 65 samples of a straight stroke across the cloth, slightly slanted, beyond both edges.
+std::vector<tachi::sim::StrokeSample> straight_stroke() {
+  std::vector<tachi::sim::StrokeSample> out;
+  for (int i = 0; i <= 64; ++i) {
+    const double s = i / 64.0;
+    out.push_back({s, Eigen::Vector3f{static_cast<float>(-0.52 + 1.04 * s), static_cast<float>(0.1 - 0.1 * s), 0.01F}});
+  }
+  return out;
+}
+
+/// Median time of applying `stroke` through a StrokeCutter to fresh copies of `prototype`.
+double time_stroke(const Cloth& prototype, const std::vector<tachi::sim::StrokeSample>& stroke, int reps,
+                   std::size_t& line_particles) {
+  std::vector<double> ms;
+  for (int r = 0; r < reps; ++r) {
+    Cloth cloth = prototype;
+    tachi::sim::StrokeCutter cutter{cloth, {}};
+    const auto t0 = cpu_ms();
+    for (const auto& s : stroke) cutter.add_sample(s);
+    cutter.end_stroke();
+    ms.push_back(ms_since(t0));
+    line_particles = cutter.report().cut_line.size();
+  }
+  return median(ms);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -126,18 +152,22 @@ int main(int argc, char** argv) {
     }
   }
 
+  std::size_t straight_particles = 0;
+  const double straight_median = time_stroke(prototype, straight_stroke(), reps, straight_particles);
   const double stroke_median = median(stroke_ms);
   const double cut_median = median(cut_ms);
   const double bullet_median = median(bullet_ms);
   const std::size_t edges = line.size() > 0 ? line.size() - 1 : 0;
-  std::printf("cut_bench: %dx%d cloth, 64-segment stroke -> %zu cut-line particles, %zu duplicated, %zu pieces, %d reps\n",
+  std::printf("cut_bench: %dx%d cloth, wavy 64-segment stroke -> %zu cut-line particles, %zu duplicated, %zu pieces, %d reps\n",
               n, n, line.size(), duplicated, pieces, reps);
-  std::printf("  stroke applied (locate + simplify + rasterise + cut + blade drag): median %.3f ms  (target <= 0.5 ms)\n",
+  std::printf("  wavy stroke, whole pipeline (locate, simplify, rasterise, cut, drag): median %.3f ms  (target <= 0.5 ms)\n",
               stroke_median);
-  std::printf("  topological cut of the line alone:                               median %.3f ms  = %.2f us per cut edge\n",
+  std::printf("  straight stroke across (%zu cut-line particles), whole pipeline:     median %.3f ms  (target <= 0.5 ms)\n",
+              straight_particles, straight_median);
+  std::printf("  wavy line, topological cut alone:                                    median %.3f ms  = %.2f us per cut edge\n",
               cut_median, 1000.0 * cut_median / static_cast<double>(std::max<std::size_t>(edges, 1)));
-  std::printf("  pieces (union-find over all springs, once per stroke):          median %.3f ms\n", median(pieces_ms));
-  std::printf("  Bullet btSoftBody::cutLink, one link:                           median %.3f ms  (first call %.1f ms)\n",
+  std::printf("  pieces (union-find over all springs, once per stroke):               median %.3f ms\n", median(pieces_ms));
+  std::printf("  Bullet btSoftBody::cutLink, one link:                                median %.3f ms  (first call %.1f ms)\n",
               bullet_median, bullet_first_ms);
   std::printf("  ratio per cut edge, Bullet / ours: %.0fx; whole stroke (%zu edges) vs Bullet at %zu links: %.0fx\n",
               bullet_median / (cut_median / static_cast<double>(std::max<std::size_t>(edges, 1))), edges, edges,

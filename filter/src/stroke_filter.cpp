@@ -29,10 +29,11 @@ StrokeSample StrokeFilter::on_hand(const HandSample& hand) {
     out.hand_outside_cloth = near->outside;
   } else {
     // A lost hand restarts the smoother: the next sighting may be far from the last one.
+    // The position stays where the hand was last seen (tracked = false says it is stale).
     smoother_.reset();
-    out.camera_position_m = hand.position_m;
-    out.position_m = config_.workspace.to_world(hand.position_m);
-    out.distance_to_cloth_m = -1.0F;
+    out.camera_position_m = have_last_ ? last_camera_ : Eigen::Vector3f::Zero();
+    out.position_m = config_.workspace.to_world(out.camera_position_m);
+    out.distance_to_cloth_m = -1.0F;  // unknown
   }
   const GateStatus& g = gate_.on_sample(distance);
   out.gate = g.output;

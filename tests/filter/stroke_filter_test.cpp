@@ -85,7 +85,10 @@ TEST(StrokeFilter, ALostHandResetsTheSmoother) {
   HandSample lost = h;
   lost.tracked = false;
   lost.stamp_ns += 33'000'000;
-  EXPECT_FALSE(f.on_hand(lost).tracked);
+  const auto stale = f.on_hand(lost);
+  EXPECT_FALSE(stale.tracked);
+  EXPECT_TRUE(stale.camera_position_m.isApprox(Eigen::Vector3f(0.0F, 0.0F, 1.5F)));  // where it was last seen
+  EXPECT_EQ(stale.distance_to_cloth_m, -1.0F);
   h.stamp_ns = lost.stamp_ns + 33'000'000;
   h.position_m = {0.3F, 0.0F, 1.2F};
   EXPECT_TRUE(f.on_hand(h).camera_position_m.isApprox(h.position_m));

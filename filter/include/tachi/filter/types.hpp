@@ -30,7 +30,8 @@ enum class VoiceCommandKind : std::uint8_t { Start, Stop };
 struct StrokeSample {
   std::uint64_t frame = 0;
   std::int64_t stamp_ns = 0;
-  Eigen::Vector3f position_m = Eigen::Vector3f::Zero();         ///< world frame, smoothed
+  /// World frame, smoothed. Without a hand (tracked = false): the last position seen.
+  Eigen::Vector3f position_m = Eigen::Vector3f::Zero();
   Eigen::Vector3f camera_position_m = Eigen::Vector3f::Zero();  ///< camera frame, smoothed
   bool tracked = false;
   GateOutput gate = GateOutput::Idle;
@@ -38,7 +39,7 @@ struct StrokeSample {
   GateSource opened_by = GateSource::None;
   GateSource closed_by = GateSource::None;
   bool hand_outside_cloth = false;
-  float distance_to_cloth_m = 0.0F;
+  float distance_to_cloth_m = 0.0F;  ///< -1 without a hand
 };
 
 }  // namespace tachi::filter

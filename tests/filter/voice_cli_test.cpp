@@ -6,7 +6,9 @@
 
 #include <gtest/gtest.h>
 
+#include <csignal>
 #include <filesystem>
+#include <thread>
 #include <fstream>
 
 namespace {
@@ -119,6 +121,54 @@ TEST_F(VoiceCli, PublishesCommandsOnTheBus) {
   ASSERT_EQ(got.size(), 2U);
   EXPECT_EQ(got[0], std::make_pair(static_cast<int>(tachi_msg_VOICE_START), std::string("start cutting")));
   EXPECT_EQ(got[1], std::make_pair(static_cast<int>(tachi_msg_VOICE_STOP), std::string("stop cutting")));
+}
+
+// The two real processes chained on the bus: tachi-voice's commands open and close tachi-filter's gate.
+TEST_F(VoiceCli, DrivesTheFilterGateOverTheBus) {
+  constexpr unsigned kChainDomain = 74;
+  tachi::bus::Participant dds{kChainDomain};
+  tachi::bus::Writer<tachi_msg_RawHandSample> hands{dds, tachi::bus::topics::raw_hand};
+  tachi::bus::Reader<tachi_msg_StrokeSample> strokes{dds, tachi::bus::topics::stroke};
+  tachi::test::ChildProcess filter{{TACHI_FILTER_EXE, "--domain", std::to_string(kChainDomain), "--gate", "voice"}};
+  ASSERT_TRUE(hands.wait_for_readers(1, 10s) && strokes.wait_for_writers(1, 10s)) << "tachi-filter did not join";
+  tachi::test::ChildProcess voice{{TACHI_VOICE_EXE, "--wav", (dir_ / "commands.wav").string(), "--domain",
+                                   std::to_string(kChainDomain), "--wait-readers", "10"}};
+  // Hand samples 100 cm from the sensor until tachi-voice has processed the whole file.
+  std::vector<tachi_msg_StrokeSample> got;
+  tachi_msg_RawHandSample h{};
+  h.tracked = true;
+  h.position_m = {0.0F, 0.0F, 1.0F};
+  const auto deadline = std::chrono::steady_clock::now() + 30s;
+  while (voice.running() && std::chrono::steady_clock::now() < deadline) {
+    ++h.frame;
+    h.capture_time_ns += 33'333'333;
+    hands.write(h);
+    std::this_thread::sleep_for(2ms);
+    for (const auto& s : strokes.take()) got.push_back(*s);
+  }
+  EXPECT_EQ(voice.wait(10s), 0) << voice.err();
+  for (int i = 0; i < 50; ++i) {  // a few more samples after the stop, then drain
+    ++h.frame;
+    hands.write(h);
+    std::this_thread::sleep_for(2ms);
+  }
+  strokes.wait_for_data(500ms);
+  for (const auto& s : strokes.take()) got.push_back(*s);
+  filter.signal(SIGINT);
+  EXPECT_EQ(filter.wait(10s), 0) << filter.err();
+
+  ASSERT_FALSE(got.empty());
+  std::size_t cutting = 0;
+  for (const auto& s : got)
+    if (s.gate == tachi_msg_GATE_CUTTING) {
+      ++cutting;
+      EXPECT_EQ(s.opened_by, tachi_msg_GATE_SOURCE_VOICE);
+      EXPECT_EQ(s.stroke_id, 1U);
+    }
+  EXPECT_GT(cutting, 0U) << "the spoken start never opened the gate";
+  EXPECT_EQ(got.back().gate, tachi_msg_GATE_IDLE) << "the spoken stop never closed it";
+  EXPECT_EQ(got.back().closed_by, tachi_msg_GATE_SOURCE_VOICE);
+  EXPECT_EQ(got.back().stroke_id, 1U);
 }
 
 }  // namespace

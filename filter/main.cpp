@@ -27,7 +27,6 @@ struct Options {
   std::string gate;
   bool camera_frame = false;
   bool print_config = false;
-  unsigned sensor_id = 0;
   std::string log_level;
   tachi::common::BusOptions bus;
 };

@@ -1,5 +1,6 @@
 #include "tachi/sim/blade.hpp"
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 
@@ -36,41 +37,31 @@ std::optional<Blade> parse_blade(std::string_view name) {
   return std::nullopt;
 }
 
-void apply_blade_drag(Cloth& cloth, std::span<const std::uint32_t> cut_particles, const Eigen::Vector3f& direction,
-                      Blade blade, const BladeDrag& drag, BladeScratch& scratch) {
+void apply_blade_drag(Cloth& cloth, const ClothCutter& cutter, std::span<const GridCoord> cut_points,
+                      const Eigen::Vector3f& direction, Blade blade, const BladeDrag& drag, BladeScratch& scratch) {
   const float norm = direction.norm();
-  if (!(norm > 0.0F) || !std::isfinite(norm) || cut_particles.empty()) return;
+  if (!(norm > 0.0F) || !std::isfinite(norm) || cut_points.empty()) return;
   const Eigen::Vector3f unit = direction / norm;
   const float force = sharpness(blade).force_n();
   const float reach = drag.radius_cells(force) + 1.0F;
+  const int box = static_cast<int>(reach);
   auto& weight = scratch.weight;
-  auto& queue = scratch.queue;
   auto& touched = scratch.touched;
   if (weight.size() < cloth.particle_count()) weight.resize(cloth.particle_count(), 0.0F);
-  queue.clear();
   touched.clear();
-
-  // Breadth-first from all cut particles at once through live springs: each particle is reached once, from
-  // the nearest cut particle (in springs), and weighs 1 - d / reach, d its grid distance to that particle.
-  for (const std::uint32_t p : cut_particles) {
-    if (p >= cloth.particle_count()) continue;
-    if (weight[p] == 0.0F) touched.push_back(p);
-    weight[p] = 1.0F;
-    queue.push_back({p, cloth.grid[p]});
-  }
-  for (std::size_t head = 0; head < queue.size(); ++head) {
-    const BladeScratch::Item item = queue[head];
-    for (const std::uint32_t k : cloth.springs_of(item.particle)) {
-      if (cloth.kind[k] != SpringKind::Structural) continue;  // diagonals reach nothing the grid does not
-      const std::uint32_t q = cloth.spring_a[k] == item.particle ? cloth.spring_b[k] : cloth.spring_a[k];
-      const float du = static_cast<float>(cloth.grid[q].u - item.source.u);
-      const float dv = static_cast<float>(cloth.grid[q].v - item.source.v);
-      if (weight[q] != 0.0F) continue;
-      const float w = 1.0F - std::sqrt(du * du + dv * dv) / reach;
-      if (w <= 0.0F) continue;
-      touched.push_back(q);
-      weight[q] = w;
-      queue.push_back({q, item.source});
+  // Each particle of the patch weighs 1 - d / reach, d its grid distance to the nearest cut point.
+  for (const GridCoord g : cut_points) {
+    for (int dv = -box; dv <= box; ++dv) {
+      for (int du = -box; du <= box; ++du) {
+        const float w = 1.0F - std::sqrt(static_cast<float>(du * du + dv * dv)) / reach;
+        if (w <= 0.0F) continue;
+        scratch.copies.clear();
+        cutter.append_copies({g.u + du, g.v + dv}, scratch.copies);
+        for (const std::uint32_t p : scratch.copies) {
+          if (weight[p] == 0.0F) touched.push_back(p);
+          weight[p] = std::max(weight[p], w);
+        }
+      }
     }
   }
   const float peak = std::min(drag.gain_mps_per_n * force, drag.max_speed_mps);

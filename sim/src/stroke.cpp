@@ -230,9 +230,7 @@ void StrokeCutter::commit(GridCoord g, const Eigen::Vector3f& direction, Topolog
   const auto added = line_->append(g);
   if (added.size() < 2) return;
   const TopologyChange cut = cutter_.cut(added);
-  cut_particles_.clear();
-  for (const GridCoord a : added) cutter_.append_copies(a, cut_particles_);
-  apply_blade_drag(*cloth_, cut_particles_, direction, options_.blade, options_.drag, drag_scratch_);
+  apply_blade_drag(*cloth_, cutter_, added, direction, options_.blade, options_.drag, drag_scratch_);
   report_.particles_duplicated += cut.duplicated_from.size();
   total_.particles_duplicated += cut.duplicated_from.size();
   change.merge(cut);

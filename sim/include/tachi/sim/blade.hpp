@@ -5,6 +5,7 @@
 #pragma once
 
 #include "tachi/sim/cloth.hpp"
+#include "tachi/sim/cutting.hpp"
 
 #include <Eigen/Core>
 
@@ -42,19 +43,17 @@ struct BladeDrag {
 
 /// Working memory of apply_blade_drag, reused between calls (no allocation in steady state).
 struct BladeScratch {
-  struct Item {
-    std::uint32_t particle;
-    GridCoord source;
-  };
   std::vector<float> weight;  // per particle, 0 outside the current call
-  std::vector<Item> queue;
   std::vector<std::uint32_t> touched;
+  std::vector<std::uint32_t> copies;
 };
 
-/// Applies the drag of `blade` cutting through `cut_particles` while moving along `direction` (world,
-/// any length; a zero direction does nothing). Reaches particles through live springs only (the far side
-/// of an earlier cut is not dragged). Pinned particles do not move.
-void apply_blade_drag(Cloth& cloth, std::span<const std::uint32_t> cut_particles, const Eigen::Vector3f& direction,
-                      Blade blade, const BladeDrag& drag, BladeScratch& scratch);
+/// Applies the drag of `blade` cutting through the grid points `cut_points` while moving along `direction`
+/// (world, any length; a zero direction does nothing): every particle of the grid patch around them (all
+/// copies of a grid point: the blade drags both lips of the cut) gets the velocity change of BladeDrag.
+/// The patch is walked on the grid, not through springs, so the cost is a few velocity writes per point.
+/// Pinned particles do not move.
+void apply_blade_drag(Cloth& cloth, const ClothCutter& cutter, std::span<const GridCoord> cut_points,
+                      const Eigen::Vector3f& direction, Blade blade, const BladeDrag& drag, BladeScratch& scratch);
 
 }  // namespace tachi::sim

@@ -131,7 +131,6 @@ class StrokeCutter {
   StrokeReport report_;
   StrokeReport total_;
   BladeScratch drag_scratch_;
-  std::vector<std::uint32_t> cut_particles_;
 };
 
 }  // namespace tachi::sim

@@ -62,6 +62,7 @@ struct Colliders {
   std::optional<GroundPlane> ground;
   const PointCloudCollider* point_cloud = nullptr;  ///< not owned; may be null
   float thickness_m = 0.005F;                        ///< particles keep this far from surfaces
+  float friction = 0.5F;  ///< 0..1: share of a touching particle's sliding that contact removes per sub-step
 };
 
 /// Moves p out of a sphere grown by `margin` (closest surface point). Returns true if it moved.

@@ -93,7 +93,8 @@ ClothCutter::ClothCutter(Cloth& cloth)
     : cloth_(&cloth),
       horizontal_cut_(static_cast<std::size_t>(std::max(cloth.columns - 1, 0) * cloth.rows), 0),
       vertical_cut_(static_cast<std::size_t>(cloth.columns * std::max(cloth.rows - 1, 0)), 0),
-      vertex_stamp_(static_cast<std::size_t>(cloth.columns * cloth.rows), 0) {
+      vertex_stamp_(static_cast<std::size_t>(cloth.columns * cloth.rows), 0),
+      vertex_order_(static_cast<std::size_t>(cloth.columns * cloth.rows), 0) {
   // Room for cuts to come, reserved now rather than reallocated in the middle of a stroke: half the grid
   // again in duplicates, and a spring per duplicate or two.
   const std::size_t grid_size = static_cast<std::size_t>(cloth.columns) * static_cast<std::size_t>(cloth.rows);
@@ -116,7 +117,6 @@ ClothCutter::ClothCutter(Cloth& cloth)
     if (!inside(m)) continue;
     bend_through_[cloth.index(m.u, m.v)][a.v == b.v ? 0 : 1] = k;
   }
-  spring_stamp_.reserve(cloth.spring_count() + grid_size);
   sync_particles();
 }
 
@@ -163,13 +163,6 @@ bool ClothCutter::edge_cut(GridCoord a, GridCoord b) const {
   return flag != nullptr && *flag != 0;
 }
 
-bool ClothCutter::mark_spring(std::uint32_t k) {
-  if (spring_stamp_.size() < cloth_->spring_count()) spring_stamp_.resize(cloth_->spring_count(), 0);
-  if (spring_stamp_[k] == stamp_) return false;
-  spring_stamp_[k] = stamp_;
-  return true;
-}
-
 TopologyChange ClothCutter::cut(std::span<const GridCoord> line) {
   Cloth& cloth = *cloth_;
   sync_particles();
@@ -181,7 +174,6 @@ TopologyChange ClothCutter::cut(std::span<const GridCoord> line) {
   // 1. Mark the new cut edges; the particles at their ends are the ones whose fans may split.
   ++stamp_;
   if (stamp_ == 0) {  // wrapped: clear the stamps once every 2^32 cuts
-    std::fill(spring_stamp_.begin(), spring_stamp_.end(), 0);
     std::fill(vertex_stamp_.begin(), vertex_stamp_.end(), 0);
     stamp_ = 1;
   }
@@ -191,6 +183,7 @@ TopologyChange ClothCutter::cut(std::span<const GridCoord> line) {
     auto& seen = vertex_stamp_[cloth.index(g.u, g.v)];
     if (seen == stamp_) return;
     seen = stamp_;
+    vertex_order_[cloth.index(g.u, g.v)] = static_cast<std::uint32_t>(vertices.size());
     // Figure 3's vectors; at an end of the line the first-particle rule: the left of the single vector.
     const bool has_prev = i > 0 && grid_adjacent(line[i - 1], g);
     const bool has_next = i + 1 < line.size() && grid_adjacent(line[i + 1], g);
@@ -213,19 +206,31 @@ TopologyChange ClothCutter::cut(std::span<const GridCoord> line) {
   //    through them) with the triangles that border it.
   anchors_.clear();
   bends_.clear();
-  for (const LineVertex& lv : vertices) {
-    // The two bends centred here (their ends are not on the line, so no incidence list names them).
+  // A spring between two particles of the line is taken once, from the one that comes first.
+  const auto on_line = [&](std::uint32_t p) {
+    const GridCoord g = cloth.grid[p];
+    return vertex_stamp_[cloth.index(g.u, g.v)] == stamp_;
+  };
+  const auto order_of = [&](std::uint32_t p) {
+    const GridCoord g = cloth.grid[p];
+    return vertex_order_[cloth.index(g.u, g.v)];
+  };
+  for (std::uint32_t order = 0; order < vertices.size(); ++order) {
+    const LineVertex& lv = vertices[order];
+    // The two bends centred here; a bend with an end on the line is taken from that end's springs.
     for (const std::uint32_t k : bend_through_[cloth.index(lv.g.u, lv.g.v)]) {
-      if (k != kNone && cloth.alive[k] != 0 && mark_spring(k)) bends_.push_back(k);
+      if (k == kNone || cloth.alive[k] == 0 || on_line(cloth.spring_a[k]) || on_line(cloth.spring_b[k])) continue;
+      bends_.push_back(k);
     }
     for (std::uint32_t c = cloth.index(lv.g.u, lv.g.v); c != kNone; c = next_copy_[c]) {
       for (const std::uint32_t k : cloth.springs_of(c)) {
+        const std::uint32_t x = cloth.spring_a[k] == c ? cloth.spring_b[k] : cloth.spring_a[k];
+        if (on_line(x) && order_of(x) < order) continue;
         if (cloth.kind[k] == SpringKind::Bend) {
-          if (mark_spring(k)) bends_.push_back(k);
-          continue;
+          bends_.push_back(k);
+        } else {
+          record_anchor(k);
         }
-        if (!mark_spring(k)) continue;
-        record_anchor(k);
       }
     }
   }

@@ -94,7 +94,6 @@ class ClothCutter {
   void split_fan(std::uint32_t c, GridCoord to_previous, GridCoord to_next, TopologyChange& change);
   void resolve_springs(TopologyChange& change);
   void resolve_bend(std::uint32_t k, TopologyChange& change);
-  bool mark_spring(std::uint32_t k);
   [[nodiscard]] const std::array<std::uint32_t, 2>* triangles_in_cell(GridCoord cell) const;
   /// The cells on either side of a structural edge (sides = 2), or the one cell of a diagonal (sides = 1).
   static std::array<GridCoord, 2> cells_beside(GridCoord a, GridCoord b, int& sides);
@@ -107,8 +106,8 @@ class ClothCutter {
   std::vector<std::uint32_t> next_copy_;      // per particle: next particle with the same grid coordinate
   std::size_t known_particles_ = 0;
   // Scratch reused between cuts (no allocation in steady state).
-  std::vector<std::uint32_t> spring_stamp_;
-  std::vector<std::uint32_t> vertex_stamp_;  // per grid coordinate
+  std::vector<std::uint32_t> vertex_stamp_;  // per grid coordinate: stamp_ when on the line being cut
+  std::vector<std::uint32_t> vertex_order_;  // per grid coordinate: its place in that line's vertex list
   std::uint32_t stamp_ = 0;
   std::vector<SpringAnchor> anchors_;
   std::vector<std::uint32_t> bends_;

@@ -59,10 +59,19 @@ std::vector<tachi::sim::StrokeSample> straight_stroke() {
   return out;
 }
 
-/// Median time of applying `stroke` through a StrokeCutter to fresh copies of `prototype`.
-double time_stroke(const Cloth& prototype, const std::vector<tachi::sim::StrokeSample>& stroke, int reps,
-                   std::size_t& line_particles) {
+/// What applying a stroke to fresh copies of a cloth gave, and how long it took (median).
+struct StrokeRun {
+  double median_ms = 0.0;
+  std::vector<tachi::sim::GridCoord> line;
+  std::size_t duplicated = 0;
+  std::size_t pieces = 0;
+  double pieces_ms = 0.0;  ///< find_pieces afterwards, median
+};
+
+StrokeRun time_stroke(const Cloth& prototype, const std::vector<tachi::sim::StrokeSample>& stroke, int reps) {
+  StrokeRun run;
   std::vector<double> ms;
+  std::vector<double> pieces_ms;
   for (int r = 0; r < reps; ++r) {
     Cloth cloth = prototype;
     tachi::sim::StrokeCutter cutter{cloth, {}};
@@ -70,9 +79,17 @@ double time_stroke(const Cloth& prototype, const std::vector<tachi::sim::StrokeS
     for (const auto& s : stroke) cutter.add_sample(s);
     cutter.end_stroke();
     ms.push_back(ms_since(t0));
-    line_particles = cutter.report().cut_line.size();
+    const auto t1 = cpu_ms();
+    const std::size_t pieces = tachi::sim::find_pieces(cloth).count();
+    pieces_ms.push_back(ms_since(t1));
+    if (r > 0 && (pieces != run.pieces || cutter.report().cut_line.size() != run.line.size())) std::abort();
+    run.line = cutter.report().cut_line;
+    run.duplicated = cutter.report().particles_duplicated;
+    run.pieces = pieces;
   }
-  return median(ms);
+  run.median_ms = median(ms);
+  run.pieces_ms = median(pieces_ms);
+  return run;
 }
 
 }  // namespace
@@ -85,45 +102,17 @@ int main(int argc, char** argv) {
   config.rows = n;
   config.pin = tachi::sim::PinMode::TopEdge;
   const Cloth prototype{config};
-  const auto stroke = wavy_stroke();
 
-  // The cut line that stroke gives (for the topological-cut-only figure).
-  std::vector<tachi::sim::GridCoord> line;
-  std::size_t duplicated = 0;
-  std::size_t pieces = 0;
-  {
-    Cloth cloth = prototype;
-    tachi::sim::StrokeCutter cutter{cloth, {}};
-    for (const auto& s : stroke) cutter.add_sample(s);
-    cutter.end_stroke();
-    line = cutter.report().cut_line;
-    duplicated = cutter.report().particles_duplicated;
-    pieces = tachi::sim::find_pieces(cloth).count();
-  }
-
-  std::vector<double> stroke_ms;
+  const StrokeRun wavy = time_stroke(prototype, wavy_stroke(), reps);
+  const StrokeRun straight = time_stroke(prototype, straight_stroke(), reps);
+  // The wavy stroke's cut line through the topological cut alone.
   std::vector<double> cut_ms;
-  std::vector<double> pieces_ms;
   for (int r = 0; r < reps; ++r) {
-    {
-      Cloth cloth = prototype;
-      tachi::sim::StrokeCutter cutter{cloth, {}};
-      const auto t0 = cpu_ms();
-      for (const auto& s : stroke) cutter.add_sample(s);
-      cutter.end_stroke();
-      stroke_ms.push_back(ms_since(t0));
-      const auto t1 = cpu_ms();
-      const auto p = tachi::sim::find_pieces(cloth);
-      pieces_ms.push_back(ms_since(t1));
-      if (p.count() != pieces) std::abort();
-    }
-    {
-      Cloth cloth = prototype;
-      tachi::sim::ClothCutter cutter{cloth};
-      const auto t0 = cpu_ms();
-      cutter.cut(line);
-      cut_ms.push_back(ms_since(t0));
-    }
+    Cloth cloth = prototype;
+    tachi::sim::ClothCutter cutter{cloth};
+    const auto t0 = cpu_ms();
+    cutter.cut(wavy.line);
+    cut_ms.push_back(ms_since(t0));
   }
 
   // Bullet baseline: cutLink across the vertical links under one row of a 128 x 128 patch.
@@ -152,21 +141,19 @@ int main(int argc, char** argv) {
     }
   }
 
-  std::size_t straight_particles = 0;
-  const double straight_median = time_stroke(prototype, straight_stroke(), reps, straight_particles);
-  const double stroke_median = median(stroke_ms);
+  const double stroke_median = wavy.median_ms;
   const double cut_median = median(cut_ms);
   const double bullet_median = median(bullet_ms);
-  const std::size_t edges = line.size() > 0 ? line.size() - 1 : 0;
+  const std::size_t edges = wavy.line.empty() ? 0 : wavy.line.size() - 1;
   std::printf("cut_bench: %dx%d cloth, wavy 64-segment stroke -> %zu cut-line particles, %zu duplicated, %zu pieces, %d reps\n",
-              n, n, line.size(), duplicated, pieces, reps);
+              n, n, wavy.line.size(), wavy.duplicated, wavy.pieces, reps);
   std::printf("  wavy stroke, whole pipeline (locate, simplify, rasterise, cut, drag): median %.3f ms  (target <= 0.5 ms)\n",
               stroke_median);
   std::printf("  straight stroke across (%zu cut-line particles), whole pipeline:     median %.3f ms  (target <= 0.5 ms)\n",
-              straight_particles, straight_median);
+              straight.line.size(), straight.median_ms);
   std::printf("  wavy line, topological cut alone:                                    median %.3f ms  = %.2f us per cut edge\n",
               cut_median, 1000.0 * cut_median / static_cast<double>(std::max<std::size_t>(edges, 1)));
-  std::printf("  pieces (union-find over all springs, once per stroke):               median %.3f ms\n", median(pieces_ms));
+  std::printf("  pieces (union-find over all springs, once per stroke):               median %.3f ms\n", wavy.pieces_ms);
   std::printf("  Bullet btSoftBody::cutLink, one link:                                median %.3f ms  (first call %.1f ms)\n",
               bullet_median, bullet_first_ms);
   std::printf("  ratio per cut edge, Bullet / ours: %.0fx; whole stroke (%zu edges) vs Bullet at %zu links: %.0fx\n",

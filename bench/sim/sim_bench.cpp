@@ -19,6 +19,9 @@
 #include <BulletSoftBody/btSoftRigidDynamicsWorld.h>
 #include <btBulletDynamicsCommon.h>
 
+#include <Eigen/IterativeLinearSolvers>
+#include <Eigen/SparseCore>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -213,6 +216,41 @@ void print_variants(int warmup) {
   }
 }
 
+/// Lower bound on an implicit step (Baraff & Witkin 1998, eq. 18): one solve of (M + h^2 K) dv = b with
+/// Eigen's conjugate gradient, where K is the isotropic spring Laplacian (stiffness k on every spring);
+/// the true Jacobian has 3x3 blocks that change every step (assembly not timed here).
+void print_implicit_lower_bound(int n) {
+  Cloth cloth = make_cloth(n);
+  const auto np = static_cast<Eigen::Index>(cloth.particle_count());
+  const float h = 1.0F / 60.0F;
+  const float k = 1000.0F;  // N/m: a stiff cloth (stretch under its own weight ~1e-3)
+  std::vector<Eigen::Triplet<float>> t;
+  for (Eigen::Index i = 0; i < np; ++i) {
+    for (int c = 0; c < 3; ++c) t.emplace_back(3 * i + c, 3 * i + c, cloth.mass[static_cast<std::size_t>(i)]);
+  }
+  for (std::size_t s = 0; s < cloth.spring_count(); ++s) {
+    const auto a = static_cast<Eigen::Index>(cloth.spring_a[s]), b = static_cast<Eigen::Index>(cloth.spring_b[s]);
+    for (int c = 0; c < 3; ++c) {
+      t.emplace_back(3 * a + c, 3 * a + c, h * h * k);
+      t.emplace_back(3 * b + c, 3 * b + c, h * h * k);
+      t.emplace_back(3 * a + c, 3 * b + c, -h * h * k);
+      t.emplace_back(3 * b + c, 3 * a + c, -h * h * k);
+    }
+  }
+  Eigen::SparseMatrix<float> m(3 * np, 3 * np);
+  m.setFromTriplets(t.begin(), t.end());
+  Eigen::VectorXf rhs = Eigen::VectorXf::Zero(3 * np);
+  for (Eigen::Index i = 0; i < np; ++i) rhs[3 * i + 1] = -9.81F * h * cloth.mass[static_cast<std::size_t>(i)];
+  Eigen::ConjugateGradient<Eigen::SparseMatrix<float>, Eigen::Lower | Eigen::Upper> cg;
+  cg.setTolerance(1e-3F);
+  const auto t0 = Clock::now();
+  cg.compute(m);
+  const Eigen::VectorXf dv = cg.solve(rhs);
+  const double ms = ms_since(t0);
+  std::printf("\nImplicit Euler lower bound, %dx%d: one CG solve of %ld unknowns, %ld iterations, %.2f ms\n", n, n,
+              static_cast<long>(3 * np), static_cast<long>(cg.iterations()), ms);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -261,6 +299,9 @@ int main(int argc, char** argv) {
                 100.0 * t.max_strain, b.step_ms, 100.0 * b.max_strain, b.step_ms / t.step_ms, b.note.c_str());
     std::fflush(stdout);
   }
-  if (variants) print_variants(warmup);
+  if (variants) {
+    print_variants(warmup);
+    print_implicit_lower_bound(128);
+  }
   return 0;
 }

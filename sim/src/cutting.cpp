@@ -42,7 +42,6 @@ GridCoord cell_of(const Cloth& cloth, std::uint32_t t) {
   return c;
 }
 
-
 void sort_unique(std::vector<std::uint32_t>& v) {
   std::sort(v.begin(), v.end());
   v.erase(std::unique(v.begin(), v.end()), v.end());

@@ -335,6 +335,25 @@ TEST(Cutting, ChangeListNamesExactlyWhatChanged) {
   }
 }
 
+TEST(Cutting, ChangesOfAStrokeMergeIntoOneList) {
+  CutCase c{make_cloth(12, 12)};
+  const auto line = line_through({{0, 6}, {11, 6}}, 12, 12);
+  TopologyChange stroke;
+  stroke.merge(c.cut_checked({line.begin(), line.begin() + 6}));
+  const TopologyChange second = c.cut_checked({line.begin() + 5, line.end()});
+  const auto first_before = stroke.particle_count_before;
+  const auto first_duplicates = stroke.duplicated_from.size();
+  stroke.merge(second);
+  EXPECT_EQ(stroke.particle_count_before, first_before);
+  EXPECT_EQ(stroke.particle_count_before, 144U);
+  EXPECT_EQ(stroke.version, second.version);
+  EXPECT_EQ(stroke.duplicated_from.size(), first_duplicates + second.duplicated_from.size());
+  EXPECT_EQ(stroke.particle_count_before + stroke.duplicated_from.size(), c.cloth.particle_count());
+  EXPECT_TRUE(std::is_sorted(stroke.changed_springs.begin(), stroke.changed_springs.end()));
+  EXPECT_TRUE(std::adjacent_find(stroke.changed_triangles.begin(), stroke.changed_triangles.end()) ==
+              stroke.changed_triangles.end());
+}
+
 TEST(Cutting, TouchesOnlyTheNeighbourhoodOfTheLine) {
   CutCase c{make_cloth(32, 32)};
   const auto line = line_through({{5, 10}, {20, 14}}, 32, 32);

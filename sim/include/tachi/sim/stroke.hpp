@@ -55,7 +55,8 @@ struct ClothPoint {
 };
 
 /// Nearest-particle search with a warm start (a hand moves little between samples): greedy descent over
-/// live springs from the previous answer, falling back to a full scan when the descent ends far away.
+/// live springs from the previous answer, falling back to a full scan when the point does not project onto
+/// the sheet within a cell of where the descent ended.
 class ClothLocator {
  public:
   explicit ClothLocator(double inside_margin_cells = 0.5) : margin_(inside_margin_cells) {}

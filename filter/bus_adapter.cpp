@@ -35,7 +35,9 @@ tachi_msg_StrokeSample to_msg(const StrokeSample& s, std::uint32_t sensor_id) {
   m.time_ns = s.stamp_ns;
   m.position_m = {s.position_m.x(), s.position_m.y(), s.position_m.z()};
   m.tracked = s.tracked;
-  m.gate = s.gate == GateOutput::Cutting ? tachi_msg_GATE_CUTTING : tachi_msg_GATE_IDLE;
+  m.gate = s.gate == GateOutput::Cutting   ? tachi_msg_GATE_CUTTING
+           : s.gate == GateOutput::Holding ? tachi_msg_GATE_HOLDING
+                                           : tachi_msg_GATE_IDLE;
   m.opened_by = to_msg(s.opened_by);
   m.closed_by = to_msg(s.closed_by);
   m.hand_outside_cloth = s.hand_outside_cloth;

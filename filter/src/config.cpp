@@ -77,7 +77,8 @@ FilterConfig parse_filter_config(const std::string& json_text) {
              {"kind", "moving_average_window", "min_cutoff_hz", "beta", "d_cutoff_hz", "lag_compensation", "nominal_rate_hz",
               "reset_after_gap_s"},
              "smoother.");
-  check_keys(section(root, "gate"), {"mode", "enter_distance_m", "exit_distance_m", "enter_dwell_samples", "exit_dwell_samples"},
+  check_keys(section(root, "gate"), {"mode", "enter_distance_m", "exit_distance_m", "enter_dwell_samples", "exit_dwell_samples",
+                                        "max_normal_speed_mps"},
              "gate.");
   check_keys(section(root, "cloth"), {"width_m", "height_m", "outside_margin_m", "behind_cloth_is_contact"}, "cloth.");
   FilterConfig c;
@@ -112,6 +113,7 @@ FilterConfig parse_filter_config(const std::string& json_text) {
   read(g, "exit_distance_m", "gate.", c.gate.exit_distance_m);
   read(g, "enter_dwell_samples", "gate.", c.gate.enter_dwell_samples);
   read(g, "exit_dwell_samples", "gate.", c.gate.exit_dwell_samples);
+  read(g, "max_normal_speed_mps", "gate.", c.gate.max_normal_speed_mps);
   if (const auto why = validate(c.gate)) fail(*why);
 
   const json& cl = section(root, "cloth");
@@ -157,7 +159,8 @@ std::string to_json(const FilterConfig& c) {
         {"enter_distance_m", tidy(c.gate.enter_distance_m)},
         {"exit_distance_m", tidy(c.gate.exit_distance_m)},
         {"enter_dwell_samples", c.gate.enter_dwell_samples},
-        {"exit_dwell_samples", c.gate.exit_dwell_samples}}},
+        {"exit_dwell_samples", c.gate.exit_dwell_samples},
+        {"max_normal_speed_mps", tidy(c.gate.max_normal_speed_mps)}}},
       {"cloth",
        {{"width_m", tidy(c.cloth.width_m)},
         {"height_m", tidy(c.cloth.height_m)},

@@ -99,6 +99,8 @@ std::optional<std::string> validate(const GateParams& p) {
     return "gate.exit_distance_m must be in (enter_distance_m, 10] m (hysteresis needs exit > enter)";
   if (p.enter_dwell_samples < 1 || p.enter_dwell_samples > 300) return "gate.enter_dwell_samples must be in [1, 300]";
   if (p.exit_dwell_samples < 1 || p.exit_dwell_samples > 300) return "gate.exit_dwell_samples must be in [1, 300]";
+  if (!std::isfinite(p.max_normal_speed_mps) || p.max_normal_speed_mps < 0.0F || p.max_normal_speed_mps > 100.0F)
+    return "gate.max_normal_speed_mps must be in [0, 100] m/s (0 disables)";
   return std::nullopt;
 }
 
@@ -121,7 +123,9 @@ void Gate::apply(GateEvent event) {
     status_.closed_by = event == GateEvent::VoiceStop ? GateSource::Voice : GateSource::Threshold;
   }
   status_.phase = after;
-  status_.output = is_cutting(after) ? GateOutput::Cutting : GateOutput::Idle;
+  status_.output = after == GatePhase::Disarming ? GateOutput::Holding
+                   : is_cutting(after)             ? GateOutput::Cutting
+                                                   : GateOutput::Idle;
 }
 
 void Gate::on_voice(VoiceCommandKind command) {

@@ -104,7 +104,7 @@ void write_stroke_csv_row(std::ostream& out, const StrokeSample& s, bool camera_
                   static_cast<double>(p.z()));
   else
     std::snprintf(xyz, sizeof xyz, "nan,nan,nan");
-  out << s.frame << ',' << s.stamp_ns << ',' << xyz << ',' << (s.gate == GateOutput::Cutting ? 1 : 0) << ','
+  out << s.frame << ',' << s.stamp_ns << ',' << xyz << ',' << static_cast<int>(s.gate) << ','
       << s.stroke_id << '\n';
 }
 

@@ -37,6 +37,18 @@ StrokeSample StrokeFilter::on_hand(const HandSample& hand) {
   }
   const GateStatus& g = gate_.on_sample(distance);
   out.gate = g.output;
+  // Seed 000 sec. 5: at the start and end of a threshold cut the user moves the hand toward or away
+  // from the cloth, and those samples made the cut stray (Figs. 6-8). The cloth hangs in z = 0, so
+  // world z is its normal: while the hand moves along it too fast, the stroke holds instead of cutting.
+  std::optional<float> normal_speed;
+  if (out.tracked && previous_normal_ && hand.stamp_ns > previous_normal_->second)
+    normal_speed = std::abs(out.position_m.z() - previous_normal_->first) /
+                   (static_cast<float>(hand.stamp_ns - previous_normal_->second) * 1e-9F);
+  previous_normal_.reset();
+  if (out.tracked) previous_normal_ = std::make_pair(out.position_m.z(), hand.stamp_ns);
+  const float limit = config_.gate.max_normal_speed_mps;
+  if (g.phase == GatePhase::CuttingByThreshold && limit > 0.0F && normal_speed && *normal_speed > limit)
+    out.gate = GateOutput::Holding;
   out.stroke_id = g.stroke_id;
   out.opened_by = g.opened_by;
   out.closed_by = g.closed_by;

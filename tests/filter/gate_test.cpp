@@ -112,8 +112,9 @@ TEST(Gate, ClosesAfterTheExitDwellAndReopensAsANewStroke) {
   Gate g{threshold_params()};
   g.on_sample(0.0F);
   g.on_sample(0.0F);
-  EXPECT_EQ(g.on_sample(0.5F).output, GateOutput::Cutting);  // 1 of 3
-  EXPECT_EQ(g.on_sample(0.5F).output, GateOutput::Cutting);  // 2 of 3
+  // Beyond reach, the stroke stays open but holds: the leaving hand must not cut.
+  EXPECT_EQ(g.on_sample(0.5F).output, GateOutput::Holding);  // 1 of 3
+  EXPECT_EQ(g.on_sample(0.5F).output, GateOutput::Holding);  // 2 of 3
   EXPECT_EQ(g.on_sample(0.5F).output, GateOutput::Idle);     // 3 of 3: closed
   g.on_sample(0.0F);
   EXPECT_EQ(g.on_sample(0.0F).stroke_id, 2U);

@@ -43,6 +43,35 @@ TEST(StrokeFilter, TheSeedsSingleThresholdFragmentsThePush) {
   EXPECT_GE(fragmented, 8U);
 }
 
+// A cut along the cloth, then the hand pulled out diagonally (as in recordings/straight_cut): the
+// samples of the pull-out must not cut, even while still within the exit distance.
+std::vector<GateOutput> cut_then_pull_out(float max_normal_speed_mps) {
+  FilterConfig config;
+  config.gate.max_normal_speed_mps = max_normal_speed_mps;
+  StrokeFilter f{config};
+  std::vector<GateOutput> pull_out;
+  for (int i = 0; i < 40; ++i) {
+    HandSample h;
+    h.frame = static_cast<std::uint64_t>(i);
+    h.stamp_ns = static_cast<std::int64_t>(i) * 33'333'333LL;
+    h.tracked = true;
+    const bool leaving = i >= 30;
+    const float out = leaving ? 0.02F * static_cast<float>(i - 29) : 0.0F;  // 0.6 m/s away from the cloth
+    h.position_m = {-0.3F + 0.02F * static_cast<float>(std::min(i, 30)) + out, out, 0.98F + out};
+    const auto s = f.on_hand(h);
+    if (leaving) pull_out.push_back(s.gate);
+  }
+  return pull_out;
+}
+
+TEST(StrokeFilter, AHandPulledOutOfTheClothHoldsInsteadOfCutting) {
+  // The smoothed speed needs one sample to see the motion: only the first pull-out sample may cut.
+  const auto with = cut_then_pull_out(0.25F);
+  for (std::size_t i = 1; i < with.size(); ++i) EXPECT_NE(with[i], GateOutput::Cutting) << "pull-out sample " << i;
+  const auto without = cut_then_pull_out(0.0F);
+  EXPECT_EQ(without[1], GateOutput::Cutting) << "without the speed limit the pull-out cuts (the seed's failure)";
+}
+
 TEST(StrokeFilter, OutputIsInTheWorldFrameAndFlagsTheHandOutsideTheCloth) {
   StrokeFilter f{FilterConfig{}};
   HandSample h;

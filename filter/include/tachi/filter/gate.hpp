@@ -64,6 +64,10 @@ struct GateParams {
   float exit_distance_m = 0.08F;   ///< stop cutting above this (> enter: hysteresis)
   int enter_dwell_samples = 2;     ///< samples within reach before the gate opens (>= 1)
   int exit_dwell_samples = 4;      ///< samples out of reach (or lost) before the gate closes (>= 1)
+  /// A threshold stroke holds (stays open without cutting) while the hand moves toward or away from
+  /// the cloth faster than this, m/s along the cloth's normal; 0 disables. Cutting is a motion along
+  /// the cloth; reaching in and pulling out are what made the seed's cuts stray (seed 000 sec. 5).
+  float max_normal_speed_mps = 0.25F;
 };
 
 std::optional<std::string> validate(const GateParams& params);

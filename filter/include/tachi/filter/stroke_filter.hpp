@@ -9,7 +9,10 @@
 #include "tachi/filter/smoothing.hpp"
 #include "tachi/filter/types.hpp"
 
+#include <cstdint>
+#include <optional>
 #include <span>
+#include <utility>
 #include <vector>
 
 namespace tachi::filter {
@@ -35,6 +38,8 @@ class StrokeFilter {
   bool have_cloth_ = false;
   Eigen::Vector3f last_camera_ = Eigen::Vector3f::Zero();
   bool have_last_ = false;
+  // The previous tracked sample's world z and time, for the hand's speed along the cloth's normal.
+  std::optional<std::pair<float, std::int64_t>> previous_normal_;
 };
 
 }  // namespace tachi::filter

@@ -18,7 +18,9 @@ struct HandSample {
 };
 
 /// Whether cutting is on. Matches tachi_msg_GateState.
-enum class GateOutput : std::uint8_t { Idle, Cutting };
+/// Holding: a stroke is open but the hand is out of reach (exit dwell): the sample does not cut, so a
+/// hand leaving the cloth never drags the cut with it; the stroke continues if the hand comes back.
+enum class GateOutput : std::uint8_t { Idle, Cutting, Holding };
 
 /// What opened or closed a stroke. Matches tachi_msg_GateSource.
 enum class GateSource : std::uint8_t { None, Threshold, Voice };

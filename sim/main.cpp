@@ -2,6 +2,7 @@
 // live mode (publish topology/state, subscribe strokes) joins the DDS pipeline.
 #include "tachi/common/app.hpp"
 #include "tachi/sim/offline.hpp"
+#include "live.hpp"
 
 #include <CLI/CLI.hpp>
 #include <spdlog/spdlog.h>
@@ -15,14 +16,20 @@ int main(int argc, char** argv) try {
   bool offline = false;
   std::string log_level = "info";
   tachi::sim::OfflineOptions options;
-  app.add_flag("--offline", offline, "Run without DDS: simulate, then export the mesh and a summary");
+  tachi::sim::LiveOptions live;
+  auto* offline_flag = app.add_flag("--offline", offline, "Run without DDS: simulate, then export the mesh and a summary");
   tachi::sim::add_offline_flags(app, options);
+  app.get_option("--stroke")->needs(offline_flag);  // live strokes come over DDS
+  tachi::sim::add_live_flags(app, live);
   tachi::common::add_log_level_flag(app, log_level);
   if (const int rc = tachi::common::parse(app, argc, argv); rc >= 0) return rc;
+  tachi::common::set_log_level(log_level);
 
   if (!offline) {
-    std::cerr << "tachi-sim: live mode needs the DDS pipeline: not built yet; use --offline\n";
-    return tachi::common::kExitUsage;
+    // Live: strokes come from tachi-filter over DDS; --steps, when given, bounds the run.
+    tachi::common::install_stop_handlers();
+    const auto steps_given = app.get_option("--steps")->count() > 0 ? std::optional<int>(options.steps) : std::nullopt;
+    return tachi::sim::run_live(options, steps_given, live);
   }
   const tachi::sim::Summary summary = tachi::sim::run_offline(options);
   spdlog::info("{} steps of a {}x{} cloth: max strain {:.4f}, median step {:.3f} ms", summary.steps, summary.columns,

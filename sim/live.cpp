@@ -1,0 +1,179 @@
+#include "live.hpp"
+
+#include "src/bus_adapter.hpp"
+#include "tachi/bus/heartbeat.hpp"
+#include "tachi/sim/pieces.hpp"
+#include "tachi/sim/session.hpp"
+
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <fstream>
+
+namespace tachi::sim {
+namespace {
+using Clock = std::chrono::steady_clock;
+
+tachi_msg_CutEvent cut_msg(std::uint32_t cloth_id, std::uint32_t version, const CutReport& report,
+                           std::vector<tachi_msg_GridCoord>& line) {
+  line.clear();
+  for (const GridCoord g : report.stroke.cut_line)
+    line.push_back({static_cast<std::uint16_t>(g.u), static_cast<std::uint16_t>(g.v)});
+  tachi_msg_CutEvent msg{};
+  msg.cloth_id = cloth_id;
+  msg.stroke_id = report.stroke_id;
+  msg.topology_version = version;
+  msg.cut_line._buffer = line.data();
+  msg.cut_line._length = msg.cut_line._maximum = static_cast<std::uint32_t>(line.size());
+  msg.cut_line._release = false;
+  msg.particles_duplicated = static_cast<std::uint32_t>(report.stroke.particles_duplicated);
+  msg.pieces = static_cast<std::uint32_t>(report.pieces);
+  msg.fallen_pieces = static_cast<std::uint32_t>(report.fallen_pieces);
+  msg.cut_length_m = report.stroke.cut_length_m;
+  return msg;
+}
+
+double median(std::vector<double> values) {
+  if (values.empty()) return 0.0;
+  const auto middle = values.begin() + static_cast<std::ptrdiff_t>(values.size() / 2);
+  std::nth_element(values.begin(), middle, values.end());
+  return *middle;
+}
+}  // namespace
+
+void add_live_flags(CLI::App& app, LiveOptions& options) {
+  common::add_bus_flags(app, options.bus);
+  app.add_option("--cloth-id", options.cloth_id, "Key of this cloth on the bus")->capture_default_str();
+  app.add_option("--state-every", options.state_every, "Live: publish the cloth state every Nth step")
+      ->check(CLI::Range(1, 1000))
+      ->capture_default_str();
+  app.add_option("--duration", options.duration_s, "Live: stop after this many seconds (0: until SIGINT/SIGTERM)")
+      ->check(CLI::NonNegativeNumber);
+  app.add_option("--exit-when-idle", options.exit_when_idle_s,
+                 "Live: stop when no hand sample arrived for this many seconds after the first (0: never)")
+      ->check(CLI::NonNegativeNumber);
+  app.add_option("--hand-radius", options.hand_radius_m, "Live: the idle hand pushes the cloth as a sphere of this radius, m (0: off)")
+      ->check(CLI::Range(0.0F, 1.0F));
+}
+
+int run_live(const OfflineOptions& shared, std::optional<int> max_steps, const LiveOptions& live) {
+  SessionOptions session_options;
+  session_options.cloth = shared.cloth;
+  session_options.solver = shared.solver;
+  session_options.stroke.blade = shared.blade;
+  session_options.hand_radius_m = live.hand_radius_m;
+  Session session{session_options};
+
+  bus::Participant dds{live.bus.domain, live.bus.dds_config};
+  bus::Reader<tachi_msg_StrokeSample> strokes{dds, bus::topics::stroke};
+  bus::Writer<tachi_msg_ClothTopology> topology_writer{dds, bus::topics::cloth_topology};
+  bus::Writer<tachi_msg_ClothState> state_writer{dds, bus::topics::cloth_state};
+  bus::Writer<tachi_msg_CutEvent> cut_writer{dds, bus::topics::cut_event};
+  bus::Heartbeat heartbeat{dds, "tachi-sim"};
+
+  TopologyMessage topology;
+  topology.fill(live.cloth_id, session.cloth(), nullptr);
+  topology_writer.write(topology.msg());
+  std::vector<tachi_msg_GridCoord> cut_line;
+
+  const auto period = std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(shared.solver.dt));
+  const auto start = Clock::now();
+  auto next_step = start;
+  auto last_hand = start;
+  std::uint64_t samples_in = 0, messages_out = 1, rejected = 0, overruns = 0;
+  bool had_filter = false;
+  std::vector<double> step_ms;
+
+  common::run_until_stopped([&] {
+    strokes.wait_for_data(std::max(next_step - Clock::now(), Clock::duration::zero()));
+    for (const auto& sample : strokes.take()) {
+      if (const auto input = from_msg(*sample)) {
+        session.on_hand({input->stroke_id, input->time_s, input->position_m, input->tracked, input->cutting, input->holding});
+        ++samples_in;
+        last_hand = Clock::now();
+      } else if (++rejected == 1 || rejected % 100 == 0) {
+        spdlog::warn("tachi-sim: {} hand samples rejected (non-finite or > 100 m from the cloth)", rejected);
+      }
+    }
+    // A filter that vanished mid-stroke would leave the stroke open forever: close it.
+    const bool has_filter = strokes.matched_writers() > 0;
+    if (had_filter && !has_filter && session.cutter().stroke_open()) {
+      spdlog::warn("tachi-sim: the stroke publisher went away mid-stroke; closing the stroke");
+      session.end_stroke();
+    }
+    had_filter = has_filter;
+
+    const auto now = Clock::now();
+    if (now >= next_step) {
+      const auto before = Clock::now();
+      session.step();
+      step_ms.push_back(std::chrono::duration<double, std::milli>(Clock::now() - before).count());
+      next_step += period;
+      if (Clock::now() - next_step > 5 * period) {  // fell behind: drop the backlog instead of racing
+        next_step = Clock::now() + period;
+        ++overruns;
+      }
+      if (const auto change = session.take_topology_change()) {
+        topology.fill(live.cloth_id, session.cloth(), &*change);
+        topology_writer.write(topology.msg());
+        ++messages_out;
+      }
+      for (const auto& report : session.take_cut_reports()) {
+        cut_writer.write(cut_msg(live.cloth_id, session.cloth().topology_version, report, cut_line));
+        ++messages_out;
+        spdlog::info("tachi-sim: stroke {} cut {} particles over {:.3f} m; {} pieces, {} falling", report.stroke_id,
+                     report.stroke.particles_duplicated, report.stroke.cut_length_m, report.pieces, report.fallen_pieces);
+      }
+      if (session.steps() % static_cast<std::uint64_t>(live.state_every) == 0) {
+        state_writer.write(state_msg(live.cloth_id, session.steps(), session.time_s(), session.cloth()));
+        ++messages_out;
+      }
+      heartbeat.update(overruns > 0 ? tachi_msg_NODE_DEGRADED : tachi_msg_NODE_RUNNING, samples_in, messages_out,
+                       "steps " + std::to_string(session.steps()));
+    }
+    if (max_steps && session.steps() >= static_cast<std::uint64_t>(*max_steps)) return false;
+    if (live.duration_s > 0 && Clock::now() - start > std::chrono::duration<double>(live.duration_s)) return false;
+    if (live.exit_when_idle_s > 0 && samples_in > 0 &&
+        Clock::now() - last_hand > std::chrono::duration<double>(live.exit_when_idle_s))
+      return false;
+    return true;
+  });
+
+  session.end_stroke();
+  if (const auto change = session.take_topology_change()) {
+    topology.fill(live.cloth_id, session.cloth(), &*change);
+    topology_writer.write(topology.msg());
+  }
+  for (const auto& report : session.take_cut_reports())
+    cut_writer.write(cut_msg(live.cloth_id, session.cloth().topology_version, report, cut_line));
+  state_writer.write(state_msg(live.cloth_id, session.steps(), session.time_s(), session.cloth()));
+  // Let late readers (viewer, tests) receive the final topology and cuts before the process goes.
+  topology_writer.wait_for_acks(std::chrono::seconds(1));
+  cut_writer.wait_for_acks(std::chrono::seconds(1));
+
+  Summary summary = summarize(session.cloth());
+  summary.steps = static_cast<int>(session.steps());
+  summary.step_ms_median = median(step_ms);
+  const StrokeReport& total = session.cutter().total();
+  nlohmann::json line = nlohmann::json::array();
+  for (const GridCoord g : total.cut_line) line.push_back({g.u, g.v});
+  summary.extra["fallen_pieces"] = find_pieces(session.cloth()).fallen();
+  summary.extra["cut_particles"] = total.particles_duplicated;
+  summary.extra["cut_length_m"] = total.cut_length_m;
+  summary.extra["cut_line"] = std::move(line);
+  summary.extra["hand_samples"] = samples_in;
+  summary.extra["hand_samples_rejected"] = rejected;
+  summary.extra["step_overruns"] = overruns;
+  summary.extra["topology_version"] = session.cloth().topology_version;
+  spdlog::info("tachi-sim: stopped after {} steps ({} hand samples, {} pieces)", summary.steps, samples_in, summary.pieces);
+  if (!shared.export_dir.empty()) {
+    std::filesystem::create_directories(shared.export_dir);
+    write_obj(session.cloth(), shared.export_dir / "cloth.obj");
+    std::ofstream out(shared.export_dir / "summary.json");
+    out << to_json(summary).dump(2) << '\n';
+    if (!out) throw std::runtime_error("cannot write " + (shared.export_dir / "summary.json").string());
+  }
+  return common::kExitOk;
+}
+
+}  // namespace tachi::sim

@@ -1,0 +1,71 @@
+#include "bus_adapter.hpp"
+
+#include <cmath>
+
+namespace tachi::sim {
+namespace {
+template <class Seq, class T>
+void point_at(Seq& seq, std::vector<T>& data) {
+  seq._buffer = data.data();
+  seq._length = seq._maximum = static_cast<std::uint32_t>(data.size());
+  seq._release = false;
+}
+static_assert(sizeof(Eigen::Vector3f) == 3 * sizeof(float), "positions are sent as packed xyz floats");
+constexpr float kFarFromAnyCloth_m = 100.0f;
+}  // namespace
+
+std::optional<StrokeInput> from_msg(const tachi_msg_StrokeSample& msg) {
+  const Eigen::Vector3f p(msg.position_m.x, msg.position_m.y, msg.position_m.z);
+  if (msg.tracked && (!p.allFinite() || p.cwiseAbs().maxCoeff() > kFarFromAnyCloth_m)) return std::nullopt;
+  StrokeInput input;
+  input.stroke_id = msg.stroke_id;
+  input.time_s = static_cast<double>(msg.time_ns) * 1e-9;
+  input.position_m = p;
+  input.tracked = msg.tracked;
+  input.cutting = msg.gate == tachi_msg_GATE_CUTTING;
+  input.holding = msg.gate == tachi_msg_GATE_HOLDING;
+  return input;
+}
+
+void TopologyMessage::fill(std::uint32_t cloth_id, const Cloth& cloth, const TopologyChange* change) {
+  triangles_.clear();
+  for (std::size_t t = 0; t < cloth.triangle_count(); ++t)
+    if (cloth.triangle_alive[t]) triangles_.insert(triangles_.end(), cloth.triangles[t].begin(), cloth.triangles[t].end());
+  grid_.resize(cloth.particle_count());
+  for (std::size_t i = 0; i < grid_.size(); ++i)
+    grid_[i] = {static_cast<std::uint16_t>(cloth.grid[i].u), static_cast<std::uint16_t>(cloth.grid[i].v)};
+  pinned_.assign(cloth.pinned.begin(), cloth.pinned.end());
+  duplicated_from_.clear();
+  changed_triangles_.clear();
+  if (change != nullptr) {
+    duplicated_from_ = change->duplicated_from;
+    changed_triangles_ = change->changed_triangles;
+  }
+  msg_ = {};
+  msg_.cloth_id = cloth_id;
+  msg_.version = cloth.topology_version;
+  msg_.columns = static_cast<std::uint16_t>(cloth.columns);
+  msg_.rows = static_cast<std::uint16_t>(cloth.rows);
+  point_at(msg_.triangles, triangles_);
+  point_at(msg_.particle_grid, grid_);
+  msg_.pinned._buffer = reinterpret_cast<bool*>(pinned_.data());
+  msg_.pinned._length = msg_.pinned._maximum = static_cast<std::uint32_t>(pinned_.size());
+  msg_.pinned._release = false;
+  point_at(msg_.duplicated_from, duplicated_from_);
+  point_at(msg_.changed_triangles, changed_triangles_);
+}
+
+tachi_msg_ClothState state_msg(std::uint32_t cloth_id, std::uint64_t frame, double sim_time_s, const Cloth& cloth) {
+  tachi_msg_ClothState msg{};
+  msg.cloth_id = cloth_id;
+  msg.frame = frame;
+  msg.sim_time_ns = static_cast<std::int64_t>(std::llround(sim_time_s * 1e9));
+  msg.topology_version = cloth.topology_version;
+  // The message is only read by dds_write; the cast drops const for the C struct's sake.
+  msg.positions._buffer = const_cast<float*>(cloth.position.empty() ? nullptr : cloth.position.front().data());
+  msg.positions._length = msg.positions._maximum = static_cast<std::uint32_t>(3 * cloth.particle_count());
+  msg.positions._release = false;
+  return msg;
+}
+
+}  // namespace tachi::sim

@@ -1,0 +1,49 @@
+// The simulator's edge to the DDS bus: Cloth -> ClothTopology / ClothState / CutEvent messages,
+// StrokeSample -> the simulator's own stroke input. Only tachi-sim links this (the tachi_sim
+// library stays free of DDS). Messages point into buffers owned here, written without a copy.
+#pragma once
+
+#include "tachi/bus/topics.hpp"
+#include "tachi/sim/cloth.hpp"
+#include "tachi/sim/cutting.hpp"
+
+#include <cstdint>
+#include <vector>
+
+namespace tachi::sim {
+
+/// A hand sample as the simulator uses it (world frame, seconds on the sender's clock).
+struct StrokeInput {
+  std::uint32_t stroke_id = 0;
+  double time_s = 0.0;
+  Eigen::Vector3f position_m = Eigen::Vector3f::Zero();
+  bool tracked = false;
+  bool cutting = false;
+  bool holding = false;
+};
+
+/// Rejects samples a filter should never send but a faulty peer might: non-finite coordinates or a
+/// hand absurdly far from the cloth (> 100 m). Returns nothing for those.
+std::optional<StrokeInput> from_msg(const tachi_msg_StrokeSample& msg);
+
+/// Owns the arrays a ClothTopology message points into.
+class TopologyMessage {
+ public:
+  /// Full topology of `cloth` (live triangles only) plus the change list since the previous version.
+  void fill(std::uint32_t cloth_id, const Cloth& cloth, const TopologyChange* change);
+  const tachi_msg_ClothTopology& msg() const { return msg_; }
+
+ private:
+  tachi_msg_ClothTopology msg_{};
+  std::vector<std::uint32_t> triangles_;
+  std::vector<tachi_msg_GridCoord> grid_;
+  std::vector<std::uint8_t> pinned_;
+  std::vector<std::uint32_t> duplicated_from_;
+  std::vector<std::uint32_t> changed_triangles_;
+};
+
+/// A ClothState message whose positions point straight at the cloth's position array
+/// (Eigen::Vector3f is three packed floats). Valid until the cloth's particle arrays grow.
+tachi_msg_ClothState state_msg(std::uint32_t cloth_id, std::uint64_t frame, double sim_time_s, const Cloth& cloth);
+
+}  // namespace tachi::sim

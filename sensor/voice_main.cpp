@@ -7,7 +7,6 @@
 #include "tachi/sensor/voice_audio.hpp"
 #include "tachi/sensor/voice_spotter.hpp"
 
-#include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 
 #include <chrono>
@@ -156,7 +155,6 @@ int main(int argc, char** argv) try {
   tachi::common::add_bus_flags(app, o.bus);
   if (const int rc = tachi::common::parse(app, argc, argv); rc >= 0) return rc;
   // Logs go to stderr: stdout carries the command lines (tachi-voice) and must stay parseable.
-  spdlog::set_default_logger(spdlog::stderr_color_mt("tachi-voice"));
   tachi::common::set_log_level(o.log_level);
   o.use_device = device->count() > 0;
 

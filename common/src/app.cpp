@@ -1,5 +1,6 @@
 #include "tachi/common/app.hpp"
 
+#include <spdlog/sinks/stdout_color_sinks.h>  // declares stderr_color_mt too
 #include <spdlog/spdlog.h>
 
 #include <csignal>
@@ -35,6 +36,8 @@ void add_bus_flags(CLI::App& app, BusOptions& options) {
 }
 
 int parse(CLI::App& app, int argc, char** argv) {
+  // Logs go to stderr, named after the program: stdout carries CSV/JSON output.
+  if (spdlog::get(app.get_name()) == nullptr) spdlog::set_default_logger(spdlog::stderr_color_mt(app.get_name()));
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp&) {

@@ -44,6 +44,8 @@ void TopologyMessage::fill(std::uint32_t cloth_id, const Cloth& cloth, const Top
   msg_ = {};
   msg_.cloth_id = cloth_id;
   msg_.version = cloth.topology_version;
+  msg_.base_version = published_version_.value_or(cloth.topology_version);
+  published_version_ = cloth.topology_version;
   msg_.columns = static_cast<std::uint16_t>(cloth.columns);
   msg_.rows = static_cast<std::uint16_t>(cloth.rows);
   point_at(msg_.triangles, triangles_);

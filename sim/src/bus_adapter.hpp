@@ -29,12 +29,14 @@ std::optional<StrokeInput> from_msg(const tachi_msg_StrokeSample& msg);
 /// Owns the arrays a ClothTopology message points into.
 class TopologyMessage {
  public:
-  /// Full topology of `cloth` (live triangles only) plus the change list since the previous version.
+  /// Full topology of `cloth` (live triangles only) plus the change list since the previously
+  /// filled version (the change may merge several cuts).
   void fill(std::uint32_t cloth_id, const Cloth& cloth, const TopologyChange* change);
   const tachi_msg_ClothTopology& msg() const { return msg_; }
 
  private:
   tachi_msg_ClothTopology msg_{};
+  std::optional<std::uint32_t> published_version_;
   std::vector<std::uint32_t> triangles_;
   std::vector<tachi_msg_GridCoord> grid_;
   std::vector<std::uint8_t> pinned_;

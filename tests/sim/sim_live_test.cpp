@@ -43,6 +43,7 @@ TEST(SimLive, CutsOffTheLowerPieceFromStrokesOverDdsAndReportsIt) {
   const auto initial = topologies.take();
   ASSERT_FALSE(initial.empty());
   EXPECT_EQ(initial.back()->particle_grid._length, 16u * 16u);
+  EXPECT_EQ(initial.back()->base_version, initial.back()->version) << "a first publication has no change list";
 
   std::uint64_t frame = 0;
   // A faulty peer's sample must be rejected, not crash the simulator or cut.
@@ -67,7 +68,13 @@ TEST(SimLive, CutsOffTheLowerPieceFromStrokesOverDdsAndReportsIt) {
   ASSERT_EQ(pieces, std::vector<std::uint32_t>{2});
   EXPECT_EQ(fallen, std::vector<std::uint32_t>{1});
   std::uint32_t latest_version = 0, duplicated = 0;
+  std::uint32_t previous = initial.back()->version;
   for (const auto& t : topologies.take()) {
+    // Keep-last-1 may overwrite a publication before it is taken: the change list starts at or after
+    // the last version this reader saw, and the message always carries the full topology too.
+    EXPECT_GE(t->base_version, previous);
+    EXPECT_LT(t->base_version, t->version);
+    previous = t->version;
     latest_version = std::max(latest_version, t->version);
     duplicated += t->duplicated_from._length;
   }

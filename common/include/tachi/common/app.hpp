@@ -31,7 +31,7 @@ void add_log_level_flag(CLI::App& app, std::string& level);
 /// Adds `--domain` and `--dds-config`.
 void add_bus_flags(CLI::App& app, BusOptions& options);
 
-/// Parses argv. Returns an exit code when the process should stop now (help printed: 0;
+/// Routes spdlog's default logger to stderr under the program's name, then parses argv. Returns an exit code when the process should stop now (help printed: 0;
 /// bad flag: one line "<program>: <flag>: <reason>" on stderr, kExitUsage), else -1.
 int parse(CLI::App& app, int argc, char** argv);
 

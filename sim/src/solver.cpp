@@ -291,7 +291,7 @@ void Solver::substep(Cloth& cloth, const Colliders& colliders, float h, bool fir
     if (len2 > a.length2) p.head<3>() = anchor.head<3>() + d.head<3>() * std::sqrt(a.length2 / len2);
   }
 
-  // 4. Soft shear and bend springs, one XPBD pass per step (they are soft: more passes buy nothing visible).
+  // 3. Soft shear and bend springs, one XPBD pass each per sub-step (soft: more passes buy nothing visible).
   if (first || params_.soft_every_substep) {
     const float full_h = params_.soft_every_substep ? h : params_.dt;
     const float shear_alpha = params_.shear_compliance / (full_h * full_h);
@@ -300,7 +300,7 @@ void Solver::substep(Cloth& cloth, const Colliders& colliders, float h, bool fir
     for (const PackedSpring& s : bend_) project_near_rest(x[s.a], x[s.b], s.rest, bend_alpha);
   }
 
-  // 3. Structural springs, hard, Gauss-Seidel. Near rest length the square root is replaced by its
+  // 4. Structural springs, hard, Gauss-Seidel. Near rest length the square root is replaced by its
   // first-order expansion, |d| ~ (|d|^2 + L^2) / 2L (Jakobsen 2001, "Advanced Character Physics"):
   // the fixed point is still |d| = L, and step 5 below is exact.
   for (int it = 0; it < params_.iterations; ++it) {

@@ -230,32 +230,29 @@ namespace {
 using Vec4 = Eigen::Vector4f;
 const Vec4 kXyz{1.0F, 1.0F, 1.0F, 0.0F};
 
-/// Exact projection of one distance constraint C = |xa - xb| - target (Mueller et al. 2007, eq. 10-11),
-/// scaled by the XPBD factor 1 / (wa + wb + alpha~) (Macklin et al. 2016, eq. 18 with lambda = 0).
-inline void project_exact(Vec4& pa, Vec4& pb, float target, float alpha) {
-  const float wa = pa.w(), wb = pb.w();
-  const float wsum = wa + wb;
-  if (wsum == 0.0F) return;
-  const Vec4 d = (pb - pa).cwiseProduct(kXyz);
-  const float len2 = d.squaredNorm();
-  if (len2 < 1e-18F) return;  // coincident particles: no direction to correct along
-  const float len = std::sqrt(len2);
-  const float c = (len - target) / (len * (wsum + alpha));
-  pa += (wa * c) * d;
-  pb -= (wb * c) * d;
-}
+enum class Length { Exact, NearRest };
 
-/// The same projection with |d| replaced by its first-order expansion around L, |d| ~ (|d|^2 + L^2) / 2L
+/// Projection of one distance constraint C = |xa - xb| - target (Mueller et al. 2007, eq. 10-11), scaled
+/// by the XPBD factor 1 / (wa + wb + alpha~) (Macklin et al. 2016, eq. 18 with lambda = 0).
+/// Length::NearRest replaces |d| by its first-order expansion around the target, |d| ~ (|d|^2 + L^2) / 2L
 /// (Jakobsen 2001, "Advanced Character Physics"): no square root, the same fixed point |d| = L, and a
 /// correction that stays bounded (< |d|) however far the spring is compressed or stretched.
-inline void project_near_rest(Vec4& pa, Vec4& pb, float rest, float alpha) {
+template <Length kLength>
+inline void project_distance(Vec4& pa, Vec4& pb, float target, float alpha) {
   const float wa = pa.w(), wb = pb.w();
   const float wsum = wa + wb;
   if (wsum == 0.0F) return;
   const Vec4 d = (pb - pa).cwiseProduct(kXyz);
   const float len2 = d.squaredNorm();
-  const float rest2 = rest * rest;
-  const float c = (len2 - rest2) / ((len2 + rest2) * (wsum + alpha));
+  float c = 0.0F;
+  if constexpr (kLength == Length::Exact) {
+    if (len2 < 1e-18F) return;  // coincident particles: no direction to correct along
+    const float len = std::sqrt(len2);
+    c = (len - target) / (len * (wsum + alpha));
+  } else {
+    const float target2 = target * target;
+    c = (len2 - target2) / ((len2 + target2) * (wsum + alpha));
+  }
   pa += (wa * c) * d;
   pb -= (wb * c) * d;
 }
@@ -296,15 +293,15 @@ void Solver::substep(Cloth& cloth, const Colliders& colliders, float h, bool fir
     const float full_h = params_.soft_every_substep ? h : params_.dt;
     const float shear_alpha = params_.shear_compliance / (full_h * full_h);
     const float bend_alpha = params_.bend_compliance / (full_h * full_h);
-    for (const PackedSpring& s : shear_) project_near_rest(x[s.a], x[s.b], s.rest, shear_alpha);
-    for (const PackedSpring& s : bend_) project_near_rest(x[s.a], x[s.b], s.rest, bend_alpha);
+    for (const PackedSpring& s : shear_) project_distance<Length::NearRest>(x[s.a], x[s.b], s.rest, shear_alpha);
+    for (const PackedSpring& s : bend_) project_distance<Length::NearRest>(x[s.a], x[s.b], s.rest, bend_alpha);
   }
 
   // 4. Structural springs, hard, Gauss-Seidel. Near rest length the square root is replaced by its
   // first-order expansion, |d| ~ (|d|^2 + L^2) / 2L (Jakobsen 2001, "Advanced Character Physics"):
   // the fixed point is still |d| = L, and step 5 below is exact.
   for (int it = 0; it < params_.iterations; ++it) {
-    for (const PackedSpring& s : structural_) project_near_rest(x[s.a], x[s.b], s.rest, 0.0F);
+    for (const PackedSpring& s : structural_) project_distance<Length::NearRest>(x[s.a], x[s.b], s.rest, 0.0F);
   }
 
   // 5. Provot's deformation constraint: a structural spring longer than (1 + max_strain) L is brought
@@ -322,7 +319,7 @@ void Solver::substep(Cloth& cloth, const Colliders& colliders, float h, bool fir
       const Vec4 d = (x[s.b] - x[s.a]).cwiseProduct(kXyz);
       const float target = limit * s.rest;
       if (d.squaredNorm() > target * target) {
-        project_exact(x[s.a], x[s.b], corrected * s.rest, 0.0F);
+        project_distance<Length::Exact>(x[s.a], x[s.b], corrected * s.rest, 0.0F);
         ++corrections;
       }
     }

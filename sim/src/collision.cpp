@@ -62,7 +62,7 @@ bool project_out_of_sphere(Eigen::Vector3f& p, const Sphere& s, float margin) {
   const Eigen::Vector3f d = p - s.centre;
   const float r = s.radius + margin;
   const float n2 = d.squaredNorm();
-  if (n2 >= r * r) return false;
+  if (!(n2 < r * r)) return false;  // also false for a NaN collider: bad input never poisons the cloth
   const float n = std::sqrt(n2);
   // A particle exactly at the centre has no outward direction: push it towards +z (the viewer).
   p = s.centre + (n > 1e-9F ? Eigen::Vector3f{d / n} : Eigen::Vector3f::UnitZ()) * r;
@@ -73,7 +73,7 @@ bool project_out_of_box(Eigen::Vector3f& p, const Box& b, float margin) {
   const Eigen::Vector3f local = p - b.centre;
   const Eigen::Vector3f half = b.half_extent.array() + margin;
   const Eigen::Vector3f depth = half.array() - local.array().abs();
-  if ((depth.array() <= 0.0F).any()) return false;
+  if (!(depth.array() > 0.0F).all()) return false;  // outside, or NaN
   Eigen::Index axis = 0;
   depth.minCoeff(&axis);
   p[axis] = b.centre[axis] + (local[axis] >= 0.0F ? half[axis] : -half[axis]);
@@ -81,7 +81,7 @@ bool project_out_of_box(Eigen::Vector3f& p, const Box& b, float margin) {
 }
 
 bool project_above_ground(Eigen::Vector3f& p, const GroundPlane& g, float margin) {
-  if (p.y() >= g.height + margin) return false;
+  if (!(p.y() < g.height + margin)) return false;
   p.y() = g.height + margin;
   return true;
 }

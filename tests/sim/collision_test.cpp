@@ -83,6 +83,22 @@ TEST(Collision, BoxProjectionLeavesAlongTheShallowestAxis) {
   EXPECT_FALSE(project_out_of_box(outside, box, 0.0F));
 }
 
+TEST(Collision, NonFiniteCollidersLeaveTheClothUntouched) {
+  ClothConfig c;
+  c.columns = 8;
+  c.rows = 8;
+  Cloth cloth{c};
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  Colliders colliders;
+  colliders.spheres.push_back({Eigen::Vector3f{nan, 0.0F, 0.0F}, 0.3F});
+  colliders.spheres.push_back({Eigen::Vector3f::Zero(), nan});
+  colliders.boxes.push_back({Eigen::Vector3f{0.0F, nan, 0.0F}, Eigen::Vector3f::Constant(0.2F)});
+  colliders.ground = GroundPlane{nan};
+  Solver solver;
+  for (int s = 0; s < 10; ++s) solver.step(cloth, colliders);
+  for (const auto& p : cloth.position) ASSERT_TRUE(p.allFinite());
+}
+
 TEST(Collision, PointCloudNearestPointMatchesBruteForce) {
   std::vector<Eigen::Vector3f> points;
   for (int i = 0; i < 500; ++i) {

@@ -1,5 +1,7 @@
 #include "tachi/sim/solver.hpp"
 
+#include <xmmintrin.h>
+
 #include <algorithm>
 #include <cmath>
 #include <functional>
@@ -51,6 +53,40 @@ std::optional<const char*> validate(const SolverParams& p) {
 
 Solver::Solver(SolverParams params) : params_(std::move(params)) {}
 
+void Solver::build_groups(const std::vector<PackedSpring>& springs, const std::vector<std::uint32_t>& keys,
+                          std::uint32_t dummy, std::vector<Group>& groups) {
+  // Four springs of one sweep class (same row and colour) never share a particle on the grid; the check
+  // below also keeps that true for springs a cut added or rewired, so the four lanes stay independent.
+  groups.clear();
+  Group g{};
+  int lanes = 0;
+  std::uint32_t group_key = 0;
+  auto flush = [&] {
+    if (lanes == 0) return;
+    for (int l = lanes; l < 4; ++l) {
+      g.a[l] = dummy;  // padding lane: a particle with inverse mass 0 on both ends does nothing
+      g.b[l] = dummy;
+      g.rest2[l] = 1.0F;
+    }
+    groups.push_back(g);
+    lanes = 0;
+  };
+  for (std::size_t k = 0; k < springs.size(); ++k) {
+    const PackedSpring& sp = springs[k];
+    bool clash = lanes > 0 && keys[k] != group_key;
+    for (int l = 0; l < lanes && !clash; ++l) {
+      clash = g.a[l] == sp.a || g.a[l] == sp.b || g.b[l] == sp.a || g.b[l] == sp.b;
+    }
+    if (clash) flush();
+    if (lanes == 0) group_key = keys[k];
+    g.a[lanes] = sp.a;
+    g.b[lanes] = sp.b;
+    g.rest2[lanes] = sp.rest * sp.rest;
+    if (++lanes == 4) flush();
+  }
+  flush();
+}
+
 void Solver::refresh_caches(const Cloth& cloth) {
   // Anchors: every particle that does not move by itself, pinned or held by the hand (a held particle
   // drags the cloth like a pin, so it gets attachments and the strain limit sweeps out from it too).
@@ -84,10 +120,13 @@ void Solver::refresh_caches(const Cloth& cloth) {
       }
       for (std::size_t i = 1; i < start.size(); ++i) start[i] += start[i - 1];
       out[f]->resize(count);
+      std::vector<std::uint32_t> sorted_key(count);
       for (std::size_t k = 0; k < cloth.spring_count(); ++k) {
         if (cloth.alive[k] == 0 || cloth.kind[k] != family) continue;
+        sorted_key[start[key[k]]] = key[k];
         (*out[f])[start[key[k]]++] = {cloth.spring_a[k], cloth.spring_b[k], cloth.rest_length[k]};
       }
+      build_groups(*out[f], sorted_key, static_cast<std::uint32_t>(cloth.particle_count()), groups_[f]);
     }
   }
   cached_pins_ = std::move(pins);
@@ -215,8 +254,9 @@ void Solver::step(Cloth& cloth, const Colliders& colliders) {
   refresh_caches(cloth);
   const std::size_t n = cloth.particle_count();
   // Work on (x, y, z, w) quadruples: one aligned 16-byte load brings a position and its inverse mass.
-  work_.resize(n);
-  old_work_.resize(n);
+  work_.resize(n + 1);
+  work_[n] = Eigen::Vector4f::Zero();  // the padding lanes' particle: never moves (inverse mass 0)
+  old_work_.resize(n + 1);
   for (std::size_t i = 0; i < n; ++i) {
     work_[i] << cloth.position[i], cloth.inverse_mass[i];
   }
@@ -257,6 +297,45 @@ inline void project_distance(Vec4& pa, Vec4& pb, float target, float alpha) {
   pb -= (wb * c) * d;
 }
 
+/// project_distance<Length::NearRest> on four independent springs at once (SSE, x86-64 baseline):
+/// the same arithmetic per lane, so the sweep is still Gauss-Seidel in the same fixed order.
+void sweep_near_rest(Vec4* x, const std::vector<Solver::Group>& groups, float alpha) {
+  const __m128 alpha4 = _mm_set1_ps(alpha);
+  const __m128 zero = _mm_setzero_ps();
+  for (const Solver::Group& g : groups) {
+    __m128 a0 = _mm_load_ps(x[g.a[0]].data()), a1 = _mm_load_ps(x[g.a[1]].data());
+    __m128 a2 = _mm_load_ps(x[g.a[2]].data()), a3 = _mm_load_ps(x[g.a[3]].data());
+    __m128 b0 = _mm_load_ps(x[g.b[0]].data()), b1 = _mm_load_ps(x[g.b[1]].data());
+    __m128 b2 = _mm_load_ps(x[g.b[2]].data()), b3 = _mm_load_ps(x[g.b[3]].data());
+    _MM_TRANSPOSE4_PS(a0, a1, a2, a3);  // a0 = x of the four a's, a1 = y, a2 = z, a3 = inverse mass
+    _MM_TRANSPOSE4_PS(b0, b1, b2, b3);
+    const __m128 dx = _mm_sub_ps(b0, a0), dy = _mm_sub_ps(b1, a1), dz = _mm_sub_ps(b2, a2);
+    const __m128 len2 = _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, dx), _mm_mul_ps(dy, dy)), _mm_mul_ps(dz, dz));
+    const __m128 rest2 = _mm_load_ps(g.rest2);
+    const __m128 wsum = _mm_add_ps(a3, b3);
+    const __m128 denominator = _mm_mul_ps(_mm_add_ps(len2, rest2), _mm_add_ps(wsum, alpha4));
+    // Both ends fixed (wsum = 0, alpha = 0) would divide by zero: such lanes get c = 0.
+    const __m128 c = _mm_and_ps(_mm_div_ps(_mm_sub_ps(len2, rest2), denominator), _mm_cmpgt_ps(wsum, zero));
+    const __m128 ca = _mm_mul_ps(a3, c), cb = _mm_mul_ps(b3, c);
+    a0 = _mm_add_ps(a0, _mm_mul_ps(ca, dx));
+    a1 = _mm_add_ps(a1, _mm_mul_ps(ca, dy));
+    a2 = _mm_add_ps(a2, _mm_mul_ps(ca, dz));
+    b0 = _mm_sub_ps(b0, _mm_mul_ps(cb, dx));
+    b1 = _mm_sub_ps(b1, _mm_mul_ps(cb, dy));
+    b2 = _mm_sub_ps(b2, _mm_mul_ps(cb, dz));
+    _MM_TRANSPOSE4_PS(a0, a1, a2, a3);
+    _MM_TRANSPOSE4_PS(b0, b1, b2, b3);
+    _mm_store_ps(x[g.a[0]].data(), a0);
+    _mm_store_ps(x[g.a[1]].data(), a1);
+    _mm_store_ps(x[g.a[2]].data(), a2);
+    _mm_store_ps(x[g.a[3]].data(), a3);
+    _mm_store_ps(x[g.b[0]].data(), b0);
+    _mm_store_ps(x[g.b[1]].data(), b1);
+    _mm_store_ps(x[g.b[2]].data(), b2);
+    _mm_store_ps(x[g.b[3]].data(), b3);
+  }
+}
+
 }  // namespace
 
 void Solver::substep(Cloth& cloth, const Colliders& colliders, float h, bool first) {
@@ -293,15 +372,15 @@ void Solver::substep(Cloth& cloth, const Colliders& colliders, float h, bool fir
     const float full_h = params_.soft_every_substep ? h : params_.dt;
     const float shear_alpha = params_.shear_compliance / (full_h * full_h);
     const float bend_alpha = params_.bend_compliance / (full_h * full_h);
-    for (const PackedSpring& s : shear_) project_distance<Length::NearRest>(x[s.a], x[s.b], s.rest, shear_alpha);
-    for (const PackedSpring& s : bend_) project_distance<Length::NearRest>(x[s.a], x[s.b], s.rest, bend_alpha);
+    sweep_near_rest(x, groups_[1], shear_alpha);
+    sweep_near_rest(x, groups_[2], bend_alpha);
   }
 
   // 4. Structural springs, hard, Gauss-Seidel. Near rest length the square root is replaced by its
   // first-order expansion, |d| ~ (|d|^2 + L^2) / 2L (Jakobsen 2001, "Advanced Character Physics"):
   // the fixed point is still |d| = L, and step 5 below is exact.
   for (int it = 0; it < params_.iterations; ++it) {
-    for (const PackedSpring& s : structural_) project_distance<Length::NearRest>(x[s.a], x[s.b], s.rest, 0.0F);
+    sweep_near_rest(x, groups_[0], 0.0F);
   }
 
   // 5. Provot's deformation constraint: a structural spring longer than (1 + max_strain) L is brought

@@ -14,6 +14,7 @@
 
 #include <Eigen/Core>
 
+#include <array>
 #include <cstdint>
 #include <optional>
 #include <vector>
@@ -58,11 +59,19 @@ class Solver {
     std::uint32_t b;
     float rest;
   };
+  /// Four springs that share no particle, projected together (SSE lanes).
+  struct Group {
+    std::array<std::uint32_t, 4> a;
+    std::array<std::uint32_t, 4> b;
+    alignas(16) float rest2[4];  ///< squared rest lengths
+  };
 
  private:
 
   void refresh_caches(const Cloth& cloth);
   void build_attachments(const Cloth& cloth);
+  static void build_groups(const std::vector<PackedSpring>& springs, const std::vector<std::uint32_t>& keys,
+                           std::uint32_t dummy, std::vector<Group>& groups);
   void substep(Cloth& cloth, const Colliders& colliders, float h, bool first);
 
   SolverParams params_;
@@ -76,6 +85,7 @@ class Solver {
   std::vector<PackedSpring> structural_;
   std::vector<PackedSpring> shear_;
   std::vector<PackedSpring> bend_;
+  std::array<std::vector<Group>, 3> groups_;  ///< the same three families, four at a time
   // Structural springs again, ordered outwards from the pins, for the strain limit.
   std::vector<PackedSpring> strain_limit_;
   // Long-range attachments: particle, pin, maximal distance.

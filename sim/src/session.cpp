@@ -24,16 +24,16 @@ void Session::close_stroke() {
 }
 
 void Session::on_hand(const HandInput& hand) {
-  if (!hand.tracked || !hand.position_m.allFinite()) {
-    hand_.reset();
+  // The gate's verdict holds whether or not the hand is seen: it usually closes a stroke on samples
+  // of a hand that has just been lost.
+  const bool idle = !hand.cutting && !hand.holding;
+  if (idle) close_stroke();
+  const bool seen = hand.tracked && hand.position_m.allFinite();
+  if (!seen || hand.holding) {
+    hand_.reset();  // neither cutting nor pushing the cloth
     return;
   }
-  if (hand.holding) {
-    hand_.reset();  // neither cutting nor pushing the cloth while the gate decides
-    return;
-  }
-  if (!hand.cutting) {
-    close_stroke();
+  if (idle) {
     hand_ = hand.position_m;
     return;
   }

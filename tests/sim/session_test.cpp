@@ -80,13 +80,17 @@ TEST(Session, HoldingSamplesKeepTheStrokeOpenWithoutCutting) {
   for (const auto& g : reports[0].stroke.cut_line) EXPECT_LE(std::abs(g.v - 8), 1) << "cut strayed to row " << g.v;
 }
 
-TEST(Session, LostOrNonFiniteSamplesNeitherCutNorCloseTheStroke) {
+TEST(Session, LostOrNonFiniteSamplesNeverCutButTheGateStillClosesTheStroke) {
   Session session{small_cloth()};
   session.on_hand(hand(1, 0.0, -0.7f, 0.0f, true));
   session.on_hand({1, 0.01, {std::numeric_limits<float>::quiet_NaN(), 0.0f, 0.0f}, true, true});
-  session.on_hand({1, 0.02, {0.0f, 0.0f, 0.0f}, false, false});
+  session.on_hand({1, 0.02, {0.3f, 0.0f, 0.0f}, false, true});  // lost while the gate is still open
   EXPECT_TRUE(session.cutter().stroke_open());
+  EXPECT_TRUE(session.cutter().report().cut_line.size() <= 2u) << "nothing cut toward the unseen samples";
   EXPECT_TRUE(session.take_cut_reports().empty());
+  session.on_hand({1, 0.03, {0.0f, 0.0f, 0.0f}, false, false});  // the gate closes on a lost hand
+  EXPECT_FALSE(session.cutter().stroke_open());
+  EXPECT_EQ(session.take_cut_reports().size(), 1u);
 }
 
 TEST(Session, TheIdleHandPushesTheClothAsAColliderSphere) {

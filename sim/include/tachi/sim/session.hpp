@@ -48,8 +48,8 @@ class Session {
 
   /// Feeds one hand sample. A CUTTING sample opens a stroke (or a new one when the stroke id
   /// changes) and extends it; a HOLDING sample keeps the stroke open without cutting (the hand is
-  /// leaving or briefly out of reach); an IDLE sample closes the open stroke. Untracked or non-finite
-  /// samples neither cut nor close (the filter's gate decides when a lost hand ends a stroke).
+  /// leaving or briefly out of reach); an IDLE sample closes the open stroke, tracked or not (the
+  /// filter's gate decides when a lost hand ends a stroke). Untracked or non-finite samples never cut.
   void on_hand(const HandInput& hand);
   /// Closes the open stroke, if any (e.g. when the filter vanished mid-stroke).
   void end_stroke();

@@ -57,10 +57,12 @@ std::vector<Interval> runs(const Table& rows, F inside) {
   return out;
 }
 
+/// Frames over which each stroke was open: cutting (gate 1) or holding (gate 2, the hand reaching in
+/// or pulling out while the stroke stays open).
 std::map<std::string, Interval> strokes(const Table& out) {
   std::map<std::string, Interval> s;
   for (const auto& row : out) {
-    if (row.at("gate") != "1") continue;
+    if (row.at("gate") == "0") continue;
     const long frame = std::stol(row.at("frame"));
     auto [it, fresh] = s.try_emplace(row.at("stroke_id"), frame, frame);
     if (!fresh) it->second.second = frame;

@@ -84,7 +84,7 @@ void add_offline_flags(CLI::App& app, OfflineOptions& o) {
          },
          "Fixed particles: corners (the two top ones), top-edge or none")
       ->default_str("corners");
-  app.add_option("--steps", o.steps, "Number of 1/60 s steps to simulate")
+  app.add_option("--steps", o.steps, "Number of 1/60 s steps to simulate (live mode: stop after this many, only when given)")
       ->check(CLI::Range(0, 10'000'000))
       ->capture_default_str();
   app.add_option("--export", o.export_dir, "Folder for cloth.obj and summary.json (created if missing)");

@@ -1,5 +1,6 @@
 // tachi-viewer: draws the cloth, the hand mark and the cut from the DDS bus, in a window or headless.
 #include "src/bus_adapter.hpp"
+#include "tachi/bus/heartbeat.hpp"
 #include "tachi/common/app.hpp"
 
 #include <opencv2/highgui.hpp>
@@ -63,6 +64,8 @@ int main(int argc, char** argv) try {
   waitset.attach(states);
   waitset.attach(strokes);
 
+  tachi::bus::Heartbeat heartbeat{dds, "tachi-viewer"};
+  std::uint64_t messages_in = 0;
   viewer::SceneState scene;
   viewer::View view;
   view.width = view.height = o.size;
@@ -77,12 +80,20 @@ int main(int argc, char** argv) try {
   tachi::common::run_until_stopped([&] {
     const auto now = std::chrono::steady_clock::now();
     waitset.wait(std::max(next_frame - now, std::chrono::steady_clock::duration(1ms)));
-    for (const auto& t : topologies.take()) scene.on_topology(viewer::from_msg(*t));
+    for (const auto& t : topologies.take()) {
+      scene.on_topology(viewer::from_msg(*t));
+      ++messages_in;
+    }
     for (const auto& s : states.take(8)) {
       scene.on_state(viewer::from_msg(*s));
       last_state = std::chrono::steady_clock::now();
+      ++messages_in;
     }
-    for (const auto& h : strokes.take()) scene.on_hand(viewer::from_msg(*h));
+    for (const auto& h : strokes.take()) {
+      scene.on_hand(viewer::from_msg(*h));
+      ++messages_in;
+    }
+    heartbeat.update(tachi_msg_NODE_RUNNING, messages_in, frames, scene.has_cloth() ? "" : "waiting for the cloth");
 
     if (std::chrono::steady_clock::now() >= next_frame) {
       next_frame += frame_period;

@@ -1,94 +1,62 @@
 #include "tachi/filter/hand_csv.hpp"
 
-#include <charconv>
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <map>
-#include <sstream>
+#include <optional>
 #include <stdexcept>
-#include <string_view>
+
+#include "tachi/common/csv.hpp"
 
 namespace tachi::filter {
 
-namespace {
-std::vector<std::string> split(const std::string& line) {
-  std::vector<std::string> cells;
-  std::string cell;
-  std::istringstream in(line);
-  while (std::getline(in, cell, ',')) {
-    while (!cell.empty() && (cell.back() == '\r' || cell.back() == ' ')) cell.pop_back();
-    while (!cell.empty() && cell.front() == ' ') cell.erase(cell.begin());
-    cells.push_back(cell);
-  }
-  if (!line.empty() && line.back() == ',') cells.emplace_back();
-  return cells;
-}
-
-template <class T>
-bool parse_int(const std::string& s, T& value) {
-  const auto [ptr, ec] = std::from_chars(s.data(), s.data() + s.size(), value);
-  return ec == std::errc{} && ptr == s.data() + s.size();
-}
-
-bool parse_float(const std::string& s, float& value) {
-  if (s.empty()) return false;
-  char* end = nullptr;
-  value = std::strtof(s.c_str(), &end);
-  return end == s.c_str() + s.size();
-}
-
-bool parse_bool(const std::string& s, bool& value) {
-  if (s == "1" || s == "true" || s == "True") return value = true, true;
-  if (s == "0" || s == "false" || s == "False") return value = false, true;
-  return false;
-}
-}  // namespace
-
 HandCsv read_hand_csv(std::istream& in) {
-  std::string line;
-  if (!std::getline(in, line)) throw std::runtime_error("hand CSV is empty (expected a header frame,stamp_ns,x,y,z,...)");
-  const auto header = split(line);
-  std::map<std::string, std::size_t> column;
-  for (std::size_t i = 0; i < header.size(); ++i) column[header[i]] = i;
-  for (const char* required : {"frame", "stamp_ns", "x", "y", "z", "tracked"})
-    if (!column.contains(required))
-      throw std::runtime_error(std::string("hand CSV header lacks column \"") + required +
-                               "\" (expected frame,stamp_ns,x,y,z,u,v,tracked,confidence)");
-  const std::size_t need = std::max({column["frame"], column["stamp_ns"], column["x"], column["y"], column["z"],
-                                     column["tracked"]}) + 1;
-  const bool has_confidence = column.contains("confidence");
+  common::CsvReader csv(in);
+  if (csv.header().empty()) throw std::runtime_error("hand CSV is empty (expected a header frame,stamp_ns,x,y,z,...)");
+  const auto required = [&](const char* name) {
+    if (const auto i = csv.column(name)) return *i;
+    throw std::runtime_error(std::string("hand CSV header lacks column \"") + name +
+                             "\" (expected frame,stamp_ns,x,y,z,u,v,tracked,confidence)");
+  };
+  const std::size_t frame = required("frame"), stamp_ns = required("stamp_ns"), x = required("x"),
+                    y = required("y"), z = required("z"), tracked = required("tracked");
+  const std::size_t need = std::max({frame, stamp_ns, x, y, z, tracked}) + 1;
+  const std::optional<std::size_t> confidence = csv.column("confidence");
 
   HandCsv result;
-  std::size_t line_no = 1;
-  while (std::getline(in, line)) {
-    ++line_no;
-    if (line.empty() || line == "\r") continue;
-    const auto cells = split(line);
+  while (const auto row = csv.next()) {
+    const auto& cells = row->cells;
     const auto skip = [&](const std::string& why) {
-      result.skipped.push_back("line " + std::to_string(line_no) + ": " + why);
+      result.skipped.push_back("line " + std::to_string(row->line) + ": " + why);
     };
     if (cells.size() < need) {
       skip("too few columns");
       continue;
     }
     HandSample s;
-    float x = 0, y = 0, z = 0;
-    if (!parse_int(cells[column["frame"]], s.frame) || !parse_int(cells[column["stamp_ns"]], s.stamp_ns)) {
+    const auto frame_no = common::to_uint64(cells[frame]);
+    const auto stamp = common::to_int64(cells[stamp_ns]);
+    if (!frame_no || !stamp) {
       skip("frame and stamp_ns must be integers");
       continue;
     }
-    if (!parse_bool(cells[column["tracked"]], s.tracked)) {
+    s.frame = *frame_no;
+    s.stamp_ns = *stamp;
+    const auto is_tracked = common::to_bool(cells[tracked]);
+    if (!is_tracked) {
       skip("tracked must be 0/1 or true/false");
       continue;
     }
-    const bool xyz_ok = parse_float(cells[column["x"]], x) && parse_float(cells[column["y"]], y) &&
-                        parse_float(cells[column["z"]], z);
-    if (s.tracked && (!xyz_ok || !std::isfinite(x) || !std::isfinite(y) || !std::isfinite(z))) {
+    s.tracked = *is_tracked;
+    const auto px = common::to_float(cells[x]), py = common::to_float(cells[y]), pz = common::to_float(cells[z]);
+    const bool xyz_ok = px && py && pz;
+    if (s.tracked && !xyz_ok) {
       skip("a tracked sample needs finite x, y, z");
       continue;
     }
-    s.position_m = xyz_ok ? Eigen::Vector3f{x, y, z} : Eigen::Vector3f::Constant(std::nanf(""));
-    if (has_confidence && column["confidence"] < cells.size()) parse_float(cells[column["confidence"]], s.confidence);
+    s.position_m = xyz_ok ? Eigen::Vector3f{*px, *py, *pz} : Eigen::Vector3f::Constant(std::nanf(""));
+    if (confidence && *confidence < cells.size())
+      if (const auto c = common::to_float(cells[*confidence])) s.confidence = *c;
     result.samples.push_back(s);
   }
   return result;

@@ -1,64 +1,40 @@
 #include "tachi/sensor/hand_csv.hpp"
 
 #include <algorithm>
-#include <charconv>
 #include <cmath>
+#include <cstdio>
 #include <fstream>
 #include <map>
 #include <ostream>
-#include <sstream>
 #include <stdexcept>
-#include <unordered_map>
+
+#include "tachi/common/csv.hpp"
 
 namespace tachi::sensor {
 namespace {
 
-std::vector<std::string> split(const std::string& line) {
-  std::vector<std::string> out;
-  std::string cell;
-  std::istringstream in(line);
-  while (std::getline(in, cell, ',')) {
-    while (!cell.empty() && (cell.back() == '\r' || cell.back() == ' ')) cell.pop_back();
-    out.push_back(cell);
-  }
-  if (!line.empty() && line.back() == ',') out.emplace_back();
-  return out;
-}
-
 /// A CSV read by column name, with errors that name the file, line and column.
 class CsvTable {
  public:
-  CsvTable(const std::filesystem::path& file, const std::vector<std::string>& required) : file_(file.string()) {
-    std::ifstream in(file);
-    if (!in) throw std::runtime_error(file_ + ": cannot open");
-    std::string line;
-    if (!std::getline(in, line)) throw std::runtime_error(file_ + ": empty file (expected a header line)");
-    const auto header = split(line);
-    for (std::size_t i = 0; i < header.size(); ++i) columns_[header[i]] = i;
+  CsvTable(const std::filesystem::path& file, const std::vector<std::string>& required)
+      : file_(file.string()), in_(file), csv_(in_) {
+    if (!in_.is_open()) throw std::runtime_error(file_ + ": cannot open");
+    if (csv_.header().empty()) throw std::runtime_error(file_ + ": empty file (expected a header line)");
     for (const auto& name : required)
-      if (!columns_.count(name)) throw std::runtime_error(file_ + ": header has no \"" + name + "\" column");
-    std::size_t number = 1;
-    while (std::getline(in, line)) {
-      ++number;
-      if (line.empty() || line == "\r") continue;
-      rows_.push_back({number, split(line)});
-    }
+      if (!has(name)) throw std::runtime_error(file_ + ": header has no \"" + name + "\" column");
+    while (auto row = csv_.next()) rows_.push_back(std::move(*row));
   }
   std::size_t size() const { return rows_.size(); }
-  bool has(const std::string& column) const { return columns_.count(column) != 0; }
+  bool has(const std::string& column) const { return csv_.column(column).has_value(); }
   double number(std::size_t row, const std::string& column) const {
-    const std::string& cell = text(row, column);
-    double v = 0;
-    const auto [ptr, ec] = std::from_chars(cell.data(), cell.data() + cell.size(), v);
-    if (ec != std::errc{} || ptr != cell.data() + cell.size() || !std::isfinite(v)) fail(row, column, "not a number");
-    return v;
+    const auto v = common::to_double(text(row, column));
+    if (!v) fail(row, column, "not a number");
+    return *v;
   }
   std::int64_t integer(std::size_t row, const std::string& column) const {
-    const std::string& cell = text(row, column);
-    std::int64_t v = 0;
-    const auto [ptr, ec] = std::from_chars(cell.data(), cell.data() + cell.size(), v);
-    if (ec != std::errc{} || ptr != cell.data() + cell.size()) fail(row, column, "not an integer");
-    return v;
+    const auto v = common::to_int64(text(row, column));
+    if (!v) fail(row, column, "not an integer");
+    return *v;
   }
   bool flag(std::size_t row, const std::string& column) const {
     const std::int64_t v = integer(row, column);
@@ -68,17 +44,18 @@ class CsvTable {
 
  private:
   const std::string& text(std::size_t row, const std::string& column) const {
-    const auto& cells = rows_[row].second;
-    const std::size_t i = columns_.at(column);
+    const auto& cells = rows_[row].cells;
+    const std::size_t i = *csv_.column(column);  // required, or checked with has()
     if (i >= cells.size()) fail(row, column, "missing");
     return cells[i];
   }
   [[noreturn]] void fail(std::size_t row, const std::string& column, const char* why) const {
-    throw std::runtime_error(file_ + ": line " + std::to_string(rows_[row].first) + ", column \"" + column + "\": " + why);
+    throw std::runtime_error(file_ + ": line " + std::to_string(rows_[row].line) + ", column \"" + column + "\": " + why);
   }
   std::string file_;
-  std::unordered_map<std::string, std::size_t> columns_;
-  std::vector<std::pair<std::size_t, std::vector<std::string>>> rows_;
+  std::ifstream in_;
+  common::CsvReader csv_;  // reads in_: declared after it
+  std::vector<common::CsvRow> rows_;
 };
 
 }  // namespace

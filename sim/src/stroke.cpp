@@ -4,26 +4,16 @@
 #include <array>
 #include <cctype>
 #include <cmath>
-#include <cstdlib>
 #include <limits>
-#include <sstream>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "tachi/common/csv.hpp"
 
 namespace tachi::sim {
 
 namespace {
-
-std::string strip(std::string s) {
-  s.erase(std::remove_if(s.begin(), s.end(), [](unsigned char c) { return std::isspace(c) != 0; }), s.end());
-  return s;
-}
-
-std::optional<double> parse_number(const std::string& field) {
-  if (field.empty()) return std::nullopt;
-  char* end = nullptr;
-  const double value = std::strtod(field.c_str(), &end);
-  if (end != field.c_str() + field.size() || !std::isfinite(value)) return std::nullopt;
-  return value;
-}
 
 /// Liang-Barsky: the part [t0, t1] of the segment a + t (b - a), t in [0, 1], inside the rectangle
 /// [0, max_u] x [0, max_v]; nothing when the segment misses it.
@@ -54,46 +44,33 @@ std::optional<std::pair<double, double>> clip_to_rectangle(const Eigen::Vector2d
 
 StrokeFile parse_stroke_csv(std::istream& in) {
   StrokeFile out;
-  std::string line;
-  bool header = false;
+  common::CsvReader csv(in);
+  if (csv.header().empty()) {
+    out.error = "empty file: expected the header t,x,y,z";
+    return out;
+  }
+  std::vector<std::string> header = csv.header();
+  for (auto& name : header)
+    std::transform(name.begin(), name.end(), name.begin(), [](unsigned char c) { return std::tolower(c); });
+  if (header != std::vector<std::string>{"t", "x", "y", "z"}) {
+    out.error = "the first line must be the header t,x,y,z";
+    return out;
+  }
   double last_t = -std::numeric_limits<double>::infinity();
-  while (std::getline(in, line)) {
-    line = strip(line);
-    if (line.empty()) continue;
-    if (!header) {
-      std::transform(line.begin(), line.end(), line.begin(), [](unsigned char c) { return std::tolower(c); });
-      if (line != "t,x,y,z") {
-        out.error = "the first line must be the header t,x,y,z";
-        return out;
-      }
-      header = true;
-      continue;
-    }
-    std::array<double, 4> values{};
-    std::istringstream fields{line};
-    std::string field;
-    std::size_t n = 0;
-    bool ok = true;
-    while (std::getline(fields, field, ',')) {
-      const auto value = parse_number(field);
-      if (n >= 4 || !value) {
-        ok = false;
-        break;
-      }
-      values[n++] = *value;
-    }
-    if (!ok || n != 4 || values[0] < last_t) {
+  while (const auto row = csv.next()) {
+    const auto& cells = row->cells;
+    // Four numbers; a trailing comma has always been let through.
+    const bool four = cells.size() == 4 || (cells.size() == 5 && cells[4].empty());
+    std::array<std::optional<double>, 4> v;
+    for (std::size_t i = 0; four && i < 4; ++i) v[i] = common::to_double(cells[i]);
+    if (!four || !v[0] || !v[1] || !v[2] || !v[3] || *v[0] < last_t) {
       ++out.skipped_rows;
       continue;
     }
-    last_t = values[0];
-    out.samples.push_back({values[0], Eigen::Vector3d{values[1], values[2], values[3]}.cast<float>()});
+    last_t = *v[0];
+    out.samples.push_back({*v[0], Eigen::Vector3d{*v[1], *v[2], *v[3]}.cast<float>()});
   }
-  if (!header) {
-    out.error = "empty file: expected the header t,x,y,z";
-  } else if (out.samples.empty()) {
-    out.error = "no usable sample after the header";
-  }
+  if (out.samples.empty()) out.error = "no usable sample after the header";
   return out;
 }
 

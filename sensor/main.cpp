@@ -11,6 +11,7 @@
 
 #include "src/bus_adapter.hpp"
 #include "tachi/bus/bus.hpp"
+#include "tachi/bus/heartbeat.hpp"
 #include "tachi/bus/topics.hpp"
 #include "tachi/common/app.hpp"
 #include "tachi/sensor/depth_source.hpp"
@@ -116,9 +117,11 @@ int main(int argc, char** argv) try {
   }
   std::optional<tachi::bus::Participant> dds;
   std::optional<tachi::bus::Writer<tachi_msg_RawHandSample>> writer;
+  std::optional<tachi::bus::Heartbeat> heartbeat;
   if (!o.no_dds) {
     dds.emplace(o.bus.domain, o.bus.dds_config);
     writer.emplace(*dds, tachi::bus::topics::raw_hand);
+    heartbeat.emplace(*dds, "tachi-sensor");
     if (o.wait_readers > 0 && !writer->wait_for_readers(o.wait_readers, std::chrono::seconds(5)))
       spdlog::warn("only {} of {} readers after 5 s; publishing anyway", writer->matched_readers(), o.wait_readers);
   }
@@ -131,12 +134,13 @@ int main(int argc, char** argv) try {
     const auto hand = finder.find(*frame);
     if (recorder) {
       recorder->write_depth(*frame);
-      recorder->write_accel(frame->stamp_ns, frame->device_timestamp, tachi::sensor::AccelSample{});
+      if (frame->accel) recorder->write_accel(frame->stamp_ns, frame->device_timestamp, *frame->accel);
     }
     if (csv.is_open()) tachi::sensor::write_hand_row(csv, frame->frame, frame->stamp_ns, hand);
     if (writer) writer->write(tachi::sensor::to_msg(hand, o.sensor_id, frame->frame, frame->stamp_ns));
     ++frames;
     tracked += hand.tracked ? 1 : 0;
+    if (heartbeat) heartbeat->update(tachi_msg_NODE_RUNNING, frames, frames, hand.tracked ? "hand tracked" : "no hand");
   }
   if (csv.is_open() && !csv.flush()) throw std::runtime_error("cannot write " + o.csv);
   if (recorder) recorder->flush();

@@ -7,6 +7,8 @@
 // <hosttime> is gettimeofday seconds printed with "%f"; <timestamp> the device's frame counter.
 #pragma once
 
+#include "tachi/sensor/depth_frame.hpp"
+
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
@@ -57,15 +59,6 @@ std::variant<std::monostate, DepthFileError> decode_depth_pgm(std::span<const ch
 
 /// Reads and decodes one depth file; throws RecordingError naming the file.
 void read_depth_file(const std::filesystem::path& file, std::vector<std::uint16_t>& raw);
-
-/// Kinect accelerometer sample (freenect_raw_tilt_state). 819 counts per g.
-struct AccelSample {
-  std::int16_t ax = 0;
-  std::int16_t ay = 819;  ///< sensor upright: gravity along +y
-  std::int16_t az = 0;
-  std::int8_t tilt_angle = 0;  ///< half degrees
-  std::int32_t tilt_status = 0;
-};
 
 /// Host time as fakenect prints it ("%f": seconds with six decimals).
 std::string format_host_time(std::int64_t host_time_ns);

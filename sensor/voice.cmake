@@ -28,7 +28,7 @@ add_library(tachi_voice STATIC
 add_library(tachi::voice ALIAS tachi_voice)
 target_include_directories(tachi_voice PUBLIC include)
 target_link_libraries(tachi_voice
-  PRIVATE tachi_pocketsphinx PkgConfig::FREENECT nlohmann_json::nlohmann_json tachi_warnings)
+  PRIVATE tachi_pocketsphinx PkgConfig::FREENECT nlohmann_json::nlohmann_json tachi::common tachi_warnings)
 
 add_executable(tachi-voice voice_main.cpp)
 target_link_libraries(tachi-voice PRIVATE tachi::voice tachi::bus tachi::common spdlog::spdlog tachi_warnings)

@@ -2,13 +2,11 @@
 
 #include "src/bus_adapter.hpp"
 #include "tachi/bus/heartbeat.hpp"
-#include "tachi/sim/pieces.hpp"
 #include "tachi/sim/session.hpp"
 
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
-#include <fstream>
 
 namespace tachi::sim {
 namespace {
@@ -33,12 +31,6 @@ tachi_msg_CutEvent cut_msg(std::uint32_t cloth_id, std::uint32_t version, const 
   return msg;
 }
 
-double median(std::vector<double> values) {
-  if (values.empty()) return 0.0;
-  const auto middle = values.begin() + static_cast<std::ptrdiff_t>(values.size() / 2);
-  std::nth_element(values.begin(), middle, values.end());
-  return *middle;
-}
 }  // namespace
 
 void add_live_flags(CLI::App& app, LiveOptions& options) {
@@ -153,26 +145,13 @@ int run_live(const OfflineOptions& shared, std::optional<int> max_steps, const L
 
   Summary summary = summarize(session.cloth());
   summary.steps = static_cast<int>(session.steps());
-  summary.step_ms_median = median(step_ms);
-  const StrokeReport& total = session.cutter().total();
-  nlohmann::json line = nlohmann::json::array();
-  for (const GridCoord g : total.cut_line) line.push_back({g.u, g.v});
-  summary.extra["fallen_pieces"] = find_pieces(session.cloth()).fallen();
-  summary.extra["cut_particles"] = total.particles_duplicated;
-  summary.extra["cut_length_m"] = total.cut_length_m;
-  summary.extra["cut_line"] = std::move(line);
+  add_cut_summary(summary, session.cloth(), session.cutter());
+  add_step_times(summary, step_ms);
   summary.extra["hand_samples"] = samples_in;
   summary.extra["hand_samples_rejected"] = rejected;
   summary.extra["step_overruns"] = overruns;
-  summary.extra["topology_version"] = session.cloth().topology_version;
   spdlog::info("tachi-sim: stopped after {} steps ({} hand samples, {} pieces)", summary.steps, samples_in, summary.pieces);
-  if (!shared.export_dir.empty()) {
-    std::filesystem::create_directories(shared.export_dir);
-    write_obj(session.cloth(), shared.export_dir / "cloth.obj");
-    std::ofstream out(shared.export_dir / "summary.json");
-    out << to_json(summary).dump(2) << '\n';
-    if (!out) throw std::runtime_error("cannot write " + (shared.export_dir / "summary.json").string());
-  }
+  if (!shared.export_dir.empty()) export_run(summary, session.cloth(), shared.export_dir);
   return common::kExitOk;
 }
 

@@ -1,11 +1,11 @@
 #include "tachi/filter/config.hpp"
 
+#include "tachi/common/text_file.hpp"
+
 #include <nlohmann/json.hpp>
 
 #include <cmath>
-#include <fstream>
 #include <initializer_list>
-#include <sstream>
 #include <stdexcept>
 
 namespace tachi::filter {
@@ -130,11 +130,7 @@ FilterConfig parse_filter_config(const std::string& json_text) {
 }
 
 FilterConfig load_filter_config(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw std::runtime_error("cannot read filter config " + path);
-  std::ostringstream text;
-  text << in.rdbuf();
-  return parse_filter_config(text.str());
+  return parse_filter_config(common::read_text_file(path, "filter config"));
 }
 
 std::string to_json(const FilterConfig& c) {

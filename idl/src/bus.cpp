@@ -1,10 +1,10 @@
 #include "tachi/bus/bus.hpp"
 
-#include <fstream>
+#include "tachi/common/text_file.hpp"
+
 #include <map>
 #include <memory>
 #include <mutex>
-#include <sstream>
 #include <thread>
 
 namespace tachi::bus {
@@ -19,14 +19,6 @@ struct DomainEntry {
 std::mutex g_domains_mutex;
 std::map<std::uint32_t, DomainEntry> g_domains;
 
-std::string read_config_file(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw std::runtime_error("cannot read DDS config file " + path);
-  std::ostringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
-
 // A participant created in a domain that was not explicitly created gets Cyclone's default
 // config, which multicasts on every interface. So the domain entry is recorded only after
 // dds_create_domain succeeded, and any failure leaves no entry behind.
@@ -36,7 +28,7 @@ void acquire_domain(std::uint32_t id, const std::string& config_file) {
     ++it->second.users;
     return;
   }
-  const std::string xml = config_file.empty() ? std::string(kLoopbackConfigXml) : read_config_file(config_file);
+  const std::string xml = config_file.empty() ? std::string(kLoopbackConfigXml) : common::read_text_file(config_file, "DDS config file");
   const dds_entity_t domain =
       check(dds_create_domain(id, xml.c_str()), "create DDS domain " + std::to_string(id) + ": dds_create_domain");
   g_domains.emplace(id, DomainEntry{domain, 1});

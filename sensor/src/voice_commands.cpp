@@ -1,5 +1,7 @@
 #include "tachi/sensor/voice_commands.hpp"
 
+#include "tachi/common/text_file.hpp"
+
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
@@ -88,11 +90,7 @@ VoiceConfig parse_voice_config(const std::string& json_text) {
 }
 
 VoiceConfig load_voice_config(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw std::runtime_error("cannot read voice config " + path);
-  std::ostringstream text;
-  text << in.rdbuf();
-  return parse_voice_config(text.str());
+  return parse_voice_config(common::read_text_file(path, "voice config"));
 }
 
 void set_phrase(VoiceConfig& config, VoiceCommand command, const std::string& phrase) {

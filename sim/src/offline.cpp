@@ -221,6 +221,16 @@ Summary run_offline(const OfflineOptions& options) {
 
   Summary summary = summarize(cloth);
   summary.steps = options.steps;
+  add_cut_summary(summary, cloth, cutter);
+  summary.extra["stroke_samples"] = stroke.samples.size();
+  summary.extra["stroke_samples_applied"] = next_sample;
+  summary.extra["stroke_rows_skipped"] = stroke.skipped_rows;
+  add_step_times(summary, step_ms);
+  if (!options.export_dir.empty()) export_run(summary, cloth, options.export_dir);
+  return summary;
+}
+
+void add_cut_summary(Summary& summary, const Cloth& cloth, const StrokeCutter& cutter) {
   const StrokeReport& cut = cutter.total();
   nlohmann::json cut_line = nlohmann::json::array();
   for (const GridCoord g : cut.cut_line) cut_line.push_back({g.u, g.v});
@@ -229,25 +239,25 @@ Summary run_offline(const OfflineOptions& options) {
   summary.extra["cut_length_m"] = cut.cut_length_m;
   summary.extra["cut_line"] = std::move(cut_line);
   summary.extra["cut_lines"] = cut.lines;
-  summary.extra["blade"] = std::string{to_string(options.blade)};
-  summary.extra["blade_force_n"] = sharpness(options.blade).force_n();
-  summary.extra["stroke_samples"] = stroke.samples.size();
-  summary.extra["stroke_samples_applied"] = next_sample;
-  summary.extra["stroke_rows_skipped"] = stroke.skipped_rows;
+  summary.extra["blade"] = std::string{to_string(cutter.options().blade)};
+  summary.extra["blade_force_n"] = sharpness(cutter.options().blade).force_n();
   summary.extra["topology_version"] = cloth.topology_version;
+}
+
+void add_step_times(Summary& summary, const std::vector<double>& step_ms) {
   summary.step_ms_median = percentile(step_ms, 0.5);
   summary.step_ms_p95 = percentile(step_ms, 0.95);
-  if (!options.export_dir.empty()) {
-    std::error_code ec;
-    std::filesystem::create_directories(options.export_dir, ec);
-    if (ec) throw std::runtime_error("cannot create " + options.export_dir.string() + ": " + ec.message());
-    write_obj(cloth, options.export_dir / "cloth.obj");
-    const auto json_path = options.export_dir / "summary.json";
-    std::ofstream out{json_path};
-    out << to_json(summary).dump(2) << '\n';
-    if (!out) throw std::runtime_error("cannot write " + json_path.string());
-  }
-  return summary;
+}
+
+void export_run(const Summary& summary, const Cloth& cloth, const std::filesystem::path& dir) {
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec) throw std::runtime_error("cannot create " + dir.string() + ": " + ec.message());
+  write_obj(cloth, dir / "cloth.obj");
+  const auto json_path = dir / "summary.json";
+  std::ofstream out{json_path};
+  out << to_json(summary).dump(2) << '\n';
+  if (!out) throw std::runtime_error("cannot write " + json_path.string());
 }
 
 }  // namespace tachi::sim

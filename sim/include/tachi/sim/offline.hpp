@@ -64,6 +64,15 @@ void write_obj(const Cloth& cloth, const std::filesystem::path& file);
 /// Summary of the cloth as it is now (no timing).
 [[nodiscard]] Summary summarize(const Cloth& cloth);
 
+class StrokeCutter;
+/// Adds what the cutting did (fallen_pieces, cut_particles, cut_length_m, cut_line, cut_lines, blade,
+/// blade_force_n, topology_version) to a summary; the offline and live modes report the same keys.
+void add_cut_summary(Summary& summary, const Cloth& cloth, const StrokeCutter& cutter);
+/// Sets step_ms_median and step_ms_p95 from the step times of a run.
+void add_step_times(Summary& summary, const std::vector<double>& step_ms);
+/// Writes dir/cloth.obj and dir/summary.json (creating dir). Throws naming the file that failed.
+void export_run(const Summary& summary, const Cloth& cloth, const std::filesystem::path& dir);
+
 /// Runs the offline simulation and, when export_dir is set, writes export_dir/cloth.obj and
 /// export_dir/summary.json. Throws std::runtime_error on an I/O failure; options must be valid.
 Summary run_offline(const OfflineOptions& options);

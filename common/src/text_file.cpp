@@ -1,0 +1,17 @@
+#include "tachi/common/text_file.hpp"
+
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+
+namespace tachi::common {
+
+std::string read_text_file(const std::filesystem::path& path, std::string_view what) {
+  std::ifstream in(path);
+  std::ostringstream text;
+  if (in) text << in.rdbuf();
+  if (!in || in.bad()) throw std::runtime_error("cannot read " + std::string(what) + " " + path.string());
+  return text.str();
+}
+
+}  // namespace tachi::common

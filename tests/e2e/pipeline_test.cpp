@@ -2,6 +2,7 @@
 // recording, tachi-filter smooths and gates it, tachi-sim cuts the cloth, tachi-viewer draws it
 // headless. Checks what comes out: the cut in the simulator's summary and the viewer's image.
 #include "process.hpp"
+#include "scratch_dir.hpp"
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -19,17 +20,14 @@ const std::string kBin = TACHI_BIN_DIR;
 const std::string kRecordings = TACHI_RECORDINGS_DIR;
 
 struct Pipeline {
-  std::filesystem::path out;
+  tachi::test::ScratchDir scratch{"e2e"};
+  std::filesystem::path out = scratch.path();
   nlohmann::json summary;
   int sensor_exit = -2, filter_exit = -2, sim_exit = -2, viewer_exit = -2;
   std::string logs;
 };
 
-Pipeline run_pipeline(const std::string& recording, unsigned domain, const std::string& rate) {
-  Pipeline p;
-  p.out = std::filesystem::temp_directory_path() / ("tachi_e2e_" + std::to_string(::getpid()) + "_" + std::to_string(domain));
-  std::filesystem::remove_all(p.out);
-  std::filesystem::create_directories(p.out);
+void run_pipeline(Pipeline& p, const std::string& recording, unsigned domain, const std::string& rate) {
   const std::string d = std::to_string(domain);
   ChildProcess sim({kBin + "/tachi-sim", "--grid", "32", "--pin", "top-edge", "--domain", d, "--exit-when-idle", "2",
                     "--export", p.out.string()});
@@ -46,12 +44,12 @@ Pipeline run_pipeline(const std::string& recording, unsigned domain, const std::
   p.logs = "sensor: " + sensor.err() + "\nfilter: " + filter.err() + "\nsim: " + sim.err() + "\nviewer: " + viewer.err();
   std::ifstream in(p.out / "summary.json");
   if (in) p.summary = nlohmann::json::parse(in, nullptr, false);
-  return p;
 }
 }  // namespace
 
 TEST(Pipeline, AStraightHandStrokeCutsTheClothAlongItsPath) {
-  const auto p = run_pipeline("straight_cut", 90, "1");
+  Pipeline p;
+  run_pipeline(p, "straight_cut", 90, "1");
   EXPECT_EQ(p.sensor_exit, 0) << p.logs;
   EXPECT_EQ(p.filter_exit, 0) << p.logs;
   EXPECT_EQ(p.sim_exit, 0) << p.logs;
@@ -76,5 +74,4 @@ TEST(Pipeline, AStraightHandStrokeCutsTheClothAlongItsPath) {
   EXPECT_GE(min_v, 12) << p.summary["cut_line"];
   EXPECT_LE(max_v, 19) << p.summary["cut_line"];
   EXPECT_TRUE(std::filesystem::exists(p.out / "final.png")) << p.logs;
-  std::filesystem::remove_all(p.out);
 }

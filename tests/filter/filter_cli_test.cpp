@@ -1,12 +1,10 @@
 // Runs the real tachi-filter executable offline on a synthetic recording and checks what it writes.
+#include "process.hpp"
 #include "scratch_dir.hpp"
 #include "synthetic_hands.hpp"
 
 #include <gtest/gtest.h>
 
-#include <sys/wait.h>
-
-#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <set>
@@ -23,15 +21,13 @@ struct ProcessResult {
   std::string output;  // stdout + stderr
 };
 
+/// Runs tachi-filter with whitespace-separated `args` (the tests' paths have no spaces).
 ProcessResult run(const std::string& args) {
-  const fs::path log = fs::temp_directory_path() / ("tachi_filter_cli_" + std::to_string(::getpid()) + ".log");
-  const std::string cmd = std::string(TACHI_FILTER_EXE) + " " + args + " > " + log.string() + " 2>&1";
-  const int status = std::system(cmd.c_str());
-  std::ifstream in(log);
-  std::stringstream text;
-  text << in.rdbuf();
-  fs::remove(log);
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, text.str()};
+  std::vector<std::string> argv{TACHI_FILTER_EXE};
+  std::istringstream words(args);
+  for (std::string word; words >> word;) argv.push_back(word);
+  const auto r = tachi::test::run(argv, std::chrono::seconds(60));
+  return {r.exit_code, r.out + r.err};
 }
 
 std::vector<std::vector<std::string>> read_rows(const fs::path& path) {
@@ -54,7 +50,7 @@ class FilterCli : public ::testing::Test {
     std::ofstream out(dir_ / "hands.csv");
     tachi::filter::testing::write_hand_csv(out, tachi::filter::testing::push_and_back(3));
   }
-  tachi::filter::testing::ScratchDir dir_{"tachi_filter_cli"};
+  tachi::test::ScratchDir dir_{"filter_cli"};
 };
 
 TEST_F(FilterCli, OfflinePushWritesOneStrokeInTheWorldFrame) {

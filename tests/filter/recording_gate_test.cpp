@@ -87,7 +87,7 @@ class RecordingGate : public ::testing::Test {
     EXPECT_EQ(r.exit_code, 0) << r.err;
     return {read_csv(recording / "ground_truth.csv"), read_csv(dir_ / "strokes.csv")};
   }
-  tachi::filter::testing::ScratchDir dir_{"tachi_recording_gate"};
+  tachi::test::ScratchDir dir_{"recording_gate"};
 };
 
 // recordings/push: the hand pushes through the cloth plane (1.0 m from the sensor) and back, twice.

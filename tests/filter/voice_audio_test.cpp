@@ -17,7 +17,10 @@ void put32(std::vector<std::uint8_t>& b, std::uint32_t v) {
   put16(b, static_cast<std::uint16_t>(v & 0xFFFF));
   put16(b, static_cast<std::uint16_t>(v >> 16));
 }
-void tag(std::vector<std::uint8_t>& b, const char* t) { b.insert(b.end(), t, t + 4); }
+// A loop, not insert(): GCC 12 warns falsely (-Wstringop-overflow) on inserting into an empty vector.
+void tag(std::vector<std::uint8_t>& b, const char* t) {
+  for (int i = 0; i < 4; ++i) b.push_back(static_cast<std::uint8_t>(t[i]));
+}
 
 std::vector<std::uint8_t> wav(int rate, int channels, int bits, const std::vector<std::int16_t>& interleaved,
                               std::uint16_t format = 1, bool extra_chunk = false) {

@@ -50,7 +50,7 @@ class VoiceCli : public ::testing::Test {
     seq.noise(100.0);
     write_wav(dir_ / "commands.wav", seq.samples());
   }
-  tachi::filter::testing::ScratchDir dir_{"tachi_voice_cli"};
+  tachi::test::ScratchDir dir_{"voice_cli"};
 };
 
 TEST_F(VoiceCli, WavModePrintsOneLinePerCommand) {

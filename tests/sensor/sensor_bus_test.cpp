@@ -1,17 +1,15 @@
 // tachi-sensor as a process: what it publishes on DDS matches what it writes to its CSV.
 #include <gtest/gtest.h>
 
-#include <sys/wait.h>
 
-#include <atomic>
 #include <chrono>
 #include <cstdlib>
 #include <map>
-#include <thread>
 
 #include "tachi/bus/bus.hpp"
 #include "tachi/bus/topics.hpp"
 #include "tachi/sensor/hand_csv.hpp"
+#include "process.hpp"
 #include "test_util.hpp"
 
 namespace tachi::sensor {
@@ -26,25 +24,17 @@ TEST(SensorProcess, PublishesOneRawHandSamplePerDepthFrameAndExitsAtTheEnd) {
   bus::Participant dds{kDomain};
   bus::Reader<tachi_msg_RawHandSample> reader{dds, bus::topics::raw_hand};
 
-  const std::string command = std::string(TACHI_SENSOR_EXE) + " --recording " + recording.string() +
-                              " --rate 3 --domain " + std::to_string(kDomain) + " --wait-readers 1 --sensor-id 9 --csv " +
-                              csv.string() + " --log-level warn";
-  std::atomic<bool> done{false};
-  int status = -1;
-  std::thread process([&] {
-    status = std::system(command.c_str());
-    done = true;
-  });
+  tachi::test::ChildProcess sensor({TACHI_SENSOR_EXE, "--recording", recording.string(), "--rate", "3", "--domain",
+                                    std::to_string(kDomain), "--wait-readers", "1", "--sensor-id", "9", "--csv", csv.string(),
+                                    "--log-level", "warn"});
   std::map<std::uint64_t, tachi_msg_RawHandSample> received;
   auto quiet_since = std::chrono::steady_clock::now();
-  while (!done || std::chrono::steady_clock::now() - quiet_since < std::chrono::milliseconds(500)) {
+  while (sensor.running() || std::chrono::steady_clock::now() - quiet_since < std::chrono::milliseconds(500)) {
     if (reader.wait_for_data(std::chrono::milliseconds(50))) quiet_since = std::chrono::steady_clock::now();
     for (auto& s : reader.take()) received[s->frame] = *s;
     if (std::chrono::steady_clock::now() - quiet_since > std::chrono::seconds(20)) break;
   }
-  process.join();
-  ASSERT_TRUE(WIFEXITED(status));
-  EXPECT_EQ(WEXITSTATUS(status), 0);
+  EXPECT_EQ(sensor.wait(std::chrono::seconds(30)), 0) << sensor.err();
 
   const auto rows = read_hand_csv(csv);
   ASSERT_EQ(rows.size(), 145u);

@@ -8,29 +8,12 @@
 #include <string>
 #include <vector>
 
+#include "scratch_dir.hpp"
 #include "tachi/sensor/depth_frame.hpp"
 
 namespace tachi::sensor::test {
 
-/// A fresh folder under the system temp dir, removed when the object goes.
-class ScratchDir {
- public:
-  explicit ScratchDir(const std::string& name) {
-    std::random_device rd;
-    path_ = std::filesystem::temp_directory_path() / ("tachi_sensor_" + name + "_" + std::to_string(rd()));
-    std::filesystem::create_directories(path_);
-  }
-  ~ScratchDir() {
-    std::error_code ec;
-    std::filesystem::remove_all(path_, ec);
-  }
-  ScratchDir(const ScratchDir&) = delete;
-  ScratchDir& operator=(const ScratchDir&) = delete;
-  const std::filesystem::path& path() const { return path_; }
-
- private:
-  std::filesystem::path path_;
-};
+using tachi::test::ScratchDir;  // tests/support/scratch_dir.hpp
 
 inline void write_text(const std::filesystem::path& file, const std::string& text) {
   std::ofstream(file, std::ios::binary) << text;

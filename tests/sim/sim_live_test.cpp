@@ -1,5 +1,6 @@
 // tachi-sim in live mode as a process: strokes in over DDS, topology, cut events and a summary out.
 #include "process.hpp"
+#include "scratch_dir.hpp"
 #include "tachi/bus/topics.hpp"
 
 #include <gtest/gtest.h>
@@ -31,7 +32,8 @@ tachi_msg_StrokeSample sample(std::uint32_t stroke, std::uint64_t frame, float x
 }  // namespace
 
 TEST(SimLive, CutsOffTheLowerPieceFromStrokesOverDdsAndReportsIt) {
-  const auto out = std::filesystem::temp_directory_path() / ("tachi_sim_live_" + std::to_string(::getpid()));
+  const tachi::test::ScratchDir scratch{"sim_live"};
+  const auto out = scratch / "out";
   tachi::test::ChildProcess sim({TACHI_SIM_EXE, "--grid", "16", "--pin", "top-edge", "--domain", std::to_string(kDomain),
                                  "--exit-when-idle", "1.5", "--export", out.string()});
   bus::Participant dds{kDomain};
@@ -89,7 +91,6 @@ TEST(SimLive, CutsOffTheLowerPieceFromStrokesOverDdsAndReportsIt) {
   EXPECT_EQ(summary["fallen_pieces"], 1);
   EXPECT_EQ(summary["hand_samples_rejected"], 1);
   EXPECT_TRUE(std::filesystem::exists(out / "cloth.obj"));
-  std::filesystem::remove_all(out);
 }
 
 TEST(SimLive, StopsCleanlyOnSigint) {

@@ -1,21 +1,21 @@
-// A per-test temporary directory, removed with everything in it when the test ends.
+// A scratch folder for one test, removed with everything in it when the object goes (also when an
+// assertion failed). Named <tag>_<pid>_<n>, so parallel ctest processes and tests never share one.
 #pragma once
 
-#include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <atomic>
 #include <filesystem>
 #include <string>
 
-namespace tachi::filter::testing {
+namespace tachi::test {
 
 class ScratchDir {
  public:
-  /// /tmp/<tag>_<pid>_<test name>: unique across parallel ctest processes and tests.
   explicit ScratchDir(const std::string& tag)
       : path_(std::filesystem::temp_directory_path() /
-              (tag + "_" + std::to_string(::getpid()) + "_" +
-               ::testing::UnitTest::GetInstance()->current_test_info()->name())) {
+              ("tachi_" + tag + "_" + std::to_string(::getpid()) + "_" + std::to_string(next_id()))) {
+    std::filesystem::remove_all(path_);
     std::filesystem::create_directories(path_);
   }
   ~ScratchDir() {
@@ -29,7 +29,11 @@ class ScratchDir {
   std::filesystem::path operator/(const std::string& name) const { return path_ / name; }
 
  private:
+  static unsigned next_id() {
+    static std::atomic<unsigned> counter{0};
+    return counter++;
+  }
   std::filesystem::path path_;
 };
 
-}  // namespace tachi::filter::testing
+}  // namespace tachi::test

@@ -1,58 +1,56 @@
 #include "tachi/viewer/scene_state.hpp"
 
-#include <cmath>
 #include <sstream>
 
 namespace tachi::viewer {
 
 void SceneState::on_topology(TopologyUpdate update) {
-  if (update.version < topology_.version) return;  // an older topology arriving late changes nothing
-  topology_ = std::move(update);
+  // An older topology arriving late changes nothing. The first one is taken whatever its version.
+  if (!scene_.mesh.triangles.empty() && update.version < scene_.mesh.topology_version) return;
+  scene_.mesh.topology_version = update.version;
+  scene_.mesh.triangles = std::move(update.triangles);
+  scene_.mesh.pinned = std::move(update.pinned);
+  update_status();
 }
 
 void SceneState::on_state(StateUpdate update) {
-  positions_ = std::move(update.positions);
+  scene_.mesh.positions = std::move(update.positions);
   positions_version_ = update.topology_version;
   frame_ = update.frame;
   ++states_received_;
+  update_status();
 }
 
 void SceneState::on_hand(const HandUpdate& update) {
-  const bool finite = update.position_m.allFinite();
-  if (!update.tracked || !finite) {
-    hand_.reset();
-    return;
+  const bool lost = !update.tracked || !update.position_m.allFinite();
+  const bool was_lost = !scene_.hand;
+  if (lost) {
+    scene_.hand.reset();
+  } else {
+    scene_.hand = Hand{update.position_m, update.cutting ? HandState::Cutting : HandState::Idle, update.outside_cloth};
+    if (update.cutting) {
+      // A new stroke replaces the trail of the previous one; the last stroke stays visible until then.
+      if (update.stroke_id != stroke_id_) scene_.stroke.clear();
+      stroke_id_ = update.stroke_id;
+      scene_.stroke.push_back(update.position_m);
+    }
   }
-  hand_ = Hand{update.position_m, update.cutting ? HandState::Cutting : HandState::Idle, update.outside_cloth};
-  if (update.cutting) {
-    // A new stroke replaces the trail of the previous one; the last stroke stays visible until then.
-    if (update.stroke_id != stroke_id_) stroke_.clear();
-    stroke_id_ = update.stroke_id;
-    stroke_.push_back(update.position_m);
-  }
+  if (lost != was_lost) update_status();
 }
 
-Scene SceneState::scene() const {
-  Scene scene;
-  scene.mesh.topology_version = topology_.version;
-  scene.mesh.triangles = topology_.triangles;
-  scene.mesh.pinned = topology_.pinned;
-  scene.mesh.positions = positions_;
-  scene.hand = hand_;
-  scene.stroke = stroke_;
+void SceneState::update_status() {
   std::ostringstream status;
-  if (topology_.triangles.empty()) {
+  if (scene_.mesh.triangles.empty()) {
     status << "waiting for the cloth topology";
-  } else if (positions_.empty()) {
+  } else if (scene_.mesh.positions.empty()) {
     status << "waiting for cloth positions";
   } else {
-    status << "frame " << frame_ << "  topology v" << topology_.version;
-    if (positions_version_ != topology_.version) status << " (positions v" << positions_version_ << ")";
-    status << "  particles " << positions_.size();
+    status << "frame " << frame_ << "  topology v" << scene_.mesh.topology_version;
+    if (positions_version_ != scene_.mesh.topology_version) status << " (positions v" << positions_version_ << ")";
+    status << "  particles " << scene_.mesh.positions.size();
   }
-  if (!hand_) status << "  hand: lost";
-  scene.status = status.str();
-  return scene;
+  if (!scene_.hand) status << "  hand: lost";
+  scene_.status = status.str();
 }
 
 }  // namespace tachi::viewer

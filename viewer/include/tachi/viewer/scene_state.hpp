@@ -30,24 +30,25 @@ struct HandUpdate {
 
 class SceneState {
  public:
+  SceneState() { update_status(); }
   void on_topology(TopologyUpdate update);
   void on_state(StateUpdate update);
   void on_hand(const HandUpdate& update);
 
-  /// The scene as it stands; the status line says what is missing or stale.
-  Scene scene() const;
-  bool has_cloth() const { return !positions_.empty() && !topology_.triangles.empty(); }
+  /// The scene as it stands; the status line says what is missing or stale. Kept up to date by the
+  /// updates, so drawing a frame copies nothing.
+  const Scene& scene() const { return scene_; }
+  bool has_cloth() const { return !scene_.mesh.positions.empty() && !scene_.mesh.triangles.empty(); }
   std::uint64_t states_received() const { return states_received_; }
 
  private:
-  TopologyUpdate topology_;
-  std::vector<Eigen::Vector3f> positions_;
+  void update_status();
+
+  Scene scene_;
   std::uint32_t positions_version_ = 0;
   std::uint64_t frame_ = 0;
   std::uint64_t states_received_ = 0;
-  std::optional<Hand> hand_;
   std::uint32_t stroke_id_ = 0;
-  std::vector<Eigen::Vector3f> stroke_;
 };
 
 }  // namespace tachi::viewer

@@ -180,3 +180,34 @@ TEST(Heartbeat, AnnouncesStartStateChangesAndStop) {
   collect();
   EXPECT_EQ(states, (std::vector<tachi_msg_NodeState>{tachi_msg_NODE_STARTING, tachi_msg_NODE_RUNNING, tachi_msg_NODE_STOPPING}));
 }
+
+TEST(Heartbeat, CarriesHostMetricsAndRejectionsByReason) {
+  constexpr std::uint32_t kMetricsDomain = 17;
+  bus::Participant dds{kMetricsDomain};
+  bus::Reader<tachi_msg_NodeStatus> reader{dds, bus::topics::node_status};
+  bus::Heartbeat heartbeat{dds, "tachi-metrics", std::chrono::hours(1)};
+  heartbeat.set_metric("frames", 12);
+  heartbeat.set_metric("frames", 13);  // replaces, does not add
+  heartbeat.count_rejected("nonfinite");
+  heartbeat.count_rejected("nonfinite", 2);
+  heartbeat.count_rejected("backwards_time");
+  heartbeat.update(tachi_msg_NODE_RUNNING, 1, 2);  // state change: published now
+  std::map<std::string, double> metrics;
+  std::uint64_t rejected = 0;
+  std::string host;
+  for (int i = 0; i < 50 && metrics.empty(); ++i) {
+    reader.wait_for_data(20ms);
+    for (const auto& s : reader.take()) {
+      if (s->state != tachi_msg_NODE_RUNNING) continue;
+      rejected = s->rejected;
+      host = s->host;
+      for (std::uint32_t k = 0; k < s->metrics._length; ++k) metrics[s->metrics._buffer[k].name] = s->metrics._buffer[k].value;
+    }
+  }
+  EXPECT_EQ(rejected, 4u);
+  EXPECT_FALSE(host.empty());
+  EXPECT_EQ(metrics.size(), 3u);
+  EXPECT_DOUBLE_EQ(metrics["frames"], 13.0);
+  EXPECT_DOUBLE_EQ(metrics["rejected.nonfinite"], 3.0);
+  EXPECT_DOUBLE_EQ(metrics["rejected.backwards_time"], 1.0);
+}

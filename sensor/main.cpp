@@ -126,6 +126,7 @@ int main(int argc, char** argv) try {
       spdlog::warn("only {} of {} readers after 5 s; publishing anyway", writer->matched_readers(), o.wait_readers);
   }
 
+  tachi::sensor::use_one_opencv_thread();
   tachi::sensor::HandFinder finder(source->model());
   std::uint64_t frames = 0, tracked = 0;
   while (!tachi::common::stop_requested() && (o.max_frames == 0 || frames < o.max_frames)) {

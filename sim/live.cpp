@@ -66,6 +66,7 @@ int run_live(const OfflineOptions& shared, std::optional<int> max_steps, const L
   session_options.cloth = shared.cloth;
   session_options.solver = shared.solver;
   session_options.stroke.blade = shared.blade;
+  session_options.stroke.mode = shared.cut_mode;
   session_options.hand_radius_m = live.hand_radius_m;
   Session session{session_options};
   // No lost cuts: replay what a previous run of this journal applied, then append to it.
@@ -202,7 +203,7 @@ int run_live(const OfflineOptions& shared, std::optional<int> max_steps, const L
   summary.extra["hand_samples_rejected"] = rejected;
   summary.extra["step_overruns"] = overruns;
   spdlog::info("tachi-sim: stopped after {} steps ({} hand samples, {} pieces)", summary.steps, samples_in, summary.pieces);
-  if (!shared.export_dir.empty()) export_run(summary, session.cloth(), shared.export_dir);
+  if (!shared.export_dir.empty()) export_run(summary, session.cloth(), shared.export_dir, &session.cutter());
   return common::kExitOk;
 }
 

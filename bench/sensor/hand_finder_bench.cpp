@@ -102,7 +102,12 @@ int main(int argc, char** argv) {
   std::printf("%-13s %6s | %9s %9s %7s %5s | %9s %9s %7s %5s | %7s\n", "scenario", "frames", "tachi ms", "RMS mm",
               "tracked", "phant", "blob ms", "RMS mm", "tracked", "phant", "speedup");
   std::vector<double> all_ours, all_base;
-  for (const char* name : {"push", "jitter", "straight_cut", "curve", "top_edge"}) {
+  // Every rendered scenario (a folder with a ground truth), in name order.
+  std::vector<std::string> names;
+  for (const auto& entry : std::filesystem::directory_iterator(dir))
+    if (std::filesystem::exists(entry.path() / "ground_truth.csv")) names.push_back(entry.path().filename().string());
+  std::sort(names.begin(), names.end());
+  for (const auto& name : names) {
     try {
       RecordingSource source(dir / name, Playback{0.0, false});
       const DepthModel model = source.model();
@@ -113,18 +118,18 @@ int main(int argc, char** argv) {
         return [finder = std::make_shared<HandFinder>(model)](const DepthFrame& f) { return finder->find(f); };
       });
       if (per_frame) {
-        for (std::size_t i = 0; i < ours_ms.size() && i < frames.size(); ++i) std::fprintf(stderr, "%s %zu %.3f\n", name, i, ours_ms[i]);
+        for (std::size_t i = 0; i < ours_ms.size() && i < frames.size(); ++i) std::fprintf(stderr, "%s %zu %.3f\n", name.c_str(), i, ours_ms[i]);
       }
       const auto [base_ms, base] = run(frames, truth, repeat, [&] {
         return [&model](const DepthFrame& f) { return nearest_blob(f.raw, model); };
       });
       all_ours.insert(all_ours.end(), ours_ms.begin(), ours_ms.end());
       all_base.insert(all_base.end(), base_ms.begin(), base_ms.end());
-      std::printf("%-13s %6zu | %9.3f %9.2f %7.4f %5zu | %9.3f %9.1f %7.4f %5zu | %6.1fx\n", name, frames.size(),
+      std::printf("%-13s %6zu | %9.3f %9.2f %7.4f %5zu | %9.3f %9.1f %7.4f %5zu | %6.1fx\n", name.c_str(), frames.size(),
                   median(ours_ms), ours.rms_m * 1000, ours.tracked_ratio, ours.phantoms, median(base_ms), base.rms_m * 1000,
                   base.tracked_ratio, base.phantoms, median(base_ms) / median(ours_ms));
     } catch (const std::exception& e) {
-      std::fprintf(stderr, "tachi-sensor-bench: %s: %s\n", name, e.what());
+      std::fprintf(stderr, "tachi-sensor-bench: %s: %s\n", name.c_str(), e.what());
       return 1;
     }
   }

@@ -24,8 +24,9 @@ const std::string kBin = TACHI_BIN_DIR;
 const std::string kRecordings = TACHI_RECORDINGS_DIR;
 
 std::vector<std::string> sim_args(unsigned domain, const std::filesystem::path& journal, const std::filesystem::path& out) {
-  return {kBin + "/tachi-sim", "--grid", "32", "--pin", "top-edge", "--domain", std::to_string(domain), "--exit-when-idle",
-          "2", "--journal", journal.string(), "--export", out.string()};
+  // Grid cuts: their summary lists the cut line cell by cell, which the comparison below reads.
+  return {kBin + "/tachi-sim", "--grid", "32", "--pin", "top-edge", "--cut-mode", "grid", "--domain", std::to_string(domain),
+          "--exit-when-idle", "2", "--journal", journal.string(), "--export", out.string()};
 }
 
 nlohmann::json read_summary(const std::filesystem::path& dir) {

@@ -125,7 +125,10 @@ int run_live(const OfflineOptions& shared, std::optional<int> max_steps, const L
           it != replayed.end() && sample->time_ns <= it->second)
         continue;
       // A stroke is (sensor, filter session, stroke id): its samples' times never go back.
-      if (!guard.time(input->session_id ^ input->sensor_id, sample->time_ns)) continue;
+      // ... and its stroke ids never go back: a lower id names a stroke that already ended.
+      if (!guard.time(input->session_id ^ input->sensor_id, sample->time_ns) ||
+          !guard.id(input->session_id ^ input->sensor_id, input->stroke_id))
+        continue;
       const HandInput hand{input->stroke_id, input->time_s,  input->position_m, input->tracked,
                            input->cutting,   input->holding, input->session_id};
       session.on_hand(hand);

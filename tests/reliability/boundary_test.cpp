@@ -18,7 +18,7 @@ namespace bus = tachi::bus;
 using tachi::test::ChildProcess;
 
 namespace {
-// Domain ids 186-189 belong to this file (docs/testing.md).
+// Domain ids 185-189 belong to this file (docs/testing.md).
 const std::string kBin = TACHI_BIN_DIR;
 
 // The newest "rejected.*" metrics `node` published, waiting until `reason` shows up (or 10 s pass).
@@ -102,6 +102,36 @@ TEST(Boundary, TheFilterRefusesAndCountsBadHandSamples) {
   EXPECT_EQ(out, 2);
   filter.signal(SIGINT);
   EXPECT_EQ(filter.wait(10s), 0);
+}
+
+TEST(Boundary, TheSimulatorRefusesAndCountsBadStrokeSamples) {
+  ChildProcess sim({kBin + "/tachi-sim", "--domain", "189", "--grid", "16"});
+  bus::Participant dds{189};
+  bus::Writer<tachi_msg_StrokeSample> strokes{dds, bus::topics::stroke};
+  bus::Reader<tachi_msg_NodeStatus> status{dds, bus::topics::node_status};
+  ASSERT_TRUE(strokes.wait_for_readers(1, 20s)) << sim.err();
+  const auto stroke = [](std::uint32_t id, std::int64_t t_ns, float x) {
+    tachi_msg_StrokeSample s{};
+    s.sensor_id = 2;
+    s.session_id = 42;
+    s.stroke_id = id;
+    s.time_ns = t_ns;
+    s.position_m = {x, 0.0F, 0.0F};
+    s.tracked = true;
+    s.gate = tachi_msg_GATE_IDLE;
+    return s;
+  };
+  strokes.write(stroke(3, 1'000'000'000, 0.1F));
+  strokes.write(stroke(3, 1'010'000'000, std::numeric_limits<float>::infinity()));
+  strokes.write(stroke(3, 900'000'000, 0.1F));    // back in time
+  strokes.write(stroke(2, 1'020'000'000, 0.1F));  // a stroke that already ended
+  strokes.write(stroke(4, 1'030'000'000, 0.1F));
+  const auto counted = rejections(status, "tachi-sim", "stale_id");
+  EXPECT_EQ(counted.count("out_of_range") ? counted.at("out_of_range") : 0, 1.0) << sim.err();
+  EXPECT_EQ(counted.count("time_backwards") ? counted.at("time_backwards") : 0, 1.0);
+  EXPECT_EQ(counted.count("stale_id") ? counted.at("stale_id") : 0, 1.0);
+  sim.signal(SIGTERM);
+  EXPECT_EQ(sim.wait(10s), 0);
 }
 
 TEST(Boundary, TheViewerRefusesAnInconsistentTopology) {

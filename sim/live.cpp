@@ -78,8 +78,7 @@ int run_live(const OfflineOptions& shared, std::optional<int> max_steps, const L
     replayed = replay(journal->recovered(), session);
     (void)session.take_cut_reports();  // the previous run reported them
     (void)session.take_topology_change();  // published whole below
-    if (!journal->recovered().empty())
-      spdlog::info("tachi-sim: replayed {} journal records ({} steps, {} cut particles) from {} in {:.0f} ms",
+    spdlog::info("tachi-sim: replayed {} journal records ({} steps, {} cut particles) from {} in {:.0f} ms",
                    journal->recovered().size(), session.steps(), session.cutter().total().particles_duplicated,
                    live.journal, std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
   }

@@ -79,8 +79,8 @@ int run_live(const OfflineOptions& shared, std::optional<int> max_steps, const L
     (void)session.take_cut_reports();  // the previous run reported them
     (void)session.take_topology_change();  // published whole below
     spdlog::info("tachi-sim: replayed {} journal records ({} steps, {} cut particles) from {} in {:.0f} ms",
-                   journal->recovered().size(), session.steps(), session.cutter().total().particles_duplicated,
-                   live.journal, std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
+                 journal->recovered().size(), session.steps(), session.cutter().total().particles_duplicated,
+                 live.journal, std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
   }
 
   bus::Participant dds{live.bus.domain, live.bus.dds_config, {live.bus.secure_dir, live.bus.identity}};

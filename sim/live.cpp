@@ -80,7 +80,8 @@ int run_live(const OfflineOptions& shared, std::optional<int> max_steps, const L
     strokes.wait_for_data(std::max(next_step - Clock::now(), Clock::duration::zero()));
     for (const auto& sample : strokes.take()) {
       if (const auto input = from_msg(*sample)) {
-        session.on_hand({input->stroke_id, input->time_s, input->position_m, input->tracked, input->cutting, input->holding});
+        session.on_hand({input->stroke_id, input->time_s, input->position_m, input->tracked, input->cutting, input->holding,
+                         input->sensor_id, input->session_id});
         ++samples_in;
         last_hand = Clock::now();
       } else if (++rejected == 1 || rejected % 100 == 0) {

@@ -20,6 +20,8 @@ struct StrokeInput {
   bool tracked = false;
   bool cutting = false;
   bool holding = false;
+  std::uint32_t sensor_id = 0;   ///< with session_id and stroke_id, names the stroke
+  std::uint64_t session_id = 0;
 };
 
 /// Rejects samples a filter should never send but a faulty peer might: non-finite coordinates or a

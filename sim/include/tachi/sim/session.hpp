@@ -23,6 +23,9 @@ struct HandInput {
   bool tracked = false;
   bool cutting = false;
   bool holding = false;  ///< stroke open, hand beyond reach: the sample must not cut (GATE_HOLDING)
+  /// The hand source (camera hand, mouse blade, ...): (sensor_id, session_id, stroke_id) names a stroke.
+  std::uint32_t sensor_id = 0;
+  std::uint64_t session_id = 0;
 };
 
 /// What one stroke did, reported when it closes.
@@ -50,7 +53,10 @@ class Session {
   /// changes) and extends it; a HOLDING sample keeps the stroke open without cutting (the hand is
   /// leaving or briefly out of reach); an IDLE sample closes the open stroke, tracked or not (the
   /// filter's gate decides when a lost hand ends a stroke). Untracked or non-finite samples never cut.
+  /// Several sources may publish: while one source's stroke is open, the others' samples are ignored
+  /// (one blade cuts at a time), unless that source fell silent for kSilentSource_s.
   void on_hand(const HandInput& hand);
+  static constexpr double kSilentSource_s = 1.0;
   /// Closes the open stroke, if any (e.g. when the filter vanished mid-stroke).
   void end_stroke();
   /// Advances the cloth by one solver step.
@@ -76,6 +82,9 @@ class Session {
   float hand_radius_m_;
   std::optional<Eigen::Vector3f> hand_;  ///< last tracked hand position while not cutting
   std::uint32_t stroke_id_ = 0;
+  std::uint32_t stroke_sensor_ = 0;     ///< source of the open stroke
+  std::uint64_t stroke_session_ = 0;
+  double stroke_heard_s_ = 0.0;         ///< time_s() of that source's last sample
   std::optional<TopologyChange> pending_;
   std::vector<CutReport> reports_;
   std::uint64_t steps_ = 0;

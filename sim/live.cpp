@@ -28,6 +28,7 @@ tachi_msg_CutEvent cut_msg(std::uint32_t cloth_id, std::uint32_t version, const 
   msg.pieces = static_cast<std::uint32_t>(report.pieces);
   msg.fallen_pieces = static_cast<std::uint32_t>(report.fallen_pieces);
   msg.cut_length_m = report.stroke.cut_length_m;
+  msg.sensor_id = report.sensor_id;
   return msg;
 }
 

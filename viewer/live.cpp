@@ -275,7 +275,7 @@ int run_live(const ViewerOptions& o) {
   const auto start = Clock::now();
   auto next_frame = start;
   auto last_state = start;
-  auto last_warning = start;
+  auto last_warning = start - kNoStateWarningPeriod;  // the first warning comes as soon as the HUD's
   cv::Mat image;
   const auto seconds = [&](Clock::time_point t) { return std::chrono::duration<double>(t - start).count(); };
   const auto count = [&](std::optional<Rejection> rejected) {

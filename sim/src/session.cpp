@@ -20,7 +20,7 @@ void Session::close_stroke() {
   if (!cutter_.stroke_open()) return;
   absorb(cutter_.end_stroke());
   const Pieces pieces = find_pieces(cloth_);
-  reports_.push_back({stroke_id_, cutter_.report(), pieces.count(), pieces.fallen()});
+  reports_.push_back({stroke_id_, cutter_.report(), pieces.count(), pieces.fallen(), stroke_sensor_});
 }
 
 void Session::on_hand(const HandInput& hand) {

@@ -145,6 +145,16 @@ TEST(SceneState, AJumpConfirmedByTheClothStatesIsTaken) {
   EXPECT_EQ(s.scene().mesh.topology_version, 900u);
 }
 
+TEST(SceneState, AStrayPublisherOfAnotherSessionDoesNotTakeTheView) {
+  SceneState s;
+  s.on_topology(topology(1, 7));
+  s.on_state(state(1, 0.0f, 7));
+  EXPECT_FALSE(s.on_topology(topology(1000, 99)));
+  EXPECT_FALSE(s.on_state(state(1, 0.1f, 7)));
+  EXPECT_EQ(s.scene().mesh.topology_version, 1u);
+  EXPECT_EQ(s.session_id(), 7u);
+}
+
 TEST(SceneState, AnImplausibleFirstTopologyGivesWayToTheOneTheStatesUse) {
   SceneState s;
   EXPECT_FALSE(s.on_topology(topology(1000)));  // taken: nothing else to show yet
@@ -161,11 +171,13 @@ TEST(SceneState, ASimulatorRestartIsFollowed) {
   s.on_cut({1, 40, {1u | 1u << 16}, 2, 1, 7, 1}, 0.0);
   ASSERT_EQ(s.pieces(), 2u);
   EXPECT_FALSE(s.on_topology(topology(0, 8)));  // new session, version back to 0
+  EXPECT_EQ(s.scene().mesh.topology_version, 40u) << "not before a state of the new session confirms it";
+  EXPECT_FALSE(s.on_state(state(40, 0.1f, 7)));
+  EXPECT_FALSE(s.on_state(state(0, 0.2f, 8)));
   EXPECT_EQ(s.scene().mesh.topology_version, 0u);
+  EXPECT_FLOAT_EQ(s.scene().mesh.positions[0].y(), 0.2f);
   EXPECT_FALSE(s.pieces()) << "the previous run's pieces are not this run's";
   EXPECT_EQ(s.on_state(state(40, 0.0f, 7)), Rejection::StaleSession) << "a late state of the old run";
-  EXPECT_FALSE(s.on_state(state(0, 0.2f, 8)));
-  EXPECT_FLOAT_EQ(s.scene().mesh.positions[0].y(), 0.2f);
 }
 
 TEST(SceneState, ACutFlashesAlongItsLineAndFades) {

@@ -89,9 +89,14 @@ void SceneState::adopt(TopologyUpdate update) {
 
 std::optional<Rejection> SceneState::on_topology(TopologyUpdate update) {
   if (const auto bad = check(update)) return reject(*bad);
-  if (!has_topology_ || update.session_id != session_id_) {
-    // The first one is taken whatever its version; a new session is a restarted simulator.
-    adopt(std::move(update));
+  if (!has_topology_) {
+    adopt(std::move(update));  // the first one is taken whatever its version
+    return std::nullopt;
+  }
+  if (update.session_id != session_id_) {
+    // A restarted simulator, or a stray publisher: taken once a cloth state of that session confirms it
+    // (a restarted simulator publishes one at its first step).
+    candidate_ = std::move(update);
     return std::nullopt;
   }
   const std::uint32_t shown = scene_.mesh.topology_version;
@@ -112,7 +117,8 @@ std::optional<Rejection> SceneState::on_topology(TopologyUpdate update) {
 std::optional<Rejection> SceneState::on_state(StateUpdate update) {
   if (const auto bad = check(update)) return reject(*bad);
   if (candidate_ && update.session_id == candidate_->session_id && update.topology_version == candidate_->version &&
-      update.topology_version != scene_.mesh.topology_version && update.positions.size() == particle_count(*candidate_))
+      (update.topology_version != scene_.mesh.topology_version || update.session_id != session_id_) &&
+      update.positions.size() == particle_count(*candidate_))
     adopt(std::move(*candidate_));
   if (has_topology_) {
     if (update.session_id != session_id_) return reject(Rejection::StaleSession);

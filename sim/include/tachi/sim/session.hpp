@@ -34,6 +34,7 @@ struct CutReport {
   StrokeReport stroke;
   std::size_t pieces = 0;
   std::size_t fallen_pieces = 0;
+  std::uint32_t sensor_id = 0;  ///< the hand source that made the stroke
 };
 
 struct SessionOptions {

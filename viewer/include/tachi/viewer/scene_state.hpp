@@ -4,7 +4,7 @@
 // Robust input: a topology or state that is malformed (wrong sizes, indices out of range,
 // non-finite or absurd coordinates) or whose version jumps implausibly is rejected and counted by
 // reason, and the scene keeps showing the last good cloth. A simulator restart (a topology from a
-// new session) is followed.
+// new session, confirmed by a cloth state of that session) is followed.
 #pragma once
 
 #include "tachi/viewer/render.hpp"

@@ -63,6 +63,7 @@ int run_live(const OfflineOptions& shared, std::optional<int> max_steps, const L
   bus::Writer<tachi_msg_ClothState> state_writer{dds, bus::topics::cloth_state};
   bus::Writer<tachi_msg_CutEvent> cut_writer{dds, bus::topics::cut_event};
   bus::Heartbeat heartbeat{dds, "tachi-sim"};
+  heartbeat.set_metric("blade", static_cast<double>(shared.blade));  // index of Blade: the viewer's HUD names it
 
   TopologyMessage topology;
   topology.fill(live.cloth_id, session.cloth(), nullptr);

@@ -2,6 +2,7 @@
 
 #include "src/bus_adapter.hpp"
 #include "tachi/bus/heartbeat.hpp"
+#include "tachi/sim/blade.hpp"
 #include "tachi/viewer/controls.hpp"
 #include "tachi/viewer/frame_stats.hpp"
 #include "tachi/viewer/mesh_file.hpp"
@@ -26,6 +27,8 @@ using namespace std::chrono_literals;
 constexpr auto kNoStateWarningPeriod = 5s;
 constexpr auto kNoStateHudAfter = 3s;
 const std::string kWindowName = "tachi";
+// A held, unmoving blade repeats its sample this often (tachi-sim lets another source take over after 1 s).
+constexpr auto kBladeHoldPeriod = 250ms;
 
 // CLI11's Range lets NaN through (every comparison with NaN is false): refuse non-finite numbers first.
 const CLI::Validator kFinite(
@@ -157,6 +160,12 @@ class MouseControl {
     ++samples_;
     return to_msg(*sample, source_, samples_, wall_ns());
   }
+  /// While the button is held still, the same spot again (re-cast: the cloth moves under it), so the
+  /// simulator does not take the mouse for a source that fell silent mid-stroke.
+  std::optional<tachi_msg_StrokeSample> hold(const Mesh& mesh, const View& view) {
+    if (const auto sample = blade_.move(mesh, view, last_)) return to_msg(*sample, source_, ++samples_, wall_ns());
+    return std::nullopt;
+  }
   /// The sample that ends a stroke still open when the viewer stops.
   std::optional<tachi_msg_StrokeSample> finish(const Mesh& mesh, const View& view) {
     if (const auto sample = blade_.release(mesh, view, last_)) return to_msg(*sample, source_, ++samples_, wall_ns());
@@ -166,7 +175,7 @@ class MouseControl {
     if (!blade_enabled_ || last_.x < 0.0f) return std::nullopt;
     return BladeCursor{last_, blade_.cutting()};
   }
-  std::string label() const { return blade_enabled_ ? (blade_.cutting() ? "mouse (cutting)" : "mouse") : "-"; }
+  std::string label() const { return blade_enabled_ ? (blade_.cutting() ? "(mouse, cutting)" : "(mouse)") : ""; }
   std::uint64_t samples() const { return samples_; }
 
  private:
@@ -178,6 +187,19 @@ class MouseControl {
   cv::Point2f last_{-1.0f, -1.0f};
   std::uint64_t samples_ = 0;
 };
+
+// The blade the simulator cuts with (seed 001 Figure 4), from its heartbeat's "blade" figure.
+std::optional<std::string> blade_of(const tachi_msg_NodeStatus& status) {
+  if (std::string_view(status.node) != "tachi-sim") return std::nullopt;
+  for (std::uint32_t i = 0; i < status.metrics._length; ++i) {
+    const auto& metric = status.metrics._buffer[i];
+    if (std::string_view(metric.name) != "blade") continue;
+    for (const sim::Blade blade : {sim::Blade::Razor, sim::Blade::Scalpel, sim::Blade::Utility, sim::Blade::Kitchen,
+                                   sim::Blade::Hunting, sim::Blade::Worn})
+      if (metric.value == static_cast<double>(blade)) return std::string(sim::to_string(blade));
+  }
+  return std::nullopt;
+}
 
 void fill_hud(Hud& hud, const SceneState& state, const FrameStats& stats, std::optional<double> age_ms,
               const std::string& blade, const std::string& warning) {
@@ -240,6 +262,7 @@ int run_live(const ViewerOptions& o) {
   bus::Reader<tachi_msg_ClothState> states{dds, bus::topics::cloth_state};
   bus::Reader<tachi_msg_StrokeSample> strokes{dds, bus::topics::stroke};
   bus::Reader<tachi_msg_CutEvent> cuts{dds, bus::topics::cut_event};
+  bus::Reader<tachi_msg_NodeStatus> statuses{dds, bus::topics::node_status};
   std::optional<bus::Writer<tachi_msg_StrokeSample>> blade_writer;
   if (o.mouse) blade_writer.emplace(dds, bus::topics::stroke);
   bus::WaitSet waitset{dds};
@@ -270,11 +293,13 @@ int run_live(const ViewerOptions& o) {
   SceneState state;
   FrameStats stats;
   MouseControl mouse{o.mouse, mouse_source};
+  std::string sim_blade = "-";
   std::uint64_t messages_in = 0, messages_out = 0;
   const auto frame_period = std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(1.0 / o.fps));
   const auto start = Clock::now();
   auto next_frame = start;
   auto last_state = start;
+  auto last_blade_sample = start;
   auto last_warning = start - kNoStateWarningPeriod;  // the first warning comes as soon as the HUD's
   cv::Mat image;
   const auto seconds = [&](Clock::time_point t) { return std::chrono::duration<double>(t - start).count(); };
@@ -298,6 +323,13 @@ int run_live(const ViewerOptions& o) {
       for (const auto& event : window->take_mouse_events())
         if (const auto sample = mouse.on_event(event, state.scene().mesh, view)) {
           blade_writer->write(*sample);
+          last_blade_sample = Clock::now();
+          ++messages_out;
+        }
+      if (Clock::now() - last_blade_sample > kBladeHoldPeriod)
+        if (const auto sample = mouse.hold(state.scene().mesh, view)) {
+          blade_writer->write(*sample);
+          last_blade_sample = Clock::now();
           ++messages_out;
         }
     } else {
@@ -321,6 +353,8 @@ int run_live(const ViewerOptions& o) {
       count(state.on_cut(from_msg(*c), seconds(Clock::now())));
       ++messages_in;
     }
+    for (const auto& s : statuses.take())
+      if (const auto blade = blade_of(*s)) sim_blade = *blade;
 
     const auto now = Clock::now();
     const auto without_state = now - last_state;
@@ -350,7 +384,8 @@ int run_live(const ViewerOptions& o) {
       state.advance(seconds(now));
       Scene& scene = state.scene();
       if (!scene.hud) scene.hud.emplace();
-      fill_hud(*scene.hud, state, stats, age_ms, mouse.label(), warning);
+      fill_hud(*scene.hud, state, stats, age_ms, mouse.label().empty() ? sim_blade : sim_blade + " " + mouse.label(),
+               warning);
       scene.blade = mouse.cursor();
       image = render(scene, view);
       outputs.frame(image);

@@ -404,7 +404,7 @@ int run_live(const ViewerOptions& o) {
 
   if (const auto last = mouse.finish(state.scene().mesh, view)) {
     blade_writer->write(*last);
-    blade_writer->wait_for_acks(1s);
+    blade_writer->wait_for_acks(300ms);  // the simulator closes the stroke; stopping stays within 1 s
   }
   if (image.empty()) image = render(state.scene(), view);
   outputs.finish(image);

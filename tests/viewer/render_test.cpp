@@ -166,3 +166,19 @@ TEST(Render, GroupsOfAMeshGetDifferentShades) {
   const cv::Mat image = render(scene, view);
   EXPECT_NE(at(image, to_pixel(view, {0.0f, 0.3f, 0.0f})), at(image, to_pixel(view, {0.0f, -0.3f, 0.0f})));
 }
+
+TEST(Render, HelpListsTheKeysOverTheImage) {
+  const View view;
+  Scene scene;
+  scene.mesh = grid_cloth(11);
+  const cv::Mat bare = render(scene, view);
+  scene.show_help = true;
+  const cv::Mat help = render(scene, view);
+  // The list darkens the cloth behind it and writes bright text there.
+  const cv::Point inside(view.width / 2, 60);
+  EXPECT_LT(cv::sum(help.at<cv::Vec3b>(inside))[0], cv::sum(bare.at<cv::Vec3b>(inside))[0]);
+  const cv::Rect list(view.width / 2 - 190, 40, 380, 20 * static_cast<int>(kKeyHelp.size()) + 20);
+  cv::Mat text;
+  cv::inRange(help(list), cv::Scalar(200, 200, 200), cv::Scalar(255, 255, 255), text);
+  EXPECT_GT(cv::countNonZero(text), 500);
+}

@@ -64,6 +64,29 @@ TEST(ViewerCli, MeshViewRendersAnObjWithItsPiecesInDifferentShades) {
   EXPECT_NE(bad.err.find("--mesh"), std::string::npos) << bad.err;
 }
 
+TEST(ViewerCli, MeshViewReadsWhatTachiSimExports) {
+  const tachi::test::ScratchDir dir{"viewer_sim_mesh"};
+  {
+    // A full-width stroke at y = -0.1 m cuts off the lower piece, which falls for 120 steps (2 s).
+    std::ofstream stroke(dir / "stroke.csv");
+    stroke << "t,x,y,z\n";
+    for (int i = 0; i <= 60; ++i) stroke << 0.2 + i / 60.0 << ',' << -0.6 + 1.2 * i / 60.0 << ",-0.1,0.01\n";
+  }
+  const auto sim = tachi::test::run({kSim, "--offline", "--grid", "32", "--pin", "top-edge", "--stroke",
+                                     (dir / "stroke.csv").string(), "--steps", "120", "--export", (dir / "out").string()}, 60s);
+  ASSERT_EQ(sim.exit_code, 0) << sim.err;
+  const auto png = (dir / "view.png").string();
+  const auto r = tachi::test::run({kViewer, "--mesh", (dir / "out" / "cloth.obj").string(), "--headless", "--snapshot", png,
+                                   "--size", "400"}, 20s);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const cv::Mat image = cv::imread(png);
+  ASSERT_EQ(image.size(), cv::Size(400, 400));
+  // Framed on what hangs (the upper piece, y from 0.5 down to about -0.1): cloth in the middle, the
+  // background at the image's corners.
+  EXPECT_NE(image.at<cv::Vec3b>(200, 200), kBackground);
+  EXPECT_EQ(image.at<cv::Vec3b>(5, 5), kBackground);
+}
+
 TEST(ViewerCli, HeadlessSaysWhenItWritesNothingAndWhileNoClothArrives) {
   const auto r = tachi::test::run({kViewer, "--headless", "--domain", "150", "--duration", "4"}, 20s);
   EXPECT_EQ(r.exit_code, 0) << r.err;

@@ -114,6 +114,20 @@ TEST(ViewerWindow, FitsASmallScreenShowsTheClothAndSavesASnapshotOnAKey) {
   const cv::Point beside = cv::Point(where.tl()) + cv::Point(pixel_of(0.75f, 0.0f, side));
   EXPECT_FALSE(is_cloth(shot.at<cv::Vec3b>(beside))) << "background beside the cloth";
 
+  // Resized, the window draws at its new size: the cloth is again at the centre of the smaller side.
+  display.run({kXdotool, "windowsize", "--sync", window, "500", "400"});
+  std::this_thread::sleep_for(1s);
+  const cv::Rect resized = display.geometry(window);
+  const cv::Mat small_shot = display.screenshot(dir / "resized.png");
+  ASSERT_FALSE(small_shot.empty());
+  const int small_side = std::min(resized.width, resized.height);
+  EXPECT_LT(small_side, side);
+  const cv::Point2f offset((static_cast<float>(resized.width - small_side)) / 2, (static_cast<float>(resized.height - small_side)) / 2);
+  EXPECT_TRUE(is_cloth(small_shot.at<cv::Vec3b>(cv::Point(resized.tl()) + cv::Point(offset + pixel_of(0.0f, 0.2f, small_side)))));
+  EXPECT_FALSE(is_cloth(small_shot.at<cv::Vec3b>(cv::Point(resized.tl()) + cv::Point(offset + pixel_of(0.0f, 0.65f, small_side)))));
+  // Beside the cloth's right edge: a stretched copy of the old square image would still show cloth here.
+  EXPECT_FALSE(is_cloth(small_shot.at<cv::Vec3b>(cv::Point(resized.tl()) + cv::Point(offset + pixel_of(0.56f, 0.2f, small_side)))));
+
   display.run({kXdotool, "windowfocus", "--sync", window, "key", "p"});
   for (int i = 0; i < 40 && !std::filesystem::exists(dir / "tachi_snapshot_1.png"); ++i) std::this_thread::sleep_for(50ms);
   EXPECT_TRUE(std::filesystem::exists(dir / "tachi_snapshot_1.png")) << viewer.err();

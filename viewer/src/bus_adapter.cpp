@@ -91,7 +91,9 @@ tachi_msg_StrokeSample to_msg(const BladeSample& sample, const MouseSource& sour
   msg.time_ns = event_ns;
   msg.acquired_ns = event_ns;
   msg.position_m = {sample.position_m.x(), sample.position_m.y(), sample.position_m.z()};
-  msg.tracked = true;
+  // The closing sample is untracked: the stroke ends, and the simulator does not keep the released
+  // cursor as a hand pushing the cloth (tachi-sim --hand-radius).
+  msg.tracked = sample.cutting;
   msg.gate = sample.cutting ? tachi_msg_GATE_CUTTING : tachi_msg_GATE_IDLE;
   msg.opened_by = tachi_msg_GATE_SOURCE_MOUSE;
   msg.closed_by = sample.cutting ? tachi_msg_GATE_SOURCE_NONE : tachi_msg_GATE_SOURCE_MOUSE;

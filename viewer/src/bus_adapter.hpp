@@ -19,8 +19,9 @@ struct MouseSource {
   std::uint32_t sensor_id = 0;
   std::uint64_t session_id = 0;
 };
-/// A mouse blade sample as a StrokeSample: gate CUTTING while the button is held, opened by
-/// GATE_SOURCE_MOUSE, acquired_ns = time_ns = the mouse event's wall-clock time.
+/// A mouse blade sample as a StrokeSample: gate CUTTING (tracked) while the button is held, IDLE
+/// (untracked) on release, opened by GATE_SOURCE_MOUSE, acquired_ns = time_ns = the mouse event's
+/// wall-clock time.
 tachi_msg_StrokeSample to_msg(const BladeSample& sample, const MouseSource& source, std::uint64_t frame,
                               std::int64_t event_ns);
 }  // namespace tachi::viewer

@@ -22,7 +22,7 @@ packages=(
   # multi-host tests in network namespaces; the capture that proves DDS stays on loopback
   iproute2 tcpdump
   # viewer under a virtual display
-  xvfb xdotool imagemagick libx11-dev
+  xvfb xdotool imagemagick libx11-dev libxfixes-dev
 )
 
 missing=()

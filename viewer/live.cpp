@@ -281,6 +281,7 @@ int run_live(const ViewerOptions& o) {
   view.width = view.height = o.size;
   if (!o.headless) {
     window.emplace(kWindowName, cv::Size(o.size, o.size));
+    if (o.mouse) window->hide_pointer();
     const cv::Size size = window->image_size();
     view.width = size.width;
     view.height = size.height;

@@ -8,6 +8,24 @@
 
 namespace tachi::viewer {
 namespace {
+// The X window named `name` under `parent` (the highgui window, or the frame a window manager put
+// it in), or 0.
+::Window find_window(Display* display, ::Window parent, const std::string& name) {
+  char* title = nullptr;
+  if (XFetchName(display, parent, &title) != 0 && title != nullptr) {
+    const bool match = name == title;
+    XFree(title);
+    if (match) return parent;
+  }
+  ::Window root = 0, up = 0, *children = nullptr;
+  unsigned count = 0;
+  if (XQueryTree(display, parent, &root, &up, &children, &count) == 0) return 0;
+  ::Window found = 0;
+  for (unsigned i = 0; i < count && found == 0; ++i) found = find_window(display, children[i], name);
+  if (children != nullptr) XFree(children);
+  return found;
+}
+
 // Room left for the window manager's title bar and borders and for a panel/taskbar.
 constexpr int kScreenMargin_px = 80;
 constexpr int kMinimumSide_px = 64;
@@ -42,6 +60,7 @@ Window::Window(std::string name, cv::Size requested) : name_(std::move(name)), s
 }
 
 Window::~Window() {
+  if (display_ != nullptr) XCloseDisplay(static_cast<Display*>(display_));
   try {
     cv::destroyWindow(name_);
     cv::waitKey(1);
@@ -61,7 +80,30 @@ cv::Size Window::image_size() const {
 
 void Window::show(const cv::Mat& image) { cv::imshow(name_, image); }
 
-int Window::poll(int wait_ms) { return cv::waitKeyEx(std::max(wait_ms, 1)); }
+int Window::poll(int wait_ms) {
+  const int key = cv::waitKeyEx(std::max(wait_ms, 1));
+  if (hide_pointer_ && !pointer_hidden_) apply_hidden_pointer();
+  return key;
+}
+
+void Window::apply_hidden_pointer() {
+  // The window appears some event loops after it was created: look for it now and then, not forever.
+  if (pointer_attempts_ > 300 || pointer_attempts_++ % 10 != 0) return;
+  if (display_ == nullptr) display_ = XOpenDisplay(nullptr);
+  auto* display = static_cast<Display*>(display_);
+  if (display == nullptr) return;
+  const ::Window window = find_window(display, DefaultRootWindow(display), name_);
+  if (window == 0) return;
+  // A cursor whose 1x1 shape and mask are empty: nothing is drawn.
+  static const char kEmpty[1] = {0};
+  const Pixmap blank = XCreateBitmapFromData(display, window, kEmpty, 1, 1);
+  XColor black{};
+  const Cursor cursor = XCreatePixmapCursor(display, blank, blank, &black, &black, 0, 0);
+  XDefineCursor(display, window, cursor);
+  XFreePixmap(display, blank);
+  XFlush(display);
+  pointer_hidden_ = true;
+}
 
 bool Window::open() const {
   try {

@@ -39,10 +39,18 @@ class Window {
   std::vector<MouseEvent> take_mouse_events();
   /// False once the user closed the window.
   bool open() const;
+  /// Hides the system pointer over the window (seed 001: the blade image drawn at the cursor replaces
+  /// it). Applied as soon as the window is mapped.
+  void hide_pointer() { hide_pointer_ = true; }
 
  private:
   static void on_mouse(int event, int x, int y, int flags, void* self);
+  void apply_hidden_pointer();
   std::string name_;
+  void* display_ = nullptr;  ///< Xlib Display*, kept open while the blank cursor is in use
+  bool hide_pointer_ = false;
+  bool pointer_hidden_ = false;
+  int pointer_attempts_ = 0;
   cv::Size size_;
   std::vector<MouseEvent> events_;
 };

@@ -15,6 +15,10 @@
 #include <regex>
 #include <thread>
 
+// Last: Xlib's macros (None, Bool, Status) would break the headers above.
+#include <X11/Xlib.h>
+#include <X11/extensions/Xfixes.h>
+
 using namespace std::chrono_literals;
 namespace bus = tachi::bus;
 using tachi::test::ChildProcess;
@@ -66,6 +70,18 @@ class VirtualDisplay {
       std::this_thread::sleep_for(100ms);
     }
     return {};
+  }
+  /// Whether the pointer, where it is, shows any pixel (its image as XFixes reports it).
+  bool pointer_visible() const {
+    Display* display = XOpenDisplay(name_.c_str());
+    if (display == nullptr) return false;
+    bool visible = false;
+    if (XFixesCursorImage* image = XFixesGetCursorImage(display)) {
+      for (int i = 0; i < image->width * image->height && !visible; ++i) visible = (image->pixels[i] >> 24) != 0;
+      XFree(image);
+    }
+    XCloseDisplay(display);
+    return visible;
   }
   cv::Rect geometry(const std::string& window) const {
     const std::string out = run({kXdotool, "getwindowgeometry", window});
@@ -128,6 +144,9 @@ TEST(ViewerWindow, FitsASmallScreenShowsTheClothAndSavesASnapshotOnAKey) {
   // Beside the cloth's right edge: a stretched copy of the old square image would still show cloth here.
   EXPECT_FALSE(is_cloth(small_shot.at<cv::Vec3b>(cv::Point(resized.tl()) + cv::Point(offset + pixel_of(0.56f, 0.2f, small_side)))));
 
+  display.run({kXdotool, "mousemove", "--window", window, "100", "100"});
+  EXPECT_TRUE(display.pointer_visible()) << "without --mouse the system pointer stays";
+
   display.run({kXdotool, "windowfocus", "--sync", window, "key", "p"});
   for (int i = 0; i < 40 && !std::filesystem::exists(dir / "tachi_snapshot_1.png"); ++i) std::this_thread::sleep_for(50ms);
   EXPECT_TRUE(std::filesystem::exists(dir / "tachi_snapshot_1.png")) << viewer.err();
@@ -151,6 +170,11 @@ TEST(ViewerWindow, AMouseDragCutsTheClothAlongTheDraggedLine) {
   ASSERT_FALSE(window.empty()) << viewer.err();
   ASSERT_TRUE(states.wait_for_data(20s)) << sim.err();
   std::this_thread::sleep_for(1500ms);  // the viewer has the cloth to cast the cursor onto
+
+  // Seed 001: the blade image drawn at the cursor replaces the system pointer.
+  display.run({kXdotool, "mousemove", "--window", window, "100", "100"});
+  std::this_thread::sleep_for(300ms);
+  EXPECT_FALSE(display.pointer_visible());
 
   // Drag from left of the cloth to right of it at y = -0.1 m: grid row (0.5 + 0.1) * 15 = 9.
   const cv::Rect where = display.geometry(window);

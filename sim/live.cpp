@@ -20,6 +20,7 @@ tachi_msg_CutEvent cut_msg(std::uint32_t cloth_id, std::uint32_t version, const 
   tachi_msg_CutEvent msg{};
   msg.cloth_id = cloth_id;
   msg.stroke_id = report.stroke_id;
+  msg.sensor_id = report.sensor_id;  // which hand source cut (camera hand, mouse blade)
   msg.topology_version = version;
   msg.cut_line._buffer = line.data();
   msg.cut_line._length = msg.cut_line._maximum = static_cast<std::uint32_t>(line.size());
@@ -28,7 +29,6 @@ tachi_msg_CutEvent cut_msg(std::uint32_t cloth_id, std::uint32_t version, const 
   msg.pieces = static_cast<std::uint32_t>(report.pieces);
   msg.fallen_pieces = static_cast<std::uint32_t>(report.fallen_pieces);
   msg.cut_length_m = report.stroke.cut_length_m;
-  msg.sensor_id = report.sensor_id;
   return msg;
 }
 
@@ -63,7 +63,6 @@ int run_live(const OfflineOptions& shared, std::optional<int> max_steps, const L
   bus::Writer<tachi_msg_ClothState> state_writer{dds, bus::topics::cloth_state};
   bus::Writer<tachi_msg_CutEvent> cut_writer{dds, bus::topics::cut_event};
   bus::Heartbeat heartbeat{dds, "tachi-sim"};
-  heartbeat.set_metric("blade", static_cast<double>(shared.blade));  // index of Blade: the viewer's HUD names it
 
   TopologyMessage topology;
   topology.fill(live.cloth_id, session.cloth(), nullptr);
@@ -77,13 +76,14 @@ int run_live(const OfflineOptions& shared, std::optional<int> max_steps, const L
   std::uint64_t samples_in = 0, messages_out = 1, rejected = 0, overruns = 0;
   bool had_filter = false;
   std::vector<double> step_ms;
+  heartbeat.set_metric("blade", static_cast<double>(shared.blade));  // index of Blade: the viewer's HUD names it
 
   common::run_until_stopped([&] {
     strokes.wait_for_data(std::max(next_step - Clock::now(), Clock::duration::zero()));
     for (const auto& sample : strokes.take()) {
       if (const auto input = from_msg(*sample)) {
         session.on_hand({input->stroke_id, input->time_s, input->position_m, input->tracked, input->cutting, input->holding,
-                         input->sensor_id, input->session_id});
+                         input->session_id, input->sensor_id});
         ++samples_in;
         last_hand = Clock::now();
       } else if (++rejected == 1 || rejected % 100 == 0) {

@@ -18,14 +18,14 @@ std::optional<StrokeInput> from_msg(const tachi_msg_StrokeSample& msg) {
   const Eigen::Vector3f p(msg.position_m.x, msg.position_m.y, msg.position_m.z);
   if (msg.tracked && (!p.allFinite() || p.cwiseAbs().maxCoeff() > kFarFromAnyCloth_m)) return std::nullopt;
   StrokeInput input;
+  input.sensor_id = msg.sensor_id;
+  input.session_id = msg.session_id;
   input.stroke_id = msg.stroke_id;
   input.time_s = static_cast<double>(msg.time_ns) * 1e-9;
   input.position_m = p;
   input.tracked = msg.tracked;
   input.cutting = msg.gate == tachi_msg_GATE_CUTTING;
   input.holding = msg.gate == tachi_msg_GATE_HOLDING;
-  input.sensor_id = msg.sensor_id;
-  input.session_id = msg.session_id;
   return input;
 }
 

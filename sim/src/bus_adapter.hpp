@@ -14,14 +14,14 @@ namespace tachi::sim {
 
 /// A hand sample as the simulator uses it (world frame, seconds on the sender's clock).
 struct StrokeInput {
+  std::uint32_t sensor_id = 0;
+  std::uint64_t session_id = 0;  ///< the publishing filter's run
   std::uint32_t stroke_id = 0;
   double time_s = 0.0;
   Eigen::Vector3f position_m = Eigen::Vector3f::Zero();
   bool tracked = false;
   bool cutting = false;
   bool holding = false;
-  std::uint32_t sensor_id = 0;   ///< with session_id and stroke_id, names the stroke
-  std::uint64_t session_id = 0;
 };
 
 /// Rejects samples a filter should never send but a faulty peer might: non-finite coordinates or a

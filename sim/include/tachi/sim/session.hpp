@@ -23,9 +23,8 @@ struct HandInput {
   bool tracked = false;
   bool cutting = false;
   bool holding = false;  ///< stroke open, hand beyond reach: the sample must not cut (GATE_HOLDING)
-  /// The hand source (camera hand, mouse blade, ...): (sensor_id, session_id, stroke_id) names a stroke.
-  std::uint32_t sensor_id = 0;
-  std::uint64_t session_id = 0;
+  std::uint64_t session_id = 0;  ///< the filter run that numbered the stroke: stroke 1 of a restarted filter is a new stroke
+  std::uint32_t sensor_id = 0;   ///< the hand source (camera hand, mouse blade): with session and stroke id, names a stroke
 };
 
 /// What one stroke did, reported when it closes.
@@ -83,8 +82,8 @@ class Session {
   float hand_radius_m_;
   std::optional<Eigen::Vector3f> hand_;  ///< last tracked hand position while not cutting
   std::uint32_t stroke_id_ = 0;
-  std::uint32_t stroke_sensor_ = 0;     ///< source of the open stroke
   std::uint64_t stroke_session_ = 0;
+  std::uint32_t stroke_sensor_ = 0;     ///< source of the open stroke
   double stroke_heard_s_ = 0.0;         ///< time_s() of that source's last sample
   std::optional<TopologyChange> pending_;
   std::vector<CutReport> reports_;

@@ -13,6 +13,7 @@
 #include <opencv2/videoio.hpp>
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -309,7 +310,8 @@ int run_live(const ViewerOptions& o) {
   };
 
   common::run_until_stopped([&] {
-    const auto wait = std::max(next_frame - Clock::now(), Clock::duration(1ms));
+    // At most 100 ms: a signal does not wake a DDS waitset, and at --fps 1 a frame is too long to stop in.
+    const auto wait = std::clamp(next_frame - Clock::now(), Clock::duration(1ms), Clock::duration(100ms));
     if (window) {
       waitset.wait(std::min(wait, Clock::duration(4ms)));
       const int key = window->poll(1);

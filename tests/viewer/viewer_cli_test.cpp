@@ -174,3 +174,59 @@ TEST(ViewerCli, BadInputsAreRejectedAndTheVideoKeepsShowingTheRealCloth) {
   sim.signal(SIGINT);
   EXPECT_EQ(sim.wait(10s), 0);
 }
+
+TEST(ViewerCli, StopsWithinASecondOfSigintEvenAtOneFramePerSecond) {
+  ChildProcess viewer({kViewer, "--headless", "--domain", "152", "--fps", "1", "--duration", "60"});
+  std::this_thread::sleep_for(1500ms);
+  const auto sent = std::chrono::steady_clock::now();
+  viewer.signal(SIGINT);
+  EXPECT_EQ(viewer.wait(3s), 0) << viewer.err();
+  EXPECT_LT(std::chrono::steady_clock::now() - sent, 1s);
+}
+
+TEST(ViewerCli, FollowsASimulatorRestart) {
+  constexpr unsigned kDomain = 153;
+  const tachi::test::ScratchDir dir{"viewer_restart"};
+  const auto png = (dir / "last.png").string();
+  const std::vector<std::string> sim_args{kSim, "--grid", "16", "--pin", "top-edge", "--domain", std::to_string(kDomain),
+                                          "--duration", "30"};
+  auto first = std::make_unique<ChildProcess>(sim_args);
+  ChildProcess viewer({kViewer, "--headless", "--domain", std::to_string(kDomain), "--snapshot", png, "--size", "320",
+                       "--duration", "60"});
+  bus::Participant dds{kDomain};
+  bus::Writer<tachi_msg_StrokeSample> strokes{dds, bus::topics::stroke};
+  bus::Reader<tachi_msg_CutEvent> cuts{dds, bus::topics::cut_event};
+  ASSERT_TRUE(strokes.wait_for_readers(2, 20s)) << first->err() << viewer.err();
+  // The first simulator cuts off the lower half (y = -0.1 m), which falls out of view.
+  const auto sample = [](std::uint64_t frame, float x, bool cutting) {
+    tachi_msg_StrokeSample s{};
+    s.sensor_id = 1;
+    s.stroke_id = 1;
+    s.frame = frame;
+    s.time_ns = static_cast<std::int64_t>(frame) * 16'666'667;
+    s.position_m = {x, -0.1f, 0.0f};
+    s.tracked = true;
+    s.gate = cutting ? tachi_msg_GATE_CUTTING : tachi_msg_GATE_IDLE;
+    return s;
+  };
+  for (int i = 0; i <= 40; ++i) {
+    strokes.write(sample(static_cast<std::uint64_t>(i), -0.7f + 1.4f * static_cast<float>(i) / 40.0f, true));
+    std::this_thread::sleep_for(5ms);
+  }
+  strokes.write(sample(41, 0.7f, false));
+  ASSERT_TRUE(cuts.wait_for_data(10s)) << first->err();
+  std::this_thread::sleep_for(2s);  // the piece falls away
+  first->signal(SIGINT);
+  EXPECT_EQ(first->wait(10s), 0);
+
+  // A new simulator: uncut cloth, topology version back to 0. The viewer shows it whole again.
+  ChildProcess second(sim_args);
+  std::this_thread::sleep_for(3s);
+  viewer.signal(SIGINT);
+  ASSERT_EQ(viewer.wait(3s), 0) << viewer.err();
+  const cv::Mat last = cv::imread(png);
+  ASSERT_FALSE(last.empty());
+  EXPECT_NE(last.at<cv::Vec3b>(cv::Point(pixel_of(0.0f, -0.3f, 320))), kBackground) << "the lower half is back";
+  second.signal(SIGINT);
+  EXPECT_EQ(second.wait(10s), 0);
+}

@@ -258,7 +258,7 @@ int run_live(const ViewerOptions& o) {
   if (!o.headless && std::getenv("DISPLAY") == nullptr)
     throw std::runtime_error("no display (DISPLAY is not set); use --headless with --video, --snapshot or --frames-dir");
 
-  bus::Participant dds{o.bus.domain, o.bus.dds_config};
+  bus::Participant dds{o.bus.domain, o.bus.dds_config, {o.bus.secure_dir, o.bus.identity}};
   bus::Reader<tachi_msg_ClothTopology> topologies{dds, bus::topics::cloth_topology};
   bus::Reader<tachi_msg_ClothState> states{dds, bus::topics::cloth_state};
   bus::Reader<tachi_msg_StrokeSample> strokes{dds, bus::topics::stroke};
@@ -272,6 +272,12 @@ int run_live(const ViewerOptions& o) {
   waitset.attach(strokes);
   waitset.attach(cuts);
   bus::Heartbeat heartbeat{dds, "tachi-viewer"};
+  // Issue 13's boundary checks (sizes, consistent arrays) before a message is copied; SceneState then
+  // checks versions, sessions and coordinates (docs/viewer.md). Both count in the heartbeat.
+  bus::InputGuard guard{[&](std::string_view reason) {
+    heartbeat.count_rejected(reason);
+    spdlog::warn("tachi-viewer: cloth message rejected ({})", reason);
+  }};
 
   const MouseSource mouse_source{o.mouse_sensor_id, random_session_id()};
   if (o.mouse)
@@ -339,14 +345,15 @@ int run_live(const ViewerOptions& o) {
       waitset.wait(wait);
     }
     for (const auto& t : topologies.take()) {
-      count(state.on_topology(from_msg(*t)));
       ++messages_in;
+      if (plausible(*t, guard)) count(state.on_topology(from_msg(*t)));
     }
     for (const auto& s : states.take(8)) {
+      ++messages_in;
+      if (!plausible(*s, guard)) continue;
       const auto rejected = state.on_state(from_msg(*s));
       count(rejected);
       if (!rejected) last_state = Clock::now();
-      ++messages_in;
     }
     for (const auto& h : strokes.take()) {
       state.on_hand(from_msg(*h));

@@ -11,6 +11,10 @@ TopologyUpdate triangles(std::uint32_t version, std::vector<std::array<std::uint
   t.triangles = std::move(list);
   return t;
 }
+TopologyUpdate in_session(TopologyUpdate t, std::uint64_t session) {
+  t.session_id = session;
+  return t;
+}
 HandUpdate hand(std::uint32_t stroke, Eigen::Vector3f at, bool tracked, bool cutting, bool outside) {
   HandUpdate h;
   h.stroke_id = stroke;
@@ -38,6 +42,25 @@ TEST(SceneState, AnOlderTopologyArrivingLateIsIgnored) {
   state.on_topology(triangles(2, {{0, 1, 2}}));
   EXPECT_EQ(state.scene().mesh.topology_version, 3u);
   EXPECT_EQ(state.scene().mesh.triangles.size(), 2u);
+}
+
+// Issue 13: a restarted simulator counts versions from 1 again; its new session is followed.
+TEST(SceneState, ARestartedSimulatorsNewSessionIsFollowedWhateverItsVersion) {
+  SceneState state;
+  state.on_topology(in_session(triangles(30, {{0, 1, 2}, {1, 2, 3}}), 111));
+  state.on_topology(in_session(triangles(1, {{0, 1, 2}}), 222));
+  // Taken once the new run's first state confirms it (issue 10: a stray publisher of another session
+  // must not take the view).
+  StateUpdate first_state;
+  first_state.topology_version = 1;
+  first_state.session_id = 222;
+  first_state.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+  state.on_state(first_state);
+  EXPECT_EQ(state.scene().mesh.topology_version, 1u);
+  EXPECT_EQ(state.scene().mesh.triangles.size(), 1u);
+  state.on_topology(in_session(triangles(29, {{0, 1, 2}, {1, 2, 3}}), 222));
+  state.on_topology(in_session(triangles(5, {{0, 1, 2}}), 222));  // late, same session: ignored
+  EXPECT_EQ(state.scene().mesh.topology_version, 29u);
 }
 
 TEST(SceneState, StrokeTrailGrowsWhileCuttingAndRestartsWithTheNextStroke) {

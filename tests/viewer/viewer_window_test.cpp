@@ -10,6 +10,7 @@
 #include <gtest/gtest.h>
 #include <opencv2/imgcodecs.hpp>
 
+#include <cmath>
 #include <csignal>
 #include <filesystem>
 #include <regex>
@@ -166,6 +167,7 @@ TEST(ViewerWindow, AMouseDragCutsTheClothAlongTheDraggedLine) {
   bus::Reader<tachi_msg_CutEvent> cuts{dds, bus::topics::cut_event};
   bus::Reader<tachi_msg_StrokeSample> strokes{dds, bus::topics::stroke};
   bus::Reader<tachi_msg_ClothState> states{dds, bus::topics::cloth_state};
+  bus::Reader<tachi_msg_ClothTopology> topologies{dds, bus::topics::cloth_topology};
   const std::string window = display.viewer_window();
   ASSERT_FALSE(window.empty()) << viewer.err();
   ASSERT_TRUE(states.wait_for_data(20s)) << sim.err();
@@ -187,22 +189,46 @@ TEST(ViewerWindow, AMouseDragCutsTheClothAlongTheDraggedLine) {
   }
   display.run({kXdotool, "mouseup", "1"});
 
-  std::vector<std::pair<int, int>> line;
+  bool cut = false;
   std::uint32_t pieces = 0, sensor = 0;
-  for (int i = 0; i < 100 && line.empty(); ++i) {
+  std::vector<std::pair<int, int>> line;  // grid cells of the cut (grid mode; exact cuts report none)
+  for (int i = 0; i < 100 && !cut; ++i) {
     cuts.wait_for_data(100ms);
-    for (const auto& cut : cuts.take()) {
-      pieces = cut->pieces;
-      sensor = cut->sensor_id;
-      for (std::uint32_t k = 0; k < cut->cut_line._length; ++k)
-        line.emplace_back(cut->cut_line._buffer[k].u, cut->cut_line._buffer[k].v);
+    for (const auto& event : cuts.take()) {
+      cut = true;
+      pieces = event->pieces;
+      sensor = event->sensor_id;
+      for (std::uint32_t k = 0; k < event->cut_line._length; ++k)
+        line.emplace_back(event->cut_line._buffer[k].u, event->cut_line._buffer[k].v);
     }
   }
-  ASSERT_FALSE(line.empty()) << "the simulator reported no cut\n" << sim.err() << viewer.err();
+  ASSERT_TRUE(cut) << "the simulator reported no cut\n" << sim.err() << viewer.err();
   EXPECT_EQ(pieces, 2u);
   EXPECT_EQ(sensor, 1000u) << "the cut names the mouse blade as its hand source";
   for (const auto& [u, v] : line) EXPECT_NEAR(v, 9, 1) << "cell (" << u << ", " << v << ") is off the dragged line";
-  EXPECT_GE(line.size(), 15u) << "the cut crosses the 16-column cloth";
+
+  // Whatever the cut mode: the cloth parted along row 9 within a cell. A second later every particle of
+  // rows 0-7 still hangs where it was and every particle of rows 11-15 has fallen away.
+  std::this_thread::sleep_for(1s);
+  (void)states.take();
+  ASSERT_TRUE(states.wait_for_data(5s));
+  const auto latest = states.take();
+  const auto shapes = topologies.take();
+  ASSERT_FALSE(latest.empty());
+  ASSERT_FALSE(shapes.empty());
+  const tachi_msg_ClothState& now = *latest.back();
+  const tachi_msg_ClothTopology& shape = *shapes.back();
+  int hanging = 0, fallen = 0, misplaced = 0;
+  for (std::uint32_t i = 0; i < shape.particle_grid._length && 3 * i + 1 < now.positions._length; ++i) {
+    const int v = shape.particle_grid._buffer[i].v;
+    const float rest_y = 0.5f - static_cast<float>(v) / 15.0f;
+    const float y = now.positions._buffer[3 * i + 1];
+    if (v <= 7) (std::abs(y - rest_y) < 0.2f ? hanging : misplaced)++;
+    if (v >= 11) (y < rest_y - 0.5f ? fallen : misplaced)++;
+  }
+  EXPECT_EQ(misplaced, 0);
+  EXPECT_GE(hanging, 8 * 16);
+  EXPECT_GE(fallen, 5 * 16);
 
   // The samples that made the cut came from the mouse as a hand source of its own.
   bool from_mouse = false;

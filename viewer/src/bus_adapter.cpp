@@ -102,4 +102,22 @@ tachi_msg_StrokeSample to_msg(const BladeSample& sample, const MouseSource& sour
   return msg;
 }
 
+namespace {
+// 4096 x 4096 particles (tachi-sim's largest grid), cut up to twice over.
+constexpr std::size_t kMaxParticles = std::size_t{4096} * 4096 * 2;
+}  // namespace
+
+bool plausible(const tachi_msg_ClothTopology& msg, bus::InputGuard& guard) {
+  const std::size_t particles = msg.particle_grid._length;
+  if (!guard.size(particles, kMaxParticles) || !guard.size(msg.triangles._length, 6 * kMaxParticles, 3)) return false;
+  if (msg.pinned._length != particles) return guard.reject("inconsistent_topology");
+  for (std::uint32_t i = 0; i < msg.triangles._length; ++i)
+    if (msg.triangles._buffer[i] >= particles) return guard.reject("inconsistent_topology");
+  return true;
+}
+
+bool plausible(const tachi_msg_ClothState& msg, bus::InputGuard& guard) {
+  return guard.size(msg.positions._length, 3 * kMaxParticles, 3);
+}
+
 }  // namespace tachi::viewer

@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 using namespace tachi::viewer;
 
 namespace {
@@ -235,4 +237,23 @@ TEST(SceneState, AnotherSourceIdleSamplesDoNotTakeTheMarkFromACuttingOne) {
   s.on_hand(camera);
   EXPECT_EQ(s.gate(), "idle (threshold)");
   EXPECT_FLOAT_EQ(s.scene().hand->position_m.x(), -0.3f);
+}
+
+TEST(SceneState, AnExactCutWithoutAGridLineFlashesWhatItSplit) {
+  SceneState s;
+  s.on_topology(topology(1));
+  s.on_state(state(1));
+  // Version 2 splits particles 3 and 4 (new particles 9 and 10 at the same grid cells).
+  auto split = topology(2);
+  split.grid.push_back(0u | 1u << 16);
+  split.grid.push_back(1u | 1u << 16);
+  split.duplicated_from = {3, 4};
+  EXPECT_FALSE(s.on_topology(split));
+  EXPECT_FALSE(s.on_cut({1, 2, {}, 2, 1, 7, 1}, 0.0));
+  auto flashed = s.scene().cut_particles;
+  std::sort(flashed.begin(), flashed.end());
+  EXPECT_EQ(flashed, (std::vector<std::uint32_t>{3, 4, 9, 10}));
+  EXPECT_FLOAT_EQ(s.scene().flash, 1.0f);
+  EXPECT_FALSE(s.on_cut({2, 2, {}, 2, 1, 7, 1}, 1.0));
+  EXPECT_TRUE(s.scene().cut_particles.empty()) << "each cut flashes its own splits";
 }

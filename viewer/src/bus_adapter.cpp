@@ -18,6 +18,7 @@ TopologyUpdate from_msg(const tachi_msg_ClothTopology& msg) {
   for (std::size_t t = 0; t < count; ++t)
     update.triangles[t] = {msg.triangles._buffer[3 * t], msg.triangles._buffer[3 * t + 1], msg.triangles._buffer[3 * t + 2]};
   update.pinned.assign(msg.pinned._buffer, msg.pinned._buffer + msg.pinned._length);
+  update.duplicated_from.assign(msg.duplicated_from._buffer, msg.duplicated_from._buffer + msg.duplicated_from._length);
   update.grid.resize(msg.particle_grid._length);
   for (std::size_t i = 0; i < update.grid.size(); ++i) update.grid[i] = packed(msg.particle_grid._buffer[i]);
   return update;

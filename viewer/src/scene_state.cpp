@@ -69,11 +69,21 @@ Rejection SceneState::reject(Rejection reason) {
 void SceneState::adopt(TopologyUpdate update) {
   if (has_topology_ && update.session_id != session_id_) {
     // The simulator restarted: what was counted and cut belongs to the previous run.
+    split_since_cut_.clear();
     pieces_.reset();
     fallen_.reset();
     scene_.cut_particles.clear();
     scene_.flash = 0.0f;
   }
+  // Remember what the cuts split (both sides of each split), for the flash of the next cut event.
+  const std::size_t count = particle_count(update);
+  if (update.duplicated_from.size() <= count && split_since_cut_.size() < kMaxParticles)
+    for (std::size_t i = 0; i < update.duplicated_from.size(); ++i) {
+      const auto original = update.duplicated_from[i];
+      if (original >= count) continue;
+      split_since_cut_.push_back(original);
+      split_since_cut_.push_back(static_cast<std::uint32_t>(count - update.duplicated_from.size() + i));
+    }
   has_topology_ = true;
   candidate_.reset();
   session_id_ = update.session_id;
@@ -174,6 +184,9 @@ std::optional<Rejection> SceneState::on_cut(const CutUpdate& update, double now_
   scene_.cut_particles.clear();
   for (std::size_t i = 0; i < grid_.size(); ++i)
     if (line.count(grid_[i]) != 0) scene_.cut_particles.push_back(static_cast<std::uint32_t>(i));
+  // Exact cuts follow the stroke's own path and report no grid line: flash what they split instead.
+  if (scene_.cut_particles.empty()) scene_.cut_particles = split_since_cut_;
+  split_since_cut_.clear();
   cut_time_s_ = now_s;
   scene_.flash = scene_.cut_particles.empty() ? 0.0f : 1.0f;
   return std::nullopt;

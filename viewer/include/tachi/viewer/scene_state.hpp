@@ -26,6 +26,9 @@ struct TopologyUpdate {
   /// then the highest triangle index tells it).
   std::vector<std::uint32_t> grid;
   bool malformed = false;  ///< the message's arrays did not fit together (e.g. triangles not in threes)
+  /// The change list: the last duplicated_from.size() particles were split off duplicated_from[i] by
+  /// cuts since the previous publication (exact cuts report no grid line: these show where they were).
+  std::vector<std::uint32_t> duplicated_from;
 };
 
 struct StateUpdate {
@@ -126,6 +129,7 @@ class SceneState {
   std::uint32_t stroke_id_ = 0;
   std::string gate_ = "-";
   std::optional<std::uint32_t> pieces_, fallen_;
+  std::vector<std::uint32_t> split_since_cut_;  ///< particles cuts split since the last cut event
   double cut_time_s_ = 0.0;
   std::uint64_t rejected_total_ = 0;
   std::map<std::string, std::uint64_t, std::less<>> rejected_;

@@ -190,7 +190,7 @@ std::optional<std::string> blade_of(const tachi_msg_NodeStatus& status) {
 }
 
 void fill_hud(Hud& hud, const SceneState& state, const FrameStats& stats, std::optional<double> age_ms,
-              const std::string& blade, const std::string& warning) {
+              const std::string& blade, std::uint64_t rejected, const std::string& warning) {
   hud.fps = stats.fps();
   hud.state_age_ms = age_ms;
   hud.gate = state.gate();
@@ -200,7 +200,7 @@ void fill_hud(Hud& hud, const SceneState& state, const FrameStats& stats, std::o
   hud.topology_version = state.scene().mesh.topology_version;
   hud.pieces = state.pieces();
   hud.fallen_pieces = state.fallen_pieces();
-  hud.rejected = state.rejected();
+  hud.rejected = rejected;
   hud.warning = warning;
 }
 }  // namespace
@@ -379,7 +379,7 @@ int run_live(const ViewerOptions& o) {
       Scene& scene = state.scene();
       if (!scene.hud) scene.hud.emplace();
       fill_hud(*scene.hud, state, stats, age_ms, mouse.label().empty() ? sim_blade : sim_blade + " " + mouse.label(),
-               warning);
+               heartbeat.rejected(), warning);
       scene.blade = mouse.cursor();
       image = render(scene, view);
       outputs.frame(image);
@@ -403,7 +403,7 @@ int run_live(const ViewerOptions& o) {
   if (image.empty()) image = render(state.scene(), view);
   outputs.finish(image);
   spdlog::info("tachi-viewer: {} frames rendered, {} cloth states received, {} inputs rejected", stats.frames(),
-               state.states_received(), state.rejected());
+               state.states_received(), heartbeat.rejected());
   return common::kExitOk;
 }
 

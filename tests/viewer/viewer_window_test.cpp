@@ -145,6 +145,18 @@ TEST(ViewerWindow, FitsASmallScreenShowsTheClothAndSavesASnapshotOnAKey) {
   // Beside the cloth's right edge: a stretched copy of the old square image would still show cloth here.
   EXPECT_FALSE(is_cloth(small_shot.at<cv::Vec3b>(cv::Point(resized.tl()) + cv::Point(offset + pixel_of(0.56f, 0.2f, small_side)))));
 
+  // `h` lists the keys over the picture (white text below the HUD, where there was none).
+  const auto white_text = [&](const cv::Mat& image) {
+    const cv::Rect below_hud = cv::Rect(resized.x + 60, resized.y + 100, 380, 150) & cv::Rect(0, 0, image.cols, image.rows);
+    cv::Mat white;
+    cv::inRange(image(below_hud), cv::Scalar(225, 225, 225), cv::Scalar(255, 255, 255), white);
+    return cv::countNonZero(white);
+  };
+  EXPECT_LT(white_text(small_shot), 20);
+  display.run({kXdotool, "windowfocus", "--sync", window, "key", "h"});
+  std::this_thread::sleep_for(500ms);
+  EXPECT_GT(white_text(display.screenshot(dir / "help.png")), 60) << "the key list is shown";
+
   display.run({kXdotool, "mousemove", "--window", window, "100", "100"});
   EXPECT_TRUE(display.pointer_visible()) << "without --mouse the system pointer stays";
 

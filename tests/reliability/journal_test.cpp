@@ -95,7 +95,8 @@ TEST_P(JournalReplay, AKilledRunReplaysToTheSameClothAndCuts) {
     ASSERT_EQ(second.cloth().position[i], undisturbed.cloth().position[i]) << "particle " << i;
 }
 
-INSTANTIATE_TEST_SUITE_P(CutModes, JournalReplay, ::testing::Values(CutMode::Grid, CutMode::Exact, CutMode::Delete));
+INSTANTIATE_TEST_SUITE_P(CutModes, JournalReplay, ::testing::Values(CutMode::Grid, CutMode::Exact, CutMode::Delete),
+                         [](const ::testing::TestParamInfo<CutMode>& info) { return std::string(to_string(info.param)); });
 
 TEST(Journal, ATornLastLineIsDroppedAndAppendingGoesOn) {
   test::ScratchDir dir{"journal"};

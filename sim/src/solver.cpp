@@ -148,9 +148,8 @@ void Solver::full_build(const Cloth& cloth, std::vector<std::uint32_t> pins) {
   }
   cached_pins_ = std::move(pins);
   build_attachments(cloth);
-  strain_limit_.clear();
-  limit_slot_.assign(cloth.spring_count(), kNone);
   append_springs(cloth, all);
+  order_strain_limit(cloth);
   lanes_ = 0;
   for (const auto& g : groups_) lanes_ += 4 * g.size();
 }
@@ -190,42 +189,48 @@ void Solver::append_springs(const Cloth& cloth, const std::vector<std::uint32_t>
       }
     }
     groups_[f].insert(groups_[f].end(), fresh.begin(), fresh.end());
-    if (f != static_cast<std::size_t>(SpringKind::Structural)) continue;
-    // The strain limit sweeps outwards from the pins (by the rest distance of the spring's nearer end);
-    // a cut's new springs go last. Pieces no pin holds (+inf) come after the rest.
-    const std::size_t first = strain_limit_.size();
-    for (const std::uint64_t e : order[f]) {
-      const auto k = static_cast<std::uint32_t>(e & 0xFFFFFFFFU);
-      std::uint32_t a = cloth.spring_a[k];
-      std::uint32_t b = cloth.spring_b[k];
-      if (nearest_[b] < nearest_[a]) std::swap(a, b);
-      strain_limit_.push_back({a, b, cloth.rest_length[k]});
-    }
-    std::vector<std::pair<float, std::uint32_t>> by_level;
-    by_level.reserve(order[f].size());
-    for (std::size_t i = 0; i < order[f].size(); ++i) {
-      by_level.emplace_back(nearest_[strain_limit_[first + i].a], static_cast<std::uint32_t>(i));
-    }
-    // Quantised to half a spacing, then stable: ties keep the grid order (measured in docs/sim.md).
-    const float unit = 0.5F * std::min(cloth.spacing_x(), cloth.spacing_y());
-    for (auto& [level, i] : by_level) level = std::isfinite(level) ? std::floor(level / unit) : kInf;
-    std::stable_sort(by_level.begin(), by_level.end(),
-                     [](const auto& x, const auto& y) { return x.first < y.first; });
-    std::vector<PackedSpring> sorted;
-    sorted.reserve(by_level.size());
-    for (const auto& [level, i] : by_level) {
-      const auto k = static_cast<std::uint32_t>(order[f][i] & 0xFFFFFFFFU);
-      limit_slot_[k] = static_cast<std::uint32_t>(first + sorted.size());
-      sorted.push_back(strain_limit_[first + i]);
-    }
-    std::copy(sorted.begin(), sorted.end(), strain_limit_.begin() + static_cast<std::ptrdiff_t>(first));
+  }
+}
+
+void Solver::order_strain_limit(const Cloth& cloth) {
+  // Outwards from the pins, by the rest distance of the spring's nearer end quantised to half a spacing,
+  // ties in spring order (measured in docs/sim.md); pieces no pin holds (+inf) last. Redone after every
+  // cut because a cut lengthens the distances behind it: a counting sort, linear in the springs.
+  const float unit = 0.5F * std::min(cloth.spacing_x(), cloth.spacing_y());
+  const auto grid_particles = static_cast<std::uint32_t>(cloth.columns * cloth.rows);
+  auto& level = limit_level_;
+  level.clear();
+  std::uint32_t top = 0;
+  for (std::uint32_t k = 0; k < cloth.spring_count(); ++k) {
+    if (cloth.alive[k] == 0 || cloth.kind[k] != SpringKind::Structural) continue;
+    const float d = std::min(nearest_[cloth.spring_a[k]], nearest_[cloth.spring_b[k]]);
+    const std::uint32_t l = std::isfinite(d) ? static_cast<std::uint32_t>(d / unit) : kNone;
+    if (l != kNone) top = std::max(top, l);
+    level.emplace_back(l, k);
+  }
+  auto& start = limit_start_;
+  start.assign(static_cast<std::size_t>(top) + 3, 0);
+  for (auto& [l, k] : level) {
+    if (l == kNone) l = top + 1;
+    ++start[l + 1];
+  }
+  for (std::size_t l = 1; l < start.size(); ++l) start[l] += start[l - 1];
+  strain_limit_.resize(level.size());
+  for (const auto& [l, k] : level) {
+    std::uint32_t na = cloth.spring_a[k];
+    std::uint32_t nb = cloth.spring_b[k];
+    if (nearest_[nb] < nearest_[na]) std::swap(na, nb);
+    // Strictly nearer by a tenth of the spring: along the way out from the pins, not across it.
+    const bool leads = std::isfinite(nearest_[nb]) && nearest_[na] + 0.1F * cloth.rest_length[k] < nearest_[nb];
+    const bool by_cut = na >= grid_particles || nb >= grid_particles;
+    const LimitFollow follow = !leads ? LimitFollow::Never : by_cut ? LimitFollow::Always : LimitFollow::LastSweep;
+    strain_limit_[start[l]++] = {na, nb, cloth.rest_length[k], follow};
   }
 }
 
 void Solver::update_incrementally(const Cloth& cloth) {
   ++incremental_updates_;
   slot_.resize(cloth.spring_count(), Slot{});
-  limit_slot_.resize(cloth.spring_count(), kNone);
   // The springs the cut edited, once each; the particles they touched before and after.
   std::vector<std::uint32_t> edited(cloth.spring_edits.begin() + static_cast<std::ptrdiff_t>(edits_read_),
                                     cloth.spring_edits.end());
@@ -244,10 +249,6 @@ void Solver::update_incrementally(const Cloth& cloth) {
       s = Slot{};
       ++blanked_;
     }
-    if (limit_slot_[k] != kNone) {
-      strain_limit_[limit_slot_[k]].rest = kInf;  // never over the limit: skipped
-      limit_slot_[k] = kNone;
-    }
     if (cloth.alive[k] != 0) {
       touched.push_back(cloth.spring_a[k]);
       touched.push_back(cloth.spring_b[k]);
@@ -258,6 +259,7 @@ void Solver::update_incrementally(const Cloth& cloth) {
   touched.erase(std::unique(touched.begin(), touched.end()), touched.end());
   update_attachments(cloth, touched);
   append_springs(cloth, edited);
+  order_strain_limit(cloth);
 }
 
 void Solver::run_search(const Cloth& cloth, Search& search, const std::vector<std::uint8_t>* only) {
@@ -576,7 +578,11 @@ void Solver::substep(Cloth& cloth, const Colliders& colliders, float h, bool fir
   }
 
   // 5. Provot's deformation constraint: a structural spring longer than (1 + max_strain) L is brought
-  // back (Provot 1995, section 4), sweeping outwards from the pins.
+  // back (Provot 1995, section 4), sweeping outwards from the pins. Provot moves both ends unless one is
+  // fixed; here the end nearer to a pin counts as fixed (follow the leader, Mueller et al. 2012, "Fast
+  // simulation of inextensible hair and fur"): the correction then travels outwards with the sweep instead
+  // of being undone by the next spring, which a cut's tip (all the weight below hanging on a few short
+  // springs) otherwise needs dozens of sweeps for.
   // A violating spring is brought to 95 % of the allowed stretch, not exactly to it: the corrections of
   // its neighbours then push it back towards, not over, the limit (a 256^2 cloth otherwise rests with a
   // few springs at 10.08 %).
@@ -585,14 +591,29 @@ void Solver::substep(Cloth& cloth, const Colliders& colliders, float h, bool fir
   // A correction can stretch a spring swept earlier, so sweeps repeat until one finds nothing to
   // correct (usually the first: the scan without a square root is cheap) or the budget is spent.
   for (int pass = 0; pass < params_.strain_limit_passes; ++pass) {
+    // Everywhere in the last sweep; from the second sweep on next to a cut (a spring touching a particle
+    // a cut made), where the weight below a tip hangs on a few short springs.
+    const bool follow_all = params_.strain_limit_follow && pass > 0 && pass + 1 == params_.strain_limit_passes;
+    const bool follow_cut = params_.strain_limit_follow && pass > 0;
     std::size_t corrections = 0;
-    for (const PackedSpring& s : strain_limit_) {
-      const Vec4 d = (x[s.b] - x[s.a]).cwiseProduct(kXyz);
+    for (const LimitSpring& s : strain_limit_) {
+      Vec4& pa = x[s.a];
+      Vec4& pb = x[s.b];
+      const Vec4 d = (pb - pa).cwiseProduct(kXyz);
       const float target = limit * s.rest;
-      if (d.squaredNorm() > target * target) {
-        project_distance<Length::Exact>(x[s.a], x[s.b], corrected * s.rest, 0.0F);
-        ++corrections;
-      }
+      const float len2 = d.squaredNorm();
+      if (!(len2 > target * target)) continue;
+      const float wb = pb.w();
+      const bool follow = s.follow == LimitFollow::Always ? follow_all || follow_cut
+                          : s.follow == LimitFollow::LastSweep ? follow_all
+                                                               : false;
+      const float wa = follow && wb > 0.0F ? 0.0F : pa.w();
+      if (wa + wb == 0.0F) continue;
+      const float len = std::sqrt(len2);
+      const float c = (len - corrected * s.rest) / (len * (wa + wb));
+      pa += (wa * c) * d;
+      pb -= (wb * c) * d;
+      ++corrections;
     }
     if (corrections == 0) break;
   }

@@ -31,6 +31,9 @@ struct SolverParams {
   float bend_compliance = 2.0F;    ///< XPBD compliance, m/N
   float max_strain = 0.10F;        ///< Provot's critical deformation rate (10%)
   int strain_limit_passes = 4;     ///< at most this many strain-limit sweeps per sub-step (stops when clean)
+  /// The last strain-limit sweep (and every sweep after the first next to a cut) moves only the end
+  /// farther from the pins (follow the leader).
+  bool strain_limit_follow = true;
   bool long_range_attachments = true;
   bool soft_every_substep = true;  ///< shear/bend in every sub-step (false: cheaper, but never fully at rest)
 };
@@ -92,6 +95,7 @@ class Solver {
   void full_build(const Cloth& cloth, std::vector<std::uint32_t> pins);
   void update_incrementally(const Cloth& cloth);
   void append_springs(const Cloth& cloth, const std::vector<std::uint32_t>& springs);
+  void order_strain_limit(const Cloth& cloth);
   void build_attachments(const Cloth& cloth);
   void run_search(const Cloth& cloth, Search& search, const std::vector<std::uint8_t>* only);
   void attach(const Cloth& cloth, Search& search, std::uint32_t i);
@@ -115,9 +119,17 @@ class Solver {
   std::size_t lanes_ = 0;                     ///< lanes in use when last fully built, and blanked since
   std::size_t blanked_ = 0;
   // Structural springs again, ordered outwards from the pins, for the strain limit; the end nearer to a
-  // pin is `a`. Per spring its place here (none for other kinds).
-  std::vector<PackedSpring> strain_limit_;
-  std::vector<std::uint32_t> limit_slot_;
+  // pin is `a`, and when it is strictly nearer only `b` moves (follow the leader).
+  enum class LimitFollow : std::uint8_t { Never, LastSweep, Always };
+  struct LimitSpring {
+    std::uint32_t a;
+    std::uint32_t b;
+    float rest;
+    LimitFollow follow;
+  };
+  std::vector<LimitSpring> strain_limit_;
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> limit_level_;  // scratch: (level, spring)
+  std::vector<std::uint32_t> limit_start_;
   // Long-range attachments: particle, pin, maximal distance.
   struct Attachment {
     std::uint32_t particle;

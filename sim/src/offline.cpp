@@ -3,6 +3,8 @@
 #include "tachi/sim/pieces.hpp"
 #include "tachi/sim/stroke.hpp"
 
+#include <spdlog/spdlog.h>
+
 #include <algorithm>
 #include <charconv>
 #include <chrono>
@@ -12,6 +14,8 @@
 #include <map>
 #include <string>
 #include <stdexcept>
+
+#include <sys/resource.h>
 
 namespace tachi::sim {
 
@@ -53,6 +57,35 @@ std::optional<std::pair<int, int>> parse_grid(const std::string& text) {
   return std::pair{*columns, *rows};
 }
 
+std::uint64_t available_memory_bytes() {
+  std::uint64_t available = 0;
+  std::ifstream meminfo{"/proc/meminfo"};
+  std::string key;
+  std::uint64_t kb = 0;
+  std::string unit;
+  while (meminfo >> key >> kb >> unit) {
+    if (key == "MemAvailable:") {
+      available = kb * 1024;
+      break;
+    }
+  }
+  // An address-space limit (ulimit -v) binds before physical memory does.
+  rlimit limit{};
+  if (getrlimit(RLIMIT_AS, &limit) == 0 && limit.rlim_cur != RLIM_INFINITY)
+    available = available == 0 ? limit.rlim_cur : std::min<std::uint64_t>(available, limit.rlim_cur);
+  return available;
+}
+
+std::optional<std::string> memory_shortfall(int columns, int rows) {
+  const double need = kPeakBytesPerParticle * static_cast<double>(columns) * static_cast<double>(rows);
+  const auto available = static_cast<double>(available_memory_bytes());
+  if (available <= 0.0 || need <= available) return std::nullopt;
+  char text[200];
+  std::snprintf(text, sizeof text, "a %dx%d cloth needs about %.1f GB and this machine has %.1f GB available; use a smaller grid",
+                columns, rows, need / 1e9, available / 1e9);
+  return text;
+}
+
 void add_offline_flags(CLI::App& app, OfflineOptions& o) {
   app.add_option_function<std::string>(
          "--grid",
@@ -61,6 +94,8 @@ void add_offline_flags(CLI::App& app, OfflineOptions& o) {
            if (!grid) {
              throw CLI::ValidationError("--grid", "'" + text + "' is not N or NxM with N, M in 2..4096");
            }
+           if (const auto shortfall = memory_shortfall(grid->first, grid->second))
+             throw CLI::ValidationError("--grid", *shortfall);
            o.cloth.columns = grid->first;
            o.cloth.rows = grid->second;
          },
@@ -287,6 +322,9 @@ Summary run_offline(const OfflineOptions& options) {
     std::ifstream in{options.stroke_file};
     if (!in) throw std::runtime_error("cannot read " + options.stroke_file.string());
     stroke = parse_stroke_csv(in);
+    for (const auto& problem : stroke.problems) spdlog::warn("{} {}; row skipped", options.stroke_file.string(), problem);
+    if (stroke.skipped_rows > stroke.problems.size())
+      spdlog::warn("{}: {} rows skipped in all", options.stroke_file.string(), stroke.skipped_rows);
     if (!stroke.error.empty()) throw std::runtime_error(options.stroke_file.string() + ": " + stroke.error);
   }
   StrokeOptions stroke_options;

@@ -47,14 +47,35 @@ StrokeFile parse_stroke_csv(std::istream& in) {
     return out;
   }
   double last_t = -std::numeric_limits<double>::infinity();
+  const auto skip = [&](std::size_t line, const std::string& why) {
+    if (out.problems.size() < StrokeFile::kMaxProblems) out.problems.push_back("line " + std::to_string(line) + ": " + why);
+    ++out.skipped_rows;
+  };
   while (const auto row = csv.next()) {
     const auto& cells = row->cells;
     // Four numbers; a trailing comma has always been let through.
     const bool four = cells.size() == 4 || (cells.size() == 5 && cells[4].empty());
     std::array<std::optional<double>, 4> v;
     for (std::size_t i = 0; four && i < 4; ++i) v[i] = common::to_double(cells[i]);
-    if (!four || !v[0] || !v[1] || !v[2] || !v[3] || *v[0] < last_t) {
-      ++out.skipped_rows;
+    if (!four) {
+      skip(row->line, "expected 4 fields t,x,y,z, got " + std::to_string(cells.size()));
+      continue;
+    }
+    if (!v[0] || !v[1] || !v[2] || !v[3]) {
+      skip(row->line, "not four finite numbers");
+      continue;
+    }
+    // Out of range before out of order: one row with t = 1e30 must not make every later row "go back".
+    if (std::abs(*v[0]) > kMaxStrokeTime_s) {
+      skip(row->line, "time " + cells[0] + " s is out of range (|t| <= 1e6 s)");
+      continue;
+    }
+    if (std::max({std::abs(*v[1]), std::abs(*v[2]), std::abs(*v[3])}) > kMaxStrokeCoordinate_m) {
+      skip(row->line, "position is out of range (|x|, |y|, |z| <= 100 m)");
+      continue;
+    }
+    if (*v[0] < last_t) {
+      skip(row->line, "time " + cells[0] + " s goes back (the previous row is at " + std::to_string(last_t) + " s)");
       continue;
     }
     last_t = *v[0];

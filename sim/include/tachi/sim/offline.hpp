@@ -57,6 +57,14 @@ void add_offline_flags(CLI::App& app, OfflineOptions& options);
 /// Parses "N" or "NxM" (columns x rows, each 2..4096). Nothing for anything else.
 [[nodiscard]] std::optional<std::pair<int, int>> parse_grid(const std::string& text);
 
+/// Peak resident bytes per particle of a tachi-sim run: 745-770 measured (maximum RSS of
+/// `tachi-sim --offline --grid 512|1024 --steps 1`), rounded up (docs/reliability.md, "Bad configs").
+inline constexpr double kPeakBytesPerParticle = 800.0;
+/// Memory this process may still use: MemAvailable, or the address-space limit when lower (0: unknown).
+[[nodiscard]] std::uint64_t available_memory_bytes();
+/// Why a columns x rows cloth will not fit in memory (what it needs, what there is), or nothing.
+[[nodiscard]] std::optional<std::string> memory_shortfall(int columns, int rows);
+
 /// Summary as JSON: particles, springs, triangles, pieces, max_strain, steps, step_ms_median, ... + extra.
 [[nodiscard]] nlohmann::json to_json(const Summary& summary);
 

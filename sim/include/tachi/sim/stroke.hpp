@@ -39,10 +39,17 @@ struct StrokeSample {
 
 /// A stroke read from CSV, or why it could not be.
 struct StrokeFile {
+  static constexpr std::size_t kMaxProblems = 20;
   std::vector<StrokeSample> samples;
-  std::size_t skipped_rows = 0;  ///< rows with a wrong field count, a non-number, or time going back
+  std::size_t skipped_rows = 0;  ///< rows with a wrong field count, a non-number, a value out of range, or time going back
+  std::vector<std::string> problems;  ///< "line N: why" of the first kMaxProblems skipped rows, for the log
   std::string error;             ///< set when the file is unusable (no header `t,x,y,z`, no sample)
 };
+
+/// A stroke row beyond these is a corrupt file, not a hand: |t| in seconds, |x|, |y|, |z| in metres
+/// (the same 100 m the live simulator rejects hand samples beyond).
+inline constexpr double kMaxStrokeTime_s = 1e6;
+inline constexpr double kMaxStrokeCoordinate_m = 100.0;
 
 /// Parses `t,x,y,z` CSV (header required; blank lines ignored; bad rows skipped and counted).
 [[nodiscard]] StrokeFile parse_stroke_csv(std::istream& in);

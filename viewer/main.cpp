@@ -58,10 +58,14 @@ int main(int argc, char** argv) try {
 
   tachi::bus::Participant dds{o.bus.domain, o.bus.dds_config, {o.bus.secure_dir, o.bus.identity}};
   tachi::bus::Reader<tachi_msg_ClothTopology> topologies{dds, tachi::bus::topics::cloth_topology};
+  // Issue 11: keyframes + deltas -> the current topology, the one way every reader assembles it.
+  tachi::bus::Reader<tachi_msg_ClothTopologyDelta> topology_deltas{dds, tachi::bus::topics::cloth_topology_delta};
+  tachi::bus::TopologyAssembler topology;
   tachi::bus::Reader<tachi_msg_ClothState> states{dds, tachi::bus::topics::cloth_state};
   tachi::bus::Reader<tachi_msg_StrokeSample> strokes{dds, tachi::bus::topics::stroke};
   tachi::bus::WaitSet waitset{dds};
   waitset.attach(topologies);
+  waitset.attach(topology_deltas);
   waitset.attach(states);
   waitset.attach(strokes);
 
@@ -86,10 +90,16 @@ int main(int argc, char** argv) try {
     const auto now = std::chrono::steady_clock::now();
     // At most 100 ms: a signal does not wake a DDS waitset, and at --fps 1 a whole frame is too long to stop in.
     waitset.wait(std::clamp(next_frame - now, std::chrono::steady_clock::duration(1ms), std::chrono::steady_clock::duration(100ms)));
+    bool topology_changed = false;
     for (const auto& t : topologies.take()) {
       ++messages_in;
-      if (viewer::plausible(*t, guard)) scene.on_topology(viewer::from_msg(*t));
+      if (viewer::plausible(*t, guard)) topology_changed = topology.on_keyframe(*t) || topology_changed;
     }
+    for (const auto& d : topology_deltas.take()) {
+      ++messages_in;
+      topology_changed = topology.on_delta(*d) || topology_changed;
+    }
+    if (topology_changed) scene.on_topology(viewer::from_assembler(topology));
     for (const auto& s : states.take(8)) {
       if (!viewer::plausible(*s, guard)) continue;
       scene.on_state(viewer::from_msg(*s));

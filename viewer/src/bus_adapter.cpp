@@ -14,6 +14,10 @@ TopologyUpdate from_msg(const tachi_msg_ClothTopology& msg) {
   return update;
 }
 
+TopologyUpdate from_assembler(const bus::TopologyAssembler& topology) {
+  return {topology.version(), topology.triangles(), topology.pinned(), topology.session_id()};
+}
+
 StateUpdate from_msg(const tachi_msg_ClothState& msg) {
   StateUpdate update;
   update.frame = msg.frame;

@@ -53,6 +53,8 @@ class Solver {
 
   /// Advances the cloth by params().dt.
   void step(Cloth& cloth, const Colliders& colliders = {});
+  /// Picks up the cloth's topology changes now (step() does it first anyway): for timing the update apart.
+  void update_topology(const Cloth& cloth) { refresh_caches(cloth); }
 
   [[nodiscard]] const SolverParams& params() const { return params_; }
   /// Number of long-range attachments in use (0 when disabled or nothing is pinned).

@@ -55,6 +55,9 @@ namespace {
 
 constexpr std::uint32_t kNone = 0xFFFFFFFFU;
 constexpr float kInf = std::numeric_limits<float>::infinity();
+/// Particles a repair of the attachments settles per step at most (~0.3 ms here): a cut that re-routes
+/// the shortest paths of a whole piece (the last cuts before it comes off) is spread over a few steps.
+constexpr std::size_t kSettledPerStep = 2048;
 
 /// Octile distance between two rest coordinates (cells): the length of the shortest path along a
 /// grid's structural and shear springs, which Dijkstra over an uncut grid measures.
@@ -116,7 +119,10 @@ void Solver::refresh_caches(const Cloth& cloth) {
   const bool topology_same = cache_valid_ && cached_version_ == cloth.topology_version &&
                              cached_springs_ == cloth.spring_count() &&
                              cached_particles_ == cloth.particle_count();
-  if (topology_same && pins == cached_pins_) return;
+  if (topology_same && pins == cached_pins_) {
+    continue_searches(cloth);
+    return;
+  }
   // Incremental only when the change is one the cloth logged: springs edited through its functions and
   // particles appended. Anything else (new pins, a grab, arrays edited directly) is rebuilt in full.
   const bool logged = cache_valid_ && pins == cached_pins_ && cloth.spring_edits.size() > edits_read_ &&
@@ -262,22 +268,29 @@ void Solver::update_incrementally(const Cloth& cloth) {
   order_strain_limit(cloth);
 }
 
-void Solver::run_search(const Cloth& cloth, Search& search, const std::vector<std::uint8_t>* only) {
-  // Dijkstra over live structural and shear springs (rest lengths). With `only`, the distances of the
-  // other particles are final and only the marked ones are relaxed (the decremental case: a cut only
-  // lengthens paths, so a particle whose shortest path the cut did not touch keeps it).
-  auto& heap = heap_;
+bool Solver::run_search(const Cloth& cloth, Search& search, bool repair, std::size_t budget) {
+  // Dijkstra over live structural and shear springs (rest lengths), at most `budget` particles settled per
+  // call. A repair (after a cut) relaxes only the open particles: the others' distances are final (a cut
+  // only lengthens paths, so a particle whose shortest path the cut did not touch keeps it); each particle
+  // it settles gets its tether back. Returns true when the search is complete.
+  auto& heap = search.heap;
   const auto greater = [](const auto& x, const auto& y) { return x.first > y.first; };
-  std::make_heap(heap.begin(), heap.end(), greater);
-  while (!heap.empty()) {
+  while (!heap.empty() && budget > 0) {
     std::pop_heap(heap.begin(), heap.end(), greater);
     const auto [d, i] = heap.back();
     heap.pop_back();
-    if (d > search.dist[i]) continue;
+    if (d != search.dist[i]) continue;  // superseded: a shorter path came, or a later cut reset it
+    if (repair) {
+      if (search.open[i] == 0) continue;
+      search.open[i] = 0;
+      if (params_.long_range_attachments) attach(cloth, search, i);
+      refresh_nearest(i);
+    }
+    --budget;
     for (const std::uint32_t k : cloth.springs_of(i)) {
       if (cloth.kind[k] == SpringKind::Bend) continue;
       const std::uint32_t j = cloth.spring_a[k] == i ? cloth.spring_b[k] : cloth.spring_a[k];
-      if (only != nullptr && (*only)[j] == 0) continue;
+      if (repair && search.open[j] == 0) continue;
       const float dj = d + cloth.rest_length[k];
       if (dj < search.dist[j]) {
         search.dist[j] = dj;
@@ -288,6 +301,31 @@ void Solver::run_search(const Cloth& cloth, Search& search, const std::vector<st
       }
     }
   }
+  if (!heap.empty()) return false;
+  // What the repair never reached is cut off from this pin: no tether (set when it was opened).
+  for (const std::uint32_t i : search.open_list) search.open[i] = 0;
+  search.open_list.clear();
+  return true;
+}
+
+void Solver::refresh_nearest(std::uint32_t i) {
+  float d = kInf;
+  for (const Search& search : searches_) {
+    if (i < search.dist.size()) d = std::min(d, search.dist[i]);
+  }
+  nearest_[i] = d;
+}
+
+void Solver::continue_searches(const Cloth& cloth) {
+  bool pending = false;
+  bool progressed = false;
+  for (Search& search : searches_) {
+    if (search.heap.empty() && search.open_list.empty()) continue;
+    progressed = true;
+    pending = !run_search(cloth, search, true, kSettledPerStep) || pending;
+  }
+  // Settled particles change the strain limit's order (their distance to the pins): redo it once done.
+  if (progressed && !pending) order_strain_limit(cloth);
 }
 
 void Solver::attach(const Cloth& cloth, Search& search, std::uint32_t i) {
@@ -333,13 +371,15 @@ void Solver::build_attachments(const Cloth& cloth) {
     search.parent.assign(n, kNone);
     search.owner.assign(n, kNone);
     search.attachment.assign(n, kNone);
-    heap_.clear();
+    search.open.assign(n, 0);
+    search.open_list.clear();
+    search.heap.clear();
     for (const std::uint32_t s : search.sources) {
       search.dist[s] = 0.0F;
       search.owner[s] = s;
-      heap_.emplace_back(0.0F, s);
+      search.heap.emplace_back(0.0F, s);
     }
-    run_search(cloth, search, nullptr);
+    run_search(cloth, search, false, std::numeric_limits<std::size_t>::max());
     for (std::uint32_t i = 0; i < n; ++i) {
       if (params_.long_range_attachments) attach(cloth, search, i);
       nearest_[i] = std::min(nearest_[i], search.dist[i]);
@@ -370,6 +410,7 @@ void Solver::update_attachments(const Cloth& cloth, const std::vector<std::uint3
     search.parent.resize(n, kNone);
     search.owner.resize(n, kNone);
     search.attachment.resize(n, kNone);
+    search.open.resize(n, 0);
     affected_.assign(n, 0);
     stack.clear();
     for (const std::uint32_t i : touched) {
@@ -407,17 +448,20 @@ void Solver::update_attachments(const Cloth& cloth, const std::vector<std::uint3
         }
       }
     }
+    // Opened: no tether until the repair settles them (a particle cut off from the pin never gets one).
     for (const std::uint32_t i : affected_list) {
       search.dist[i] = kInf;
       search.parent[i] = kNone;
       search.owner[i] = kNone;
+      if (search.open[i] == 0) search.open_list.push_back(i);
+      search.open[i] = 1;
+      if (params_.long_range_attachments) attach(cloth, search, i);
     }
-    heap_.clear();
     for (const std::uint32_t i : affected_list) {
       for (const std::uint32_t k : cloth.springs_of(i)) {
         if (cloth.kind[k] == SpringKind::Bend) continue;
         const std::uint32_t j = cloth.spring_a[k] == i ? cloth.spring_b[k] : cloth.spring_a[k];
-        if (affected_[j] != 0 || !std::isfinite(search.dist[j])) continue;
+        if (search.open[j] != 0 || !std::isfinite(search.dist[j])) continue;
         const float d = search.dist[j] + cloth.rest_length[k];
         if (d < search.dist[i]) {
           search.dist[i] = d;
@@ -425,19 +469,18 @@ void Solver::update_attachments(const Cloth& cloth, const std::vector<std::uint3
           search.owner[i] = search.owner[j];
         }
       }
-      if (std::isfinite(search.dist[i])) heap_.emplace_back(search.dist[i], i);
-    }
-    run_search(cloth, search, &affected_);
-    for (const std::uint32_t i : affected_list) {
-      if (params_.long_range_attachments) attach(cloth, search, i);
+      if (std::isfinite(search.dist[i])) {
+        search.heap.emplace_back(search.dist[i], i);
+        std::push_heap(search.heap.begin(), search.heap.end(),
+                       [](const auto& x, const auto& y) { return x.first > y.first; });
+      }
     }
     all_affected.insert(all_affected.end(), affected_list.begin(), affected_list.end());
   }
-  // Nearest pin, for the strain limit's order of the new springs.
-  for (const std::uint32_t i : all_affected) {
-    float d = kInf;
-    for (const Search& search : searches_) d = std::min(d, search.dist[i]);
-    nearest_[i] = d;
+  for (const std::uint32_t i : all_affected) refresh_nearest(i);
+  // The repair itself, within this step's budget; continue_searches goes on with it in the next steps.
+  for (Search& search : searches_) {
+    if (!search.open_list.empty()) run_search(cloth, search, true, kSettledPerStep);
   }
 }
 

@@ -91,6 +91,11 @@ class Solver {
     std::vector<std::uint32_t> parent;     ///< previous particle on the shortest path (none at a source)
     std::vector<std::uint32_t> owner;      ///< the pin the path starts at
     std::vector<std::uint32_t> attachment; ///< per particle: its attachment in attachments_, or none
+    // A repair after a cut, possibly spread over several steps: its heap, the particles whose distance is
+    // not final yet (their tethers are off meanwhile), and the same as a list.
+    std::vector<std::pair<float, std::uint32_t>> heap;
+    std::vector<std::uint8_t> open;
+    std::vector<std::uint32_t> open_list;
   };
 
   void refresh_caches(const Cloth& cloth);
@@ -99,7 +104,9 @@ class Solver {
   void append_springs(const Cloth& cloth, const std::vector<std::uint32_t>& springs);
   void order_strain_limit(const Cloth& cloth);
   void build_attachments(const Cloth& cloth);
-  void run_search(const Cloth& cloth, Search& search, const std::vector<std::uint8_t>* only);
+  bool run_search(const Cloth& cloth, Search& search, bool repair, std::size_t budget);
+  void continue_searches(const Cloth& cloth);
+  void refresh_nearest(std::uint32_t i);
   void attach(const Cloth& cloth, Search& search, std::uint32_t i);
   void update_attachments(const Cloth& cloth, const std::vector<std::uint32_t>& touched);
   static void build_groups(const std::vector<PackedSpring>& springs, const std::vector<std::uint32_t>& keys,
@@ -142,7 +149,6 @@ class Solver {
   std::vector<Search> searches_;
   std::vector<float> nearest_;  ///< per particle: rest distance to the nearest pin (+inf: no pin reaches it)
   std::vector<std::uint8_t> affected_;  ///< scratch of the incremental searches
-  std::vector<std::pair<float, std::uint32_t>> heap_;
   // Positions with the inverse mass in w, during a step; element 0 is the fixed padding particle.
   std::vector<Eigen::Vector4f> work_;
   std::vector<Eigen::Vector4f> old_work_;

@@ -23,6 +23,9 @@ bool TopologyAssembler::on_keyframe(const tachi_msg_ClothTopology& msg) {
   grid_.assign(msg.particle_grid._buffer, msg.particle_grid._buffer + msg.particle_grid._length);
   pinned_.assign(msg.pinned._buffer, msg.pinned._buffer + msg.pinned._length);
   pinned_.resize(grid_.size(), 0);
+  columns_ = msg.columns;
+  rows_ = msg.rows;
+  duplicated_since_.clear();
   // Kept-aside deltas of another session or already covered by the keyframe are of no use any more.
   std::erase_if(pending_, [&](const Delta& d) { return d.session_id != session_id_ || d.base_version < version_; });
   drain_pending();
@@ -30,11 +33,12 @@ bool TopologyAssembler::on_keyframe(const tachi_msg_ClothTopology& msg) {
 }
 
 bool TopologyAssembler::on_delta(const tachi_msg_ClothTopologyDelta& msg) {
-  Delta d{msg.session_id, msg.base_version, msg.version, {}, {}, {}, {}};
+  Delta d{msg.session_id, msg.base_version, msg.version, {}, {}, {}, {}, {}};
   d.grid.assign(msg.new_particle_grid._buffer, msg.new_particle_grid._buffer + msg.new_particle_grid._length);
   d.pinned.assign(msg.new_particle_pinned._buffer, msg.new_particle_pinned._buffer + msg.new_particle_pinned._length);
   d.removed.assign(msg.removed_triangles._buffer, msg.removed_triangles._buffer + msg.removed_triangles._length);
   d.added.assign(msg.added_triangles._buffer, msg.added_triangles._buffer + msg.added_triangles._length);
+  d.duplicated_from.assign(msg.duplicated_from._buffer, msg.duplicated_from._buffer + msg.duplicated_from._length);
   if (!has_topology_ || msg.session_id != session_id_ || msg.base_version > version_) {
     // Not applicable yet: before the first keyframe, of a session not seen yet, or after a missed delta.
     if (pending_.size() >= kMaxPending) pending_.erase(pending_.begin());
@@ -51,6 +55,12 @@ bool TopologyAssembler::on_delta(const tachi_msg_ClothTopologyDelta& msg) {
 }
 
 void TopologyAssembler::apply(const Delta& delta) {
+  // Split-off particles of the deltas since the last take, as long as they stay the last particles.
+  if (delta.duplicated_from.size() == delta.grid.size()) {
+    duplicated_since_.insert(duplicated_since_.end(), delta.duplicated_from.begin(), delta.duplicated_from.end());
+  } else {
+    duplicated_since_.clear();
+  }
   grid_.insert(grid_.end(), delta.grid.begin(), delta.grid.end());
   pinned_.insert(pinned_.end(), delta.pinned.begin(), delta.pinned.end());
   pinned_.resize(grid_.size(), 0);

@@ -1,5 +1,6 @@
 #include "bus_adapter.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 namespace tachi::sim {
@@ -104,11 +105,15 @@ void TopologyDeltaMessage::fill(std::uint32_t cloth_id, const Cloth& cloth, cons
   msg_.new_particle_pinned._release = false;
   point_at(msg_.removed_triangles, removed_);
   point_at(msg_.added_triangles, added_);
+  // The merged change lists every particle appended since the last delta, in order.
+  duplicated_from_.assign(change.duplicated_from.end() - static_cast<std::ptrdiff_t>(std::min(change.duplicated_from.size(), grid_.size())),
+                          change.duplicated_from.end());
+  point_at(msg_.duplicated_from, duplicated_from_);
 }
 
 std::size_t TopologyDeltaMessage::payload_bytes() const {
   return sizeof(tachi_msg_GridCoord) * grid_.size() + pinned_.size() +
-         sizeof(std::uint32_t) * (removed_.size() + added_.size());
+         sizeof(std::uint32_t) * (removed_.size() + added_.size() + duplicated_from_.size());
 }
 
 tachi_msg_ClothState state_msg(std::uint32_t cloth_id, std::uint64_t frame, double sim_time_s, const Cloth& cloth,
@@ -119,6 +124,7 @@ tachi_msg_ClothState state_msg(std::uint32_t cloth_id, std::uint64_t frame, doub
   msg.frame = frame;
   msg.sim_time_ns = static_cast<std::int64_t>(std::llround(sim_time_s * 1e9));
   msg.topology_version = cloth.topology_version;
+  msg.held_particle = -1;  // nothing held (a zeroed message would say particle 0)
   // The message is only read by dds_write; the cast drops const for the C struct's sake.
   msg.positions._buffer = const_cast<float*>(cloth.position.empty() ? nullptr : cloth.position.front().data());
   msg.positions._length = msg.positions._maximum = static_cast<std::uint32_t>(3 * cloth.particle_count());

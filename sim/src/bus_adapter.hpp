@@ -70,6 +70,7 @@ class TopologyDeltaMessage {
   std::vector<std::uint8_t> pinned_;
   std::vector<std::uint32_t> removed_;
   std::vector<std::uint32_t> added_;
+  std::vector<std::uint32_t> duplicated_from_;
 };
 
 /// A ClothState message whose positions point straight at the cloth's position array

@@ -12,6 +12,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <unordered_map>
+#include <utility>
 #include <vector>
 
 namespace tachi::bus {
@@ -33,6 +34,12 @@ class TopologyAssembler {
   [[nodiscard]] const std::vector<std::uint8_t>& pinned() const { return pinned_; }
   [[nodiscard]] const std::vector<tachi_msg_GridCoord>& particle_grid() const { return grid_; }
   [[nodiscard]] std::size_t particle_count() const { return grid_.size(); }
+  /// Grid of the uncut cloth, from the keyframe.
+  [[nodiscard]] int columns() const { return columns_; }
+  [[nodiscard]] int rows() const { return rows_; }
+  /// Per particle appended by the deltas applied since the last call (the last ones of the particle list):
+  /// the particle it was split off. Cleared by the call and by a keyframe.
+  std::vector<std::uint32_t> take_duplicated_from() { return std::exchange(duplicated_since_, {}); }
   /// Deltas applied, kept aside, dropped (older than what is held), since construction.
   [[nodiscard]] std::uint64_t applied() const { return applied_; }
   [[nodiscard]] std::uint64_t dropped() const { return dropped_; }
@@ -47,6 +54,7 @@ class TopologyAssembler {
     std::vector<std::uint8_t> pinned;
     std::vector<std::uint32_t> removed;
     std::vector<std::uint32_t> added;
+    std::vector<std::uint32_t> duplicated_from;
   };
   struct TriangleHash {
     std::size_t operator()(const std::array<std::uint32_t, 3>& t) const {
@@ -66,6 +74,9 @@ class TopologyAssembler {
   std::unordered_map<std::array<std::uint32_t, 3>, std::size_t, TriangleHash> where_;
   std::vector<std::uint8_t> pinned_;
   std::vector<tachi_msg_GridCoord> grid_;
+  int columns_ = 0;
+  int rows_ = 0;
+  std::vector<std::uint32_t> duplicated_since_;
   std::vector<Delta> pending_;
   std::uint64_t applied_ = 0;
   std::uint64_t dropped_ = 0;

@@ -333,10 +333,15 @@ int run_live(const ViewerOptions& o) {
     } else {
       waitset.wait(wait);
     }
+    // A keyframe the scene refuses (a version jump, indices out of range) must not become the base the
+    // deltas apply to either: the scene judges it first.
     bool topology_changed = false;
     for (const auto& t : topologies.take()) {
       ++messages_in;
-      if (plausible(*t, guard)) topology_changed = topology.on_keyframe(*t) || topology_changed;
+      if (!plausible(*t, guard)) continue;
+      const auto rejected = state.on_topology(from_msg(*t));
+      count(rejected);
+      if (!rejected) topology.on_keyframe(*t);
     }
     for (const auto& d : topology_deltas.take()) {
       ++messages_in;

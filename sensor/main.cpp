@@ -119,7 +119,7 @@ int main(int argc, char** argv) try {
   std::optional<tachi::bus::Writer<tachi_msg_RawHandSample>> writer;
   std::optional<tachi::bus::Heartbeat> heartbeat;
   if (!o.no_dds) {
-    dds.emplace(o.bus.domain, o.bus.dds_config);
+    dds.emplace(o.bus.domain, o.bus.dds_config, tachi::bus::Security{o.bus.secure_dir, o.bus.identity});
     writer.emplace(*dds, tachi::bus::topics::raw_hand);
     heartbeat.emplace(*dds, "tachi-sensor");
     if (o.wait_readers > 0 && !writer->wait_for_readers(o.wait_readers, std::chrono::seconds(5)))

@@ -12,6 +12,7 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "tachi/common/app.hpp"
 #include "tachi/sensor/depth_source.hpp"
 #include "tachi/sensor/hand_csv.hpp"
 #include "tachi/sensor/hand_finder.hpp"
@@ -82,9 +83,21 @@ std::pair<std::vector<double>, Evaluation> run(const std::vector<DepthFrame>& fr
 }  // namespace
 
 int main(int argc, char** argv) {
-  const std::filesystem::path dir = argc > 1 ? argv[1] : TACHI_RECORDINGS_DIR;
-  const int repeat = argc > 2 ? std::max(1, std::atoi(argv[2])) : 5;
-  const bool per_frame = argc > 3 && std::string(argv[3]) == "per-frame";  // first pass's ms per frame to stderr
+  CLI::App app{"tachi-sensor-bench: hand extraction speed and accuracy on the bundled recordings, against a "
+               "nearest-blob baseline (docs/benchmarks.md)"};
+  app.name("tachi-sensor-bench");
+  std::string recordings = TACHI_RECORDINGS_DIR;
+  int repeat = 5;
+  std::string per_frame_word;
+  app.add_option("recordings", recordings, "Folder holding the push, jitter, straight_cut, curve and top_edge recordings")
+      ->check(CLI::ExistingDirectory)
+      ->capture_default_str();
+  app.add_option("passes", repeat, "Passes per scenario")->check(CLI::Range(1, 1000))->capture_default_str();
+  app.add_option("per-frame", per_frame_word, "\"per-frame\": also print the first pass's ms per frame to stderr")
+      ->check(CLI::IsMember({"per-frame"}));
+  if (const int rc = tachi::common::parse(app, argc, argv); rc >= 0) return rc;
+  const std::filesystem::path dir = recordings;
+  const bool per_frame = !per_frame_word.empty();
   std::printf("recordings %s, %d passes per scenario, one thread, thread CPU time per frame\n\n", dir.c_str(), repeat);
   std::printf("%-13s %6s | %9s %9s %7s %5s | %9s %9s %7s %5s | %7s\n", "scenario", "frames", "tachi ms", "RMS mm",
               "tracked", "phant", "blob ms", "RMS mm", "tracked", "phant", "speedup");

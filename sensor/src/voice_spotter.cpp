@@ -23,6 +23,7 @@ struct KeywordSpotter::Impl {
   long utterance_start = 0;         // sample at which the current utterance began
   std::vector<std::int16_t> audio;  // the latest audio, from sample audio_start on
   long audio_start = 0;
+  long last_hit_end = -1L << 30;  // sample at which the last reported hit ended (none yet)
 
   ~Impl() {
     if (decoder != nullptr) {
@@ -36,6 +37,7 @@ struct KeywordSpotter::Impl {
 namespace {
 constexpr long kSamplesPerFrame = kVoiceSampleRate / 100;     // pocketsphinx's 10 ms frames
 constexpr std::size_t kKeepSamples = 4 * kVoiceSampleRate;   // replayable audio: longer than a phrase
+constexpr long kRedetectSamples = kVoiceSampleRate / 2;      // a hit ending < 0.5 s after the last one is it again
 
 // pocketsphinx reads keyword lists from a file only.
 std::string write_kws_file(const std::string& text) {
@@ -96,7 +98,6 @@ std::vector<VoiceDetection> KeywordSpotter::process(std::span<const std::int16_t
   for (int round = 0; round < 4; ++round) {  // a replay may hold another hit; a few at most
     const char* hyp = ps_get_hyp(impl_->decoder, nullptr);
     if (hyp == nullptr || hyp[0] == '\0') break;
-    for (const auto& p : phrases_in_hypothesis(hyp, impl_->config.phrases)) found.push_back({time_s(), p.command, p.phrase});
     // Restart, or the same hit is reported with every later block; then replay the audio after the
     // hit's end, which the decoder held and a restart alone drops: in "go forward ten meters" the
     // second phrase follows the first at once and was never found that way (issue 14).
@@ -105,6 +106,13 @@ std::vector<VoiceDetection> KeywordSpotter::process(std::span<const std::int16_t
       int start_frame = 0, end_frame = 0;
       ps_seg_frames(seg, &start_frame, &end_frame);
       last_end = std::max(last_end, end_frame);
+    }
+    // The replay can hold the tail of the phrase just reported ("... cutting"), found again ending
+    // just after it; a real next phrase ends at least a phrase's length later.
+    const long hit_end = impl_->utterance_start + (last_end + 1) * kSamplesPerFrame;
+    if (hit_end - impl_->last_hit_end >= kRedetectSamples) {
+      for (const auto& p : phrases_in_hypothesis(hyp, impl_->config.phrases)) found.push_back({time_s(), p.command, p.phrase});
+      impl_->last_hit_end = hit_end;
     }
     ps_end_utt(impl_->decoder);
     ps_start_utt(impl_->decoder);

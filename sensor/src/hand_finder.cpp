@@ -24,7 +24,6 @@ struct HandFinder::Impl {
   HandFinderParams params;
   std::array<std::uint16_t, 2048> foreground_below{};  // raw < this[bg] means foreground
   std::array<std::uint16_t, 2048> band_limit{};        // hand band: raw <= this[nearest raw]
-  std::array<std::uint16_t, 2048> narrow_band_limit{}; // the same, narrow_band_m deep
   // Per cell: the nearest depth that has stayed put for a while (what "static" means here: the
   // scene at start, furniture, a resting arm), the farthest depth seen (fallback where nothing was
   // stable yet), and the current run of steady readings.
@@ -59,7 +58,6 @@ struct HandFinder::Impl {
       const double z = model.metres(static_cast<std::uint16_t>(raw));
       foreground_below[raw] = raw_limit(z > 0 ? z - params.foreground_m : 0.0, false);
       band_limit[raw] = raw_limit(z > 0 ? z + params.hand_depth_band_m : 0.0, true);
-      narrow_band_limit[raw] = raw_limit(z > 0 ? z + params.narrow_band_m : 0.0, true);
     }
   }
 
@@ -178,10 +176,13 @@ bool HandFinder::Impl::measure(std::span<const std::uint16_t> raw, const cv::Rec
   if (!measure_in_band(raw, cells, near_raw, band_limit[near_raw], seed_cell, palm)) return false;
   // A circle much larger than a palm: the band reached something just behind the hand (a hand
   // against the chest, the torso 5-8 cm behind). A flat palm and its fingers lie within a few cm.
-  if (palm.radius_m <= params.narrow_band_above_m) return true;
-  Palm narrow;
-  if (!measure_in_band(raw, cells, near_raw, narrow_band_limit[near_raw], seed_cell, narrow)) return true;
-  palm = narrow;
+  // Halved again (1.75 cm) where the torso is nearer still.
+  const double z_near = model.metres(near_raw);
+  for (double band = params.narrow_band_m; palm.radius_m > params.narrow_band_above_m && band >= 0.015; band /= 2) {
+    Palm narrow;
+    if (!measure_in_band(raw, cells, near_raw, raw_limit(z_near + band, true), seed_cell, narrow)) break;
+    palm = narrow;
+  }
   return true;
 }
 
@@ -429,6 +430,7 @@ bool HandFinder::Impl::find_arm_end(std::span<const std::uint16_t> raw, Palm& pa
     const double z = model.metres(near_raw);
     const double w_m = box.width * kStep * z / k.fx, h_m = box.height * kStep * z / k.fy;
     if (std::max(w_m, h_m) < 0.05 || std::min(w_m, h_m) > 0.35) continue;
+    if (z > params.max_acquire_depth_m) continue;  // nor here: a person walking by behind the user
     // The grid test first: it is cheap, the full-resolution measure is not.
     if (!reaches_back(seed, near_raw) || !measure(raw, box, near_raw, seed, palm) || !palm_accepted(palm)) continue;
     band_region.copyTo(arm);

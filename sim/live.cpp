@@ -79,10 +79,9 @@ int run_live(const OfflineOptions& shared, std::optional<int> max_steps, const L
     replayed = replay(journal->recovered(), session);
     (void)session.take_cut_reports();  // the previous run reported them
     (void)session.take_topology_change();  // published whole below
-    if (!journal->recovered().empty())
-      spdlog::info("tachi-sim: replayed {} journal records ({} steps, {} cut particles) from {} in {:.0f} ms",
-                   journal->recovered().size(), session.steps(), session.cutter().total().particles_duplicated,
-                   live.journal, std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
+    spdlog::info("tachi-sim: replayed {} journal records ({} steps, {} cut particles) from {} in {:.0f} ms",
+                 journal->recovered().size(), session.steps(), session.cutter().total().particles_duplicated,
+                 live.journal, std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
   }
 
   bus::Participant dds{live.bus.domain, live.bus.dds_config, {live.bus.secure_dir, live.bus.identity}};
@@ -136,7 +135,10 @@ int run_live(const OfflineOptions& shared, std::optional<int> max_steps, const L
           it != replayed.end() && sample->time_ns <= it->second)
         continue;
       // A stroke is (sensor, filter session, stroke id): its samples' times never go back.
-      if (!guard.time(input->session_id ^ input->sensor_id, sample->time_ns)) continue;
+      // ... and its stroke ids never go back: a lower id names a stroke that already ended.
+      if (!guard.time(input->session_id ^ input->sensor_id, sample->time_ns) ||
+          !guard.id(input->session_id ^ input->sensor_id, input->stroke_id))
+        continue;
       const HandInput hand{input->stroke_id, input->time_s,  input->position_m, input->tracked,
                            input->cutting,   input->holding, input->session_id, input->sensor_id};
       session.on_hand(hand);

@@ -102,6 +102,15 @@ int run_live(const OfflineOptions& shared, std::optional<int> max_steps, const L
   TopologyMessage topology;
   topology.fill(live.cloth_id, session.cloth(), nullptr, session_id);
   topology_writer.write(topology.msg());
+  constexpr auto kTopologyPeriod = std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(1.0 / 30.0));
+  constexpr auto kKeyframePeriod = std::chrono::seconds(1);
+  bus::Writer<tachi_msg_ClothTopologyDelta> delta_writer{dds, bus::topics::cloth_topology_delta};
+  TopologyDeltaMessage delta{session.cloth()};
+  auto last_topology = Clock::now();
+  auto last_keyframe = Clock::now();
+  bool keyframe_due = false;
+  std::uint64_t topology_updates = 0;
+  std::size_t topology_bytes = 0;
   std::vector<tachi_msg_GridCoord> cut_line;
 
   const auto period = std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(shared.solver.dt));
@@ -157,10 +166,26 @@ int run_live(const OfflineOptions& shared, std::optional<int> max_steps, const L
         next_step = Clock::now() + period;
         ++overruns;
       }
-      if (const auto change = session.take_topology_change()) {
-        topology.fill(live.cloth_id, session.cloth(), &*change, session_id);
+      // Topology changes are merged in the session and published as deltas at most 30 times a second (a
+      // stroke cuts on most steps at 60 Hz); the whole topology goes out as a keyframe for late joiners and
+      // readers that missed a delta at most once a second while cuts go on (issue 11).
+      if (Clock::now() - last_topology >= kTopologyPeriod) {
+        if (const auto change = session.take_topology_change()) {
+          delta.fill(live.cloth_id, session.cloth(), *change, session_id);
+          delta_writer.write(delta.msg());
+          ++messages_out;
+          ++topology_updates;
+          topology_bytes += delta.payload_bytes();
+          last_topology = Clock::now();
+          keyframe_due = true;
+        }
+      }
+      if (keyframe_due && Clock::now() - last_keyframe >= kKeyframePeriod) {
+        topology.fill(live.cloth_id, session.cloth(), nullptr, session_id);
         topology_writer.write(topology.msg());
         ++messages_out;
+        keyframe_due = false;
+        last_keyframe = Clock::now();
       }
       for (const auto& report : session.take_cut_reports()) {
         cut_writer.write(cut_msg(live.cloth_id, session.cloth().topology_version, report, cut_line, session_id));
@@ -189,7 +214,12 @@ int run_live(const OfflineOptions& shared, std::optional<int> max_steps, const L
     journal->flush();
   }
   if (const auto change = session.take_topology_change()) {
-    topology.fill(live.cloth_id, session.cloth(), &*change, session_id);
+    delta.fill(live.cloth_id, session.cloth(), *change, session_id);
+    delta_writer.write(delta.msg());
+    keyframe_due = true;
+  }
+  if (keyframe_due) {
+    topology.fill(live.cloth_id, session.cloth(), nullptr, session_id);
     topology_writer.write(topology.msg());
   }
   for (const auto& report : session.take_cut_reports())
@@ -197,6 +227,7 @@ int run_live(const OfflineOptions& shared, std::optional<int> max_steps, const L
   state_writer.write(state_msg(live.cloth_id, session.steps(), session.time_s(), session.cloth(), session_id));
   // Let late readers (viewer, tests) receive the final topology and cuts before the process goes.
   topology_writer.wait_for_acks(std::chrono::seconds(1));
+  delta_writer.wait_for_acks(std::chrono::seconds(1));
   cut_writer.wait_for_acks(std::chrono::seconds(1));
 
   Summary summary = summarize(session.cloth());
@@ -206,6 +237,9 @@ int run_live(const OfflineOptions& shared, std::optional<int> max_steps, const L
   summary.extra["hand_samples"] = samples_in;
   summary.extra["hand_samples_rejected"] = rejected;
   summary.extra["step_overruns"] = overruns;
+  summary.extra["topology_updates"] = topology_updates;
+  summary.extra["topology_bytes_per_update"] = topology_updates > 0 ? topology_bytes / topology_updates : 0;
+  summary.extra["topology_keyframe_bytes"] = topology.payload_bytes();
   spdlog::info("tachi-sim: stopped after {} steps ({} hand samples, {} pieces)", summary.steps, samples_in, summary.pieces);
   if (!shared.export_dir.empty()) export_run(summary, session.cloth(), shared.export_dir, &session.cutter());
   return common::kExitOk;

@@ -29,11 +29,12 @@ tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 
 # node: topics it publishes | topics it reads. Every node publishes its heartbeat (tachi/node/status).
+# tachi/cloth/* (topology, topology_delta, state, cut): the simulator's output, whatever it adds.
 declare -A publishes=(
   [sensor]="tachi/hand/raw"
   [voice]="tachi/voice/command"
   [filter]="tachi/hand/stroke"
-  [sim]="tachi/cloth/topology tachi/cloth/state tachi/cloth/cut"
+  [sim]="tachi/cloth/*"
   [viewer]=""
   [mouse]="tachi/hand/stroke"
   [monitor]=""
@@ -43,8 +44,8 @@ declare -A reads=(
   [voice]=""
   [filter]="tachi/hand/raw tachi/voice/command tachi/cloth/state"
   [sim]="tachi/hand/stroke tachi/voice/command"
-  [viewer]="tachi/cloth/topology tachi/cloth/state tachi/cloth/cut tachi/hand/stroke tachi/node/status"
-  [mouse]="tachi/cloth/topology tachi/cloth/state tachi/cloth/cut tachi/hand/stroke tachi/node/status"
+  [viewer]="tachi/cloth/* tachi/hand/stroke tachi/node/status"
+  [mouse]="tachi/cloth/* tachi/hand/stroke tachi/node/status"
   [monitor]="*"
 )
 nodes=(sensor voice filter sim viewer mouse monitor)

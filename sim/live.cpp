@@ -2,6 +2,8 @@
 
 #include "src/bus_adapter.hpp"
 #include "tachi/bus/heartbeat.hpp"
+#include "tachi/common/latency.hpp"
+#include "tachi/common/peer_wait.hpp"
 #include "tachi/sim/session.hpp"
 
 #include <spdlog/spdlog.h>
@@ -72,21 +74,65 @@ int run_live(const OfflineOptions& shared, std::optional<int> max_steps, const L
   const auto start = Clock::now();
   auto next_step = start;
   auto last_hand = start;
-  std::uint64_t samples_in = 0, messages_out = 1, rejected = 0, overruns = 0;
+  std::uint64_t samples_in = 0, messages_out = 1, rejected = 0, overruns = 0, cuts = 0;
+  double cut_length_m = 0.0;
   bool had_filter = false;
   std::vector<double> step_ms;
+  // acquired_ns of the newest applied hand sample: every state published from then on reflects it.
+  std::int64_t newest_acquired_ns = 0;
+  common::LatencyWindow latency;
+  common::PeerWait waiting_for_filter("tachi-filter", live.bus.domain);
+
+  // Topology changes and closed strokes go out before the state that indexes the new topology.
+  const auto publish_changes = [&] {
+    if (const auto change = session.take_topology_change()) {
+      topology.fill(live.cloth_id, session.cloth(), &*change);
+      topology_writer.write(topology.msg());
+      ++messages_out;
+    }
+    for (const auto& report : session.take_cut_reports()) {
+      cut_writer.write(cut_msg(live.cloth_id, session.cloth().topology_version, report, cut_line));
+      ++messages_out;
+      ++cuts;
+      spdlog::info("tachi-sim: stroke {} cut {} particles over {:.3f} m; {} pieces, {} falling", report.stroke_id,
+                   report.stroke.particles_duplicated, report.stroke.cut_length_m, report.pieces, report.fallen_pieces);
+      heartbeat.set_metric("pieces", static_cast<double>(report.pieces));
+      heartbeat.set_metric("fallen_pieces", static_cast<double>(report.fallen_pieces));
+      cut_length_m += report.stroke.cut_length_m;
+    }
+  };
+  const auto publish_state = [&] {
+    auto msg = state_msg(live.cloth_id, session.steps(), session.time_s(), session.cloth());
+    msg.acquired_ns = newest_acquired_ns;
+    msg.published_ns = common::wall_clock_ns();
+    state_writer.write(msg);
+    ++messages_out;
+    return msg.published_ns;
+  };
 
   common::run_until_stopped([&] {
     strokes.wait_for_data(std::max(next_step - Clock::now(), Clock::duration::zero()));
+    std::int64_t batch_acquired_ns = 0;
     for (const auto& sample : strokes.take()) {
       if (const auto input = from_msg(*sample)) {
         session.on_hand({input->stroke_id, input->time_s, input->position_m, input->tracked, input->cutting, input->holding});
         ++samples_in;
         last_hand = Clock::now();
+        batch_acquired_ns = std::max(batch_acquired_ns, sample->acquired_ns);
       } else if (++rejected == 1 || rejected % 100 == 0) {
         spdlog::warn("tachi-sim: {} hand samples rejected (non-finite or > 100 m from the cloth)", rejected);
       }
     }
+    // A stroke sample is applied as soon as it arrives (the waitset woke us), and the state that
+    // reflects it goes out now rather than at the next 60 Hz step: capture -> state latency.
+    if (batch_acquired_ns > 0) {
+      newest_acquired_ns = batch_acquired_ns;
+      publish_changes();
+      latency.add_since(batch_acquired_ns, publish_state());
+      heartbeat.set_metric("latency_p50_ms", latency.percentile(50));
+      heartbeat.set_metric("latency_p99_ms", latency.percentile(99));
+    }
+    waiting_for_filter.warn_if_waiting(strokes.matched_writers() > 0);
     // A filter that vanished mid-stroke would leave the stroke open forever: close it.
     const bool has_filter = strokes.matched_writers() > 0;
     if (had_filter && !has_filter && session.cutter().stroke_open()) {
@@ -105,21 +151,11 @@ int run_live(const OfflineOptions& shared, std::optional<int> max_steps, const L
         next_step = Clock::now() + period;
         ++overruns;
       }
-      if (const auto change = session.take_topology_change()) {
-        topology.fill(live.cloth_id, session.cloth(), &*change);
-        topology_writer.write(topology.msg());
-        ++messages_out;
-      }
-      for (const auto& report : session.take_cut_reports()) {
-        cut_writer.write(cut_msg(live.cloth_id, session.cloth().topology_version, report, cut_line));
-        ++messages_out;
-        spdlog::info("tachi-sim: stroke {} cut {} particles over {:.3f} m; {} pieces, {} falling", report.stroke_id,
-                     report.stroke.particles_duplicated, report.stroke.cut_length_m, report.pieces, report.fallen_pieces);
-      }
-      if (session.steps() % static_cast<std::uint64_t>(live.state_every) == 0) {
-        state_writer.write(state_msg(live.cloth_id, session.steps(), session.time_s(), session.cloth()));
-        ++messages_out;
-      }
+      publish_changes();
+      if (session.steps() % static_cast<std::uint64_t>(live.state_every) == 0) publish_state();
+      heartbeat.set_metric("cuts", static_cast<double>(cuts));
+      heartbeat.set_metric("cut_length_m", cut_length_m);
+      heartbeat.set_metric("steps", static_cast<double>(session.steps()));
       heartbeat.update(overruns > 0 ? tachi_msg_NODE_DEGRADED : tachi_msg_NODE_RUNNING, samples_in, messages_out,
                        "steps " + std::to_string(session.steps()));
     }
@@ -138,7 +174,7 @@ int run_live(const OfflineOptions& shared, std::optional<int> max_steps, const L
   }
   for (const auto& report : session.take_cut_reports())
     cut_writer.write(cut_msg(live.cloth_id, session.cloth().topology_version, report, cut_line));
-  state_writer.write(state_msg(live.cloth_id, session.steps(), session.time_s(), session.cloth()));
+  publish_state();
   // Let late readers (viewer, tests) receive the final topology and cuts before the process goes.
   topology_writer.wait_for_acks(std::chrono::seconds(1));
   cut_writer.wait_for_acks(std::chrono::seconds(1));
@@ -150,6 +186,8 @@ int run_live(const OfflineOptions& shared, std::optional<int> max_steps, const L
   summary.extra["hand_samples"] = samples_in;
   summary.extra["hand_samples_rejected"] = rejected;
   summary.extra["step_overruns"] = overruns;
+  summary.extra["latency_p50_ms"] = latency.percentile(50);
+  summary.extra["latency_p99_ms"] = latency.percentile(99);
   spdlog::info("tachi-sim: stopped after {} steps ({} hand samples, {} pieces)", summary.steps, samples_in, summary.pieces);
   if (!shared.export_dir.empty()) export_run(summary, session.cloth(), shared.export_dir);
   return common::kExitOk;

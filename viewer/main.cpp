@@ -2,12 +2,15 @@
 #include "src/bus_adapter.hpp"
 #include "tachi/bus/heartbeat.hpp"
 #include "tachi/common/app.hpp"
+#include "tachi/common/latency.hpp"
+#include "tachi/common/peer_wait.hpp"
 
 #include <opencv2/highgui.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <spdlog/spdlog.h>
 
 #include <cstdlib>
+#include <utility>
 #include <filesystem>
 #include <iostream>
 
@@ -74,6 +77,10 @@ int main(int argc, char** argv) try {
   auto next_frame = start;
   auto last_state = start;
   std::uint64_t frames = 0;
+  // Capture of the newest depth frame the next rendered image reflects (0: none since the last image).
+  std::int64_t unrendered_acquired_ns = 0, newest_acquired_ns = 0;
+  tachi::common::LatencyWindow latency;
+  tachi::common::PeerWait waiting_for_sim("tachi-sim", o.bus.domain);
   cv::Mat image;
   const std::string window = "tachi";
 
@@ -86,6 +93,10 @@ int main(int argc, char** argv) try {
     }
     for (const auto& s : states.take(8)) {
       scene.on_state(viewer::from_msg(*s));
+      if (s->acquired_ns > newest_acquired_ns) {  // a state reflecting a new depth frame (not a later step of an old one)
+        newest_acquired_ns = s->acquired_ns;
+        if (unrendered_acquired_ns == 0) unrendered_acquired_ns = s->acquired_ns;
+      }
       last_state = std::chrono::steady_clock::now();
       ++messages_in;
     }
@@ -94,10 +105,16 @@ int main(int argc, char** argv) try {
       ++messages_in;
     }
     heartbeat.update(tachi_msg_NODE_RUNNING, messages_in, frames, scene.has_cloth() ? "" : "waiting for the cloth");
+    waiting_for_sim.warn_if_waiting(states.matched_writers() > 0);
 
     if (std::chrono::steady_clock::now() >= next_frame) {
       next_frame += frame_period;
       image = viewer::render(scene.scene(), view);
+      if (unrendered_acquired_ns > 0) {  // capture -> rendered image
+        latency.add_since(std::exchange(unrendered_acquired_ns, 0), tachi::common::wall_clock_ns());
+        heartbeat.set_metric("latency_p50_ms", latency.percentile(50));
+        heartbeat.set_metric("latency_p99_ms", latency.percentile(99));
+      }
       if (!o.frames_dir.empty()) {
         char name[32];
         std::snprintf(name, sizeof name, "frame_%05llu.png", static_cast<unsigned long long>(frames));

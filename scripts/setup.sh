@@ -23,6 +23,8 @@ packages=(
   iproute2 tcpdump
   # viewer under a virtual display
   xvfb
+  # the run's plots (tachi run: latency.png, trajectory.png via scripts/plot_run.py)
+  python3-matplotlib
 )
 
 missing=()

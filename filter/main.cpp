@@ -121,11 +121,6 @@ int run_bus(const Options& o, const tachi::filter::FilterConfig& config) {
       spdlog::info("voice command {} (\"{}\")", c->command == tachi_msg_VOICE_START ? "start" : "stop", c->phrase);
       filter.on_voice(tachi::filter::from_msg(*c));
     }
-    auto states = cloth.take();
-    if (!states.empty()) {
-      const auto& newest = *states.back();
-      filter.on_cloth_state({newest.positions._buffer, newest.positions._length});
-    }
     for (const auto& h : hands.take()) {
       ++in_count;
       const auto stroke = filter.on_hand(tachi::filter::from_msg(*h));
@@ -141,6 +136,13 @@ int run_bus(const Options& o, const tachi::filter::FilterConfig& config) {
       heartbeat.set_metric("latency_p99_ms", latency.percentile(99));
     }
     waiting_for_sensor.warn_if_waiting(hands.matched_writers() > 0);
+    // The cloth after the hands: a 128 x 128 state is 196 KB to copy and scan, and the hand samples
+    // must not wait for it (end-to-end latency); the gate then uses the cloth as of one state earlier.
+    auto states = cloth.take();
+    if (!states.empty()) {
+      const auto& newest = *states.back();
+      filter.on_cloth_state({newest.positions._buffer, newest.positions._length});
+    }
     heartbeat.update(tachi_msg_NODE_RUNNING, in_count, out_count, "gate " + tachi::filter::to_string(config.gate.mode));
     return true;
   });

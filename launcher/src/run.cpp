@@ -129,11 +129,23 @@ int run(const RunConfig& config, const RunPaths& paths) {
   const bool recording = !config.recording.empty();
   spdlog::info("run on DDS domain {}: {} ({}); outputs in {}", config.domain, to_json(config)["nodes"].get<std::string>(),
                recording ? "recording " + config.recording : "live", out.string());
+  std::vector<std::string> started;
   for (auto& c : children) {
+    // Consumers first. The sensor starts once the others said they are up (their first heartbeat:
+    // their readers and writers exist and are being discovered), so a recording's first frames are not lost.
+    if (c.child->spec().node == "sensor") {
+      const auto deadline = Clock::now() + 5s;
+      const auto all_up = [&] {
+        for (const auto& program : started)
+          if (!board.nodes().contains(program)) return false;
+        return true;
+      };
+      while (!all_up() && Clock::now() < deadline && !common::stop_requested()) monitor.poll(board, 50ms);
+      monitor.poll(board, 200ms);
+    }
     c.child->start();
+    started.push_back(c.child->spec().program);
     spdlog::info("started {} (pid {})", c.child->spec().program, c.child->pid());
-    // Consumers first, with a moment to create their readers, so producers lose no samples.
-    monitor.poll(board, 150ms);
   }
 
   const bool tty = ::isatty(STDERR_FILENO) == 1;

@@ -1,10 +1,11 @@
 #!/usr/bin/env python3
 """Plots of one `tachi run` (called by the launcher after the run; usage: plot_run.py OUT_DIR).
 
-latency.png: histogram per stage and end to end, from the run's trace (OUT_DIR/trace/*.csv): for the
-hand samples and strokes, capture of the depth frame -> the sample's arrival at the launcher; for the
-cloth states, capture -> the simulator's publication (the end-to-end figure, exact on one host).
-The viewer's capture -> rendered image figures come from its heartbeat (summary.json): drawn as lines.
+latency.png: histogram per stage and end to end. Hand samples and strokes: capture of the depth frame
+-> the sample's arrival at the launcher (OUT_DIR/trace/*.csv). End to end: capture -> the simulator's
+publication of the cloth state reflecting it, per depth frame, as the simulator measured it
+(summary.json `latency_ms`; exact on one host). The viewer's capture -> rendered image figures come from
+its heartbeat (summary.json `viewer_p50_ms`, `viewer_p99_ms`): drawn as lines.
 trajectory.png: raw hand (mapped onto the cloth the way the filter's default mirror mapping does),
 smoothed hand (the filter's strokes) and the simulator's cut line, over the cloth's outline.
 """
@@ -39,7 +40,6 @@ def main(out_dir):
     trace = os.path.join(out_dir, "trace")
     hands = read_csv(os.path.join(trace, "hands.csv"))
     strokes = read_csv(os.path.join(trace, "strokes.csv"))
-    states = read_csv(os.path.join(trace, "states.csv"))
     summary_path = os.path.join(out_dir, "summary.json")
     summary = json.load(open(summary_path)) if os.path.exists(summary_path) else {}
     config_path = os.path.join(out_dir, "config.json")
@@ -48,7 +48,7 @@ def main(out_dir):
     series = [
         ("sensor -> launcher (raw hand)", delays_ms(hands, "acquired_ns", "received_ns")),
         ("filter -> launcher (stroke)", delays_ms(strokes, "acquired_ns", "received_ns")),
-        ("end to end: capture -> cloth state published", delays_ms(states, "acquired_ns", "published_ns")),
+        ("end to end: capture -> cloth state published", list(summary.get("latency_ms") or [])),
     ]
     fig, ax = plt.subplots(figsize=(8, 5))
     for label, values in series:

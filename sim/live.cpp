@@ -188,6 +188,7 @@ int run_live(const OfflineOptions& shared, std::optional<int> max_steps, const L
   summary.extra["step_overruns"] = overruns;
   summary.extra["latency_p50_ms"] = latency.percentile(50);
   summary.extra["latency_p99_ms"] = latency.percentile(99);
+  summary.extra["latency_ms"] = latency.values();  // capture -> published state per depth frame (the last 1024)
   spdlog::info("tachi-sim: stopped after {} steps ({} hand samples, {} pieces)", summary.steps, samples_in, summary.pieces);
   if (!shared.export_dir.empty()) export_run(summary, session.cloth(), shared.export_dir);
   return common::kExitOk;

@@ -5,8 +5,8 @@ reflects it, at two grid sizes, on one host (docs/benchmarks.md "End-to-end late
 Each run is `tachi run` on a bundled recording (all nodes, loopback, headless). The capture stamp is
 taken when the depth frame reaches tachi-sensor, after the recording's pacing sleep, so pacing is
 excluded; the cloth state carries that stamp and the simulator's publication time (same host, same
-clock). The launcher's trace (OUT/trace/states.csv) has one row per depth frame: the first state that
-reflects it. Baseline in the same run: capture -> the raw hand sample's arrival at the launcher
+clock). The simulator measures each depth frame's delay to the first state reflecting it and exports
+them (summary.json `latency_ms`). Baseline in the same run: capture -> the raw hand sample's arrival at the launcher
 (OUT/trace/hands.csv), the floor any DDS pipeline stage pays; the ratio says what filtering, mapping,
 gating, cutting and publishing the cloth add on top of one hop.
 
@@ -47,9 +47,9 @@ def main():
                 done = subprocess.run(cmd, capture_output=True, text=True, timeout=300)
                 if done.returncode != 0:
                     sys.exit(f"run failed ({done.returncode}): {' '.join(cmd)}\n{done.stderr[-2000:]}")
-                e2e = delays(os.path.join(out, "trace", "states.csv"), "acquired_ns", "published_ns")
                 hop = delays(os.path.join(out, "trace", "hands.csv"), "acquired_ns", "received_ns")
                 summary = json.load(open(os.path.join(out, "summary.json")))
+                e2e = summary["latency_ms"]
             row = (pct(e2e, 50), pct(e2e, 99), pct(hop, 50), pct(hop, 99))
             rows.append(row)
             print(f"{grid:4d}  {run:3d}  {len(e2e):6d}  {row[0]:7.2f}  {row[1]:7.2f}  {row[2]:7.2f}  {row[3]:7.2f}  "

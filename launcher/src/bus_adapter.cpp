@@ -117,13 +117,11 @@ RunMonitor::RunMonitor(const bus::Participant& participant, const std::filesyste
     : status_(participant, bus::topics::node_status),
       hands_(participant, bus::topics::raw_hand),
       strokes_(participant, bus::topics::stroke),
-      states_(participant, bus::topics::cloth_state),
       cuts_(participant, bus::topics::cut_event),
       waitset_(participant) {
   waitset_.attach(status_);
   waitset_.attach(hands_);
   waitset_.attach(strokes_);
-  waitset_.attach(states_);
   waitset_.attach(cuts_);
   std::filesystem::create_directories(trace_dir);
   const auto open = [&](std::ofstream& f, const char* name, const char* header) {
@@ -134,7 +132,6 @@ RunMonitor::RunMonitor(const bus::Participant& participant, const std::filesyste
   // received_ns: the launcher's clock when the sample arrived here (one host: the same clock as the stamps).
   open(hands_csv_, "hands.csv", "frame,acquired_ns,received_ns,tracked,x,y,z");
   open(strokes_csv_, "strokes.csv", "frame,acquired_ns,received_ns,tracked,x,y,z,gate,stroke_id");
-  open(states_csv_, "states.csv", "frame,acquired_ns,published_ns,received_ns");
 }
 
 void RunMonitor::poll(StatusBoard& board, std::chrono::milliseconds timeout) {
@@ -147,16 +144,9 @@ void RunMonitor::poll(StatusBoard& board, std::chrono::milliseconds timeout) {
   for (const auto& s : strokes_.take())
     strokes_csv_ << s->frame << ',' << s->acquired_ns << ',' << now << ',' << int{s->tracked} << ',' << s->position_m.x << ','
                  << s->position_m.y << ',' << s->position_m.z << ',' << static_cast<int>(s->gate) << ',' << s->stroke_id << '\n';
-  // The first state that reflects each depth frame; later steps repeat its stamp.
-  for (const auto& c : states_.take(64)) {
-    if (c->acquired_ns <= newest_acquired_ns_) continue;
-    newest_acquired_ns_ = c->acquired_ns;
-    states_csv_ << c->frame << ',' << c->acquired_ns << ',' << c->published_ns << ',' << now << '\n';
-  }
   cut_events_ += cuts_.take().size();
   hands_csv_.flush();
   strokes_csv_.flush();
-  states_csv_.flush();
 }
 
 bool known_topic(const std::string& topic) {

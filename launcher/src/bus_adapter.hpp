@@ -1,5 +1,5 @@
 // The launcher's edge to the DDS bus: heartbeats -> NodeReport, the run's trace (hand samples,
-// strokes, cloth states, cuts as they pass on the bus, for latency.png and trajectory.png), and the
+// strokes and cuts as they pass on the bus, for latency.png and trajectory.png), and the
 // JSON form of every tachi message for `tachi echo`.
 #pragma once
 
@@ -18,7 +18,9 @@ namespace tachi::launcher {
 [[nodiscard]] NodeReport from_msg(const tachi_msg_NodeStatus& msg);
 
 /// Watches one run's domain: keeps the status board current and writes the trace CSVs
-/// (trace/hands.csv, trace/strokes.csv, trace/states.csv) when a trace folder is given.
+/// (trace/hands.csv, trace/strokes.csv). It does not read the cloth states: at 128 x 128 one more
+/// reader of 196 KB states would load the simulator it measures. The end-to-end delays per depth
+/// frame come from the simulator's own summary (`latency_ms`).
 class RunMonitor {
  public:
   RunMonitor(const bus::Participant& participant, const std::filesystem::path& trace_dir);
@@ -30,12 +32,10 @@ class RunMonitor {
   bus::Reader<tachi_msg_NodeStatus> status_;
   bus::Reader<tachi_msg_RawHandSample> hands_;
   bus::Reader<tachi_msg_StrokeSample> strokes_;
-  bus::Reader<tachi_msg_ClothState> states_;
   bus::Reader<tachi_msg_CutEvent> cuts_;
   bus::WaitSet waitset_;
-  std::ofstream hands_csv_, strokes_csv_, states_csv_;
+  std::ofstream hands_csv_, strokes_csv_;
   std::uint64_t cut_events_ = 0;
-  std::int64_t newest_acquired_ns_ = 0;
 };
 
 /// The topic names `tachi echo` knows, and one JSON line per sample of such a topic (sequences

@@ -25,6 +25,8 @@ class LatencyWindow {
 
   [[nodiscard]] std::size_t size() const noexcept { return values_.size(); }
   [[nodiscard]] std::uint64_t total() const noexcept { return total_; }
+  /// The window's delays, ms (not in arrival order once it wrapped).
+  [[nodiscard]] const std::vector<double>& values() const noexcept { return values_; }
   /// Nearest-rank percentile (0 < p <= 100) of the window; 0 when empty.
   [[nodiscard]] double percentile(double p) const;
 

@@ -197,7 +197,6 @@ std::vector<ChildSpec> plan(const RunConfig& c) {
     bus.push_back(c.dds_config);
   }
   const bool recording = !c.recording.empty();
-  const auto settle = [](double s) { return json(s).dump(); };
   std::vector<ChildSpec> children;
   for (const auto& node : kNodes) {
     if (!c.has(node)) continue;
@@ -207,12 +206,13 @@ std::vector<ChildSpec> plan(const RunConfig& c) {
       a.insert(a.end(), {"--grid", std::to_string(c.grid), "--export", (out / kSimExportDir).string()});
       if (!c.blade.empty()) a.insert(a.end(), {"--blade", c.blade});
       // With a recording, the cloth has settled this long after the last hand sample: the run's end.
-      if (recording) a.insert(a.end(), {"--exit-when-idle", settle(c.settle_s)});
+      if (recording) a.insert(a.end(), {"--exit-when-idle", json(c.settle_s).dump()});
       child.finite = recording;
     } else if (node == "viewer") {
       if (c.headless) a.push_back("--headless");
       a.insert(a.end(), {"--snapshot", (out / "final.png").string()});
-      if (recording) a.insert(a.end(), {"--exit-when-idle", settle(c.settle_s + 1.0)});
+      // The simulator publishes states until it ends: a second without one means it has.
+      if (recording) a.insert(a.end(), {"--exit-when-idle", "1"});
       child.finite = recording;
     } else if (node == "filter") {
       a.insert(a.end(), {"--gate", c.gate});

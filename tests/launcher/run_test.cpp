@@ -266,3 +266,14 @@ TEST(WaitingForPeers, ANodeWhosePeerDoesNotComeSaysSoEveryFewSeconds) {
   EXPECT_NE(viewer.err().find("waiting for tachi-sim on domain 128"), std::string::npos) << viewer.err();
   EXPECT_NE(filter.err().find("waiting for tachi-sensor on domain 128"), std::string::npos) << filter.err();
 }
+
+TEST(TachiRun, LiveWithoutAKinectStopsTheRunWithExitCode3) {
+  tachi::test::ScratchDir out("tachi_run_live");
+  const auto r = tachi::test::run({kBin + "/tachi", "run", "--live", "--grid", "16", "--domain", "129", "--out",
+                                   out.path().string(), "--headless"},
+                                  60s);
+  EXPECT_EQ(r.exit_code, 3) << r.err;
+  EXPECT_NE(r.err.find("tachi-sensor cannot run (exit code 3)"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("no Kinect"), std::string::npos) << "the sensor's own words, from its log: " << r.err;
+  EXPECT_TRUE(fs::exists(out / "summary.json"));
+}

@@ -23,7 +23,7 @@ namespace launcher = tachi::launcher;
 using nlohmann::json;
 
 struct RunFlags {
-  std::string config_file, recording, rate, gate, voice_wav, voice_device, blade, out, nodes, dds_config;
+  std::string config_file, recording, rate, gate, voice_wav, voice_device, blade, out, nodes, dds_config, secure;
   bool live = false, headless = false, print_config = false;
   int grid = 0;
   unsigned domain = 0;
@@ -63,6 +63,7 @@ json effective_config(const CLI::App& run, const RunFlags& f) {
   if (given("--grid")) config["grid"] = f.grid;
   if (given("--domain")) config["domain"] = f.domain;
   if (given("--dds-config")) config["dds_config"] = fs::absolute(f.dds_config).string();
+  if (given("--secure")) config["secure"] = fs::absolute(f.secure).string();
   if (given("--out")) config["out"] = f.out;
   if (given("--headless")) config["headless"] = f.headless;
   if (given("--nodes")) config["nodes"] = f.nodes;
@@ -95,7 +96,7 @@ int cmd_run(const CLI::App& run, const RunFlags& f, const fs::path& bin_dir) {
 }
 
 int cmd_topics(const tachi::common::BusOptions& bus, double listen_s) {
-  tachi::bus::Participant dds{bus.domain, bus.dds_config};
+  tachi::bus::Participant dds{bus.domain, bus.dds_config, {bus.secure_dir, bus.identity}};
   const auto snapshot = tachi::bus::discover(dds, std::chrono::milliseconds(static_cast<int>(listen_s * 1000)));
   std::map<std::string, const tachi::bus::ParticipantInfo*> by_key;
   std::cout << "participants on domain " << bus.domain << ":\n";
@@ -130,7 +131,7 @@ int cmd_topics(const tachi::common::BusOptions& bus, double listen_s) {
 }
 
 int cmd_status(const tachi::common::BusOptions& bus, double listen_s) {
-  tachi::bus::Participant dds{bus.domain, bus.dds_config};
+  tachi::bus::Participant dds{bus.domain, bus.dds_config, {bus.secure_dir, bus.identity}};
   tachi::bus::Reader<tachi_msg_NodeStatus> reader{dds, tachi::bus::topics::node_status};
   launcher::StatusBoard board;
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(listen_s);
@@ -176,6 +177,8 @@ int main(int argc, char** argv) try {
   run->add_option("--grid", f.grid, "Cloth particles per side")->check(CLI::Range(2, 1024));
   run->add_option("--domain", f.domain, "DDS domain id of this pipeline")->check(CLI::Range(0u, 232u));
   run->add_option("--dds-config", f.dds_config, "Cyclone DDS XML for every node (default: loopback only)")->check(CLI::ExistingFile);
+  run->add_option("--secure", f.secure, "DDS Security folder (scripts/make_test_pki.sh) for every node; each uses its own identity")
+      ->check(CLI::ExistingDirectory);
   run->add_option("--out", f.out, "Output folder (summary.json, cloth.obj, plots, logs); default out/run");
   run->add_flag("--headless,!--window", f.headless, "Viewer without a window (default when DISPLAY is unset)");
   run->add_option("--nodes", f.nodes, "Start only these nodes, e.g. sensor,filter (the other host runs sim,viewer)");
@@ -184,6 +187,7 @@ int main(int argc, char** argv) try {
   run->add_option("--set", f.sets, "NODE.FLAG=VALUE passed to one node, e.g. sim.material=denim (repeatable)");
 
   tachi::common::BusOptions bus;
+  bus.identity = "monitor";  // with --secure: the identity that may read every topic (scripts/make_test_pki.sh)
   double listen_s = 1.5;
   auto* topics = app.add_subcommand("topics", "List the participants (process, host, pid) and topics (type, writers, readers) on a domain");
   tachi::common::add_bus_flags(*topics, bus);
@@ -215,7 +219,7 @@ int main(int argc, char** argv) try {
   tachi::common::install_stop_handlers();
   if (topics->parsed()) return cmd_topics(bus, listen_s);
   if (status->parsed()) return cmd_status(bus, listen_s);
-  const auto n = launcher::echo(tachi::bus::Participant{bus.domain, bus.dds_config}, topic, count, full,
+  const auto n = launcher::echo(tachi::bus::Participant{bus.domain, bus.dds_config, {bus.secure_dir, bus.identity}}, topic, count, full,
                                 std::chrono::milliseconds(static_cast<long long>(timeout_s * 1000)));
   return count > 0 && n < count ? tachi::common::kExitFailure : tachi::common::kExitOk;
 } catch (const std::exception& e) {

@@ -12,7 +12,7 @@ using nlohmann::json;
 
 const std::set<std::string> kTopKeys{"recording", "live",   "rate",       "gate",     "voice_wav", "voice_device",
                                      "blade",     "grid",   "domain",     "dds_config", "out",     "headless",
-                                     "settle_s",  "nodes"};
+                                     "settle_s",  "nodes",  "secure"};
 
 std::invalid_argument bad(const std::string& key, const std::string& why) {
   return std::invalid_argument("config key \"" + key + "\": " + why);
@@ -96,6 +96,7 @@ RunConfig from_json(const json& config) {
   if (domain < 0 || domain > 232) throw bad("domain", "must be in [0, 232]");
   c.domain = static_cast<unsigned>(domain);
   c.dds_config = get<std::string>(config, "dds_config", "");
+  c.secure = get<std::string>(config, "secure", "");
   c.out = get<std::string>(config, "out", c.out);
   if (c.out.empty()) throw bad("out", "must name a folder");
   c.headless = get<bool>(config, "headless", c.headless);
@@ -130,7 +131,8 @@ json to_json(const RunConfig& c) {
   for (const auto& n : c.nodes) nodes += (nodes.empty() ? "" : ",") + n;
   json j = {{"recording", c.recording}, {"rate", c.rate},       {"gate", c.gate},
             {"voice_wav", c.voice_wav}, {"voice_device", c.voice_device}, {"blade", c.blade}, {"grid", c.grid},
-            {"domain", c.domain},       {"dds_config", c.dds_config}, {"out", c.out},         {"headless", c.headless},
+            {"domain", c.domain},       {"dds_config", c.dds_config}, {"secure", c.secure},   {"out", c.out},
+            {"headless", c.headless},
             {"settle_s", c.settle_s},   {"nodes", nodes}};
   for (const auto& [node, options] : c.node_options.items()) j[node] = options;
   return j;
@@ -195,6 +197,10 @@ std::vector<ChildSpec> plan(const RunConfig& c) {
   if (!c.dds_config.empty()) {
     bus.push_back("--dds-config");
     bus.push_back(c.dds_config);
+  }
+  if (!c.secure.empty()) {  // each node uses its own identity (its name) from the folder
+    bus.push_back("--secure");
+    bus.push_back(c.secure);
   }
   const bool recording = !c.recording.empty();
   std::vector<ChildSpec> children;

@@ -116,7 +116,8 @@ int run(const RunConfig& config, const RunPaths& paths) {
     std::ofstream cfg(out / "config.json");
     cfg << to_json(config).dump(2) << '\n';
   }
-  bus::Participant dds{config.domain, config.dds_config};
+  // With DDS Security the launcher reads as "monitor", the identity that may read every topic.
+  bus::Participant dds{config.domain, config.dds_config, {config.secure, "monitor"}};
   RunMonitor monitor{dds, out / "trace"};
   StatusBoard board;
 

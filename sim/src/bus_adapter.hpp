@@ -14,6 +14,8 @@ namespace tachi::sim {
 
 /// A hand sample as the simulator uses it (world frame, seconds on the sender's clock).
 struct StrokeInput {
+  std::uint32_t sensor_id = 0;
+  std::uint64_t session_id = 0;  ///< the publishing filter's run
   std::uint32_t stroke_id = 0;
   double time_s = 0.0;
   Eigen::Vector3f position_m = Eigen::Vector3f::Zero();
@@ -31,7 +33,7 @@ class TopologyMessage {
  public:
   /// Full topology of `cloth` (live triangles only) plus the change list since the previously
   /// filled version (the change may merge several cuts).
-  void fill(std::uint32_t cloth_id, const Cloth& cloth, const TopologyChange* change);
+  void fill(std::uint32_t cloth_id, const Cloth& cloth, const TopologyChange* change, std::uint64_t session_id = 0);
   const tachi_msg_ClothTopology& msg() const { return msg_; }
 
  private:
@@ -46,6 +48,7 @@ class TopologyMessage {
 
 /// A ClothState message whose positions point straight at the cloth's position array
 /// (Eigen::Vector3f is three packed floats). Valid until the cloth's particle arrays grow.
-tachi_msg_ClothState state_msg(std::uint32_t cloth_id, std::uint64_t frame, double sim_time_s, const Cloth& cloth);
+tachi_msg_ClothState state_msg(std::uint32_t cloth_id, std::uint64_t frame, double sim_time_s, const Cloth& cloth,
+                               std::uint64_t session_id = 0);
 
 }  // namespace tachi::sim

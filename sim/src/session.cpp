@@ -38,9 +38,10 @@ void Session::on_hand(const HandInput& hand) {
     return;
   }
   hand_.reset();
-  if (cutter_.stroke_open() && hand.stroke_id != stroke_id_) close_stroke();
+  if (cutter_.stroke_open() && (hand.stroke_id != stroke_id_ || hand.session_id != stroke_session_)) close_stroke();
   if (!cutter_.stroke_open()) {
     stroke_id_ = hand.stroke_id;
+    stroke_session_ = hand.session_id;
     absorb(cutter_.begin_stroke());
   }
   absorb(cutter_.add_sample({hand.time_s, hand.position_m}));

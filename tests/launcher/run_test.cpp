@@ -25,7 +25,9 @@ const std::string kRecordings = TACHI_RECORDINGS_DIR;
 std::vector<std::string> run_args(const std::string& recording, unsigned domain, const fs::path& out,
                                   std::vector<std::string> extra = {}) {
   std::vector<std::string> args{kBin + "/tachi", "run", "--recording", kRecordings + "/" + recording, "--grid", "32",
-                                "--domain", std::to_string(domain), "--out", out.string(), "--headless", "--settle", "1.5"};
+                                "--domain", std::to_string(domain), "--out", out.string(), "--headless", "--settle", "1.5",
+                                // The grid cut reports the cells it cut (summary cut_line), which these tests check.
+                                "--set", "sim.cut-mode=grid"};
   args.insert(args.end(), extra.begin(), extra.end());
   return args;
 }
@@ -276,4 +278,17 @@ TEST(TachiRun, LiveWithoutAKinectStopsTheRunWithExitCode3) {
   EXPECT_NE(r.err.find("tachi-sensor cannot run (exit code 3)"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("no Kinect"), std::string::npos) << "the sensor's own words, from its log: " << r.err;
   EXPECT_TRUE(fs::exists(out / "summary.json"));
+}
+
+TEST(TachiRun, SecureRunAuthenticatesEveryNodeAndTheLauncher) {
+  tachi::test::ScratchDir out("tachi_run_secure");
+  const auto pki = out / "pki";
+  ASSERT_EQ(tachi::test::run({"/bin/bash", std::string(TACHI_SOURCE_DIR) + "/scripts/make_test_pki.sh", pki.string()}, 60s).exit_code, 0);
+  const auto r = tachi::test::run(run_args("straight_cut", 130, out.path() / "run", {"--secure", pki.string()}), 120s);
+  ASSERT_EQ(r.exit_code, 0) << r.err << logs(out.path() / "run");
+  const auto s = read_json(out / "run" / "summary.json");
+  EXPECT_EQ(s["frames"], depth_frames("straight_cut")) << "the launcher (identity monitor) read the sensor's heartbeats";
+  EXPECT_EQ(s["cuts"], 1);
+  EXPECT_GT(s["cut_particles"].get<int>(), 5);
+  EXPECT_NE(read_text(out / "run" / "sim.log").find("--secure"), std::string::npos);
 }

@@ -12,7 +12,7 @@ source "$(dirname "$0")/../support/two_hosts.sh"
 dom=127
 
 ip netns exec "$b" timeout 120 "$bin/tachi" run --nodes sim,viewer --grid 32 --domain $dom --dds-config "$work/$if_b.xml" \
-  --recording "$recording" --headless --settle 1.5 --out "$work/b" >"$work/b.out" 2>"$work/b.err" & run_b=$!; pids+=("$run_b")
+  --recording "$recording" --headless --settle 1.5 --set sim.cut-mode=grid --out "$work/b" >"$work/b.out" 2>"$work/b.err" & run_b=$!; pids+=("$run_b")
 ip netns exec "$a" timeout 120 "$bin/tachi" run --nodes sensor,filter --domain $dom --dds-config "$work/$if_a.xml" \
   --recording "$recording" --headless --out "$work/a" >"$work/a.out" 2>"$work/a.err"
 a_status=$?

@@ -26,6 +26,7 @@ struct RunConfig {
   int grid = 64;
   unsigned domain = 0;
   std::string dds_config;         ///< empty: every node's built-in loopback config
+  std::string secure;             ///< DDS Security folder (scripts/make_test_pki.sh) for every node; empty: none
   std::string out = "out/run";
   bool headless = true;
   double settle_s = 2.0;          ///< a recording run ends this long after the last hand sample

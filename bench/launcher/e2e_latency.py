@@ -10,7 +10,8 @@ them (summary.json `latency_ms`). Baseline in the same run: capture -> the raw h
 (OUT/trace/hands.csv), the floor any DDS pipeline stage pays; the ratio says what filtering, mapping,
 gating, cutting and publishing the cloth add on top of one hop.
 
-Usage: e2e_latency.py BIN_DIR RECORDING [RUNS]   (domain 149; RUNS fresh runs per grid, default 3)
+Usage: e2e_latency.py BIN_DIR RECORDING [RUNS [TACHI_RUN_FLAGS...]]
+       (domain 149; RUNS fresh runs per grid, default 3; e.g. --set sim.cut-mode=grid)
 """
 import csv
 import json
@@ -36,14 +37,16 @@ def main():
         sys.exit(__doc__)
     bin_dir, recording = sys.argv[1], sys.argv[2]
     runs = int(sys.argv[3]) if len(sys.argv) > 3 else 3
-    print(f"recording {recording}, {runs} fresh runs per grid; per run: p50/p99 over its depth frames (ms)")
+    extra = sys.argv[4:]
+    print(f"recording {recording}, {runs} fresh runs per grid, flags {' '.join(extra) or '(none)'}; "
+          "per run: p50/p99 over its depth frames (ms)")
     print("grid  run  frames  e2e_p50  e2e_p99  hop_p50  hop_p99  e2e_p50/hop_p50")
     for grid in (64, 128):
         rows = []
         for run in range(runs):
             with tempfile.TemporaryDirectory(prefix="tachi-e2e-bench-") as out:
                 cmd = [os.path.join(bin_dir, "tachi"), "run", "--recording", recording, "--grid", str(grid), "--domain", "149",
-                       "--out", out, "--headless", "--settle", "1"]
+                       "--out", out, "--headless", "--settle", "1"] + extra
                 done = subprocess.run(cmd, capture_output=True, text=True, timeout=300)
                 if done.returncode != 0:
                     sys.exit(f"run failed ({done.returncode}): {' '.join(cmd)}\n{done.stderr[-2000:]}")

@@ -173,7 +173,8 @@ int run(const RunConfig& config, const RunPaths& paths) {
       }
       const auto status = c.child->poll();
       if (!status) continue;
-      switch (classify_exit(*status, spec.finite)) {
+      const ExitMeaning meaning = classify_exit(*status, spec.finite);
+      switch (meaning) {
         case ExitMeaning::Done:
           c.done = true;
           spdlog::info("{} finished", spec.program);
@@ -181,7 +182,7 @@ int run(const RunConfig& config, const RunPaths& paths) {
           break;
         case ExitMeaning::Usage:
         case ExitMeaning::NoDevice: {
-          const bool usage = classify_exit(*status, spec.finite) == ExitMeaning::Usage;
+          const bool usage = meaning == ExitMeaning::Usage;
           spdlog::error("{} cannot run ({}); its log {} ends:\n{}", spec.program, describe_exit(*status), c.child->log().string(),
                         c.child->last_log_lines(10));
           exit_code = usage ? kRunUsage : kRunNoDevice;

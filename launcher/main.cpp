@@ -24,7 +24,7 @@ using nlohmann::json;
 
 struct RunFlags {
   std::string config_file, recording, rate, gate, voice_wav, voice_device, blade, out, nodes, dds_config, secure;
-  bool live = false, headless = false, print_config = false;
+  bool live = false, headless = false, print_config = false, mouse = false;
   int grid = 0;
   unsigned domain = 0;
   double settle_s = 0;
@@ -68,6 +68,7 @@ json effective_config(const CLI::App& run, const RunFlags& f) {
   if (given("--headless")) config["headless"] = f.headless;
   if (given("--nodes")) config["nodes"] = f.nodes;
   if (given("--settle")) config["settle_s"] = f.settle_s;
+  if (given("--mouse")) config["mouse"] = f.mouse;
   for (const auto& s : f.sets) launcher::merge_into(config, launcher::parse_set(s));
   return config;
 }
@@ -169,6 +170,8 @@ int main(int argc, char** argv) try {
   run->add_flag("--print-config", f.print_config, "Print the effective config (defaults, --config, flags) as JSON and exit");
   auto* rec = run->add_option("--recording", f.recording, "Play this fakenect recording folder")->check(CLI::ExistingDirectory);
   run->add_flag("--live", f.live, "Use the live Kinect (the default without --recording)")->excludes(rec);
+  run->add_flag("--mouse", f.mouse, "Cut with the mouse in the viewer's window (seed 001's blade): sim and viewer only")
+      ->excludes(rec);
   run->add_option("--rate", f.rate, "Recording pace: real (=1), max or a factor (tachi-sensor --rate)");
   run->add_option("--gate", f.gate, "What opens a stroke")->check(CLI::IsMember({"threshold", "voice", "either"}));
   auto* wav = run->add_option("--voice-wav", f.voice_wav, "Voice commands from a WAV file (starts tachi-voice)")->check(CLI::ExistingFile);

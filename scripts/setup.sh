@@ -24,7 +24,7 @@ packages=(
   # DDS Security test PKI (scripts/make_test_pki.sh); libFuzzer targets and sanitizer builds (-DTACHI_FUZZ=ON)
   openssl clang
   # viewer under a virtual display
-  xvfb
+  xvfb xdotool imagemagick libx11-dev libxfixes-dev
   # the run's plots (tachi run: latency.png, trajectory.png via scripts/plot_run.py)
   python3-matplotlib
 )

@@ -24,6 +24,7 @@ tachi_msg_CutEvent cut_msg(std::uint32_t cloth_id, std::uint32_t version, const 
   tachi_msg_CutEvent msg{};
   msg.cloth_id = cloth_id;
   msg.stroke_id = report.stroke_id;
+  msg.sensor_id = report.sensor_id;  // which hand source cut (camera hand, mouse blade)
   msg.topology_version = version;
   msg.cut_line._buffer = line.data();
   msg.cut_line._length = msg.cut_line._maximum = static_cast<std::uint32_t>(line.size());
@@ -114,6 +115,7 @@ int run_live(const OfflineOptions& shared, std::optional<int> max_steps, const L
   double cut_length_m = 0.0;
   bool had_filter = false;
   std::vector<double> step_ms;
+  heartbeat.set_metric("blade", static_cast<double>(shared.blade));  // index of Blade: the viewer's HUD names it
   // acquired_ns of the newest applied hand sample: every state published from then on reflects it.
   std::int64_t newest_acquired_ns = 0;
   common::LatencyWindow latency;
@@ -162,7 +164,7 @@ int run_live(const OfflineOptions& shared, std::optional<int> max_steps, const L
       // A stroke is (sensor, filter session, stroke id): its samples' times never go back.
       if (!guard.time(input->session_id ^ input->sensor_id, sample->time_ns)) continue;
       const HandInput hand{input->stroke_id, input->time_s,  input->position_m, input->tracked,
-                           input->cutting,   input->holding, input->session_id};
+                           input->cutting,   input->holding, input->session_id, input->sensor_id};
       session.on_hand(hand);
       if (journal) journal_append(*journal, {JournalRecord::Kind::Hand, session.steps(), input->sensor_id, sample->time_ns, hand});
       ++samples_in;

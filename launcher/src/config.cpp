@@ -12,7 +12,7 @@ using nlohmann::json;
 
 const std::set<std::string> kTopKeys{"recording", "live",   "rate",       "gate",     "voice_wav", "voice_device",
                                      "blade",     "grid",   "domain",     "dds_config", "out",     "headless",
-                                     "settle_s",  "nodes",  "secure"};
+                                     "settle_s",  "nodes",  "secure", "mouse", "video"};
 
 std::invalid_argument bad(const std::string& key, const std::string& why) {
   return std::invalid_argument("config key \"" + key + "\": " + why);
@@ -100,10 +100,19 @@ RunConfig from_json(const json& config) {
   c.out = get<std::string>(config, "out", c.out);
   if (c.out.empty()) throw bad("out", "must name a folder");
   c.headless = get<bool>(config, "headless", c.headless);
+  c.mouse = get<bool>(config, "mouse", false);
+  if (c.mouse && (!c.recording.empty() || live)) throw bad("mouse", "the mouse blade replaces the camera: no recording or live");
+  if (c.mouse && c.headless) throw bad("mouse", "the mouse blade needs the viewer's window (a DISPLAY, not headless)");
+  c.video = get<std::string>(config, "video", c.video);
+  if (!c.video.empty() && !c.video.ends_with(".mp4") && !c.video.ends_with(".avi"))
+    throw bad("video", "must be a .mp4 or .avi file name (or empty: no video)");
   c.settle_s = get<double>(config, "settle_s", c.settle_s);
   if (!(c.settle_s > 0.0 && c.settle_s <= 60.0)) throw bad("settle_s", "must be in (0, 60] seconds");
 
-  c.nodes = split_nodes(config.contains("nodes") ? config.at("nodes") : json("sensor,filter,sim,viewer"));
+  // The mouse blade writes strokes itself: no camera, no filter.
+  c.nodes = split_nodes(config.contains("nodes") && !(c.mouse && config.at("nodes") == json("sensor,filter,sim,viewer"))
+                            ? config.at("nodes")
+                            : json(c.mouse ? "sim,viewer" : "sensor,filter,sim,viewer"));
   if (c.nodes.empty()) throw bad("nodes", "names no node");
   for (const auto& n : c.nodes)
     if (std::find(kNodes.begin(), kNodes.end(), n) == kNodes.end())
@@ -133,7 +142,7 @@ json to_json(const RunConfig& c) {
             {"voice_wav", c.voice_wav}, {"voice_device", c.voice_device}, {"blade", c.blade}, {"grid", c.grid},
             {"domain", c.domain},       {"dds_config", c.dds_config}, {"secure", c.secure},   {"out", c.out},
             {"headless", c.headless},
-            {"settle_s", c.settle_s},   {"nodes", nodes}};
+            {"settle_s", c.settle_s},   {"nodes", nodes},             {"mouse", c.mouse},     {"video", c.video}};
   for (const auto& [node, options] : c.node_options.items()) j[node] = options;
   return j;
 }
@@ -217,9 +226,12 @@ std::vector<ChildSpec> plan(const RunConfig& c) {
     } else if (node == "viewer") {
       if (c.headless) a.push_back("--headless");
       a.insert(a.end(), {"--snapshot", (out / "final.png").string()});
+      if (!c.video.empty()) a.insert(a.end(), {"--video", (out / c.video).string()});
+      if (c.mouse) a.push_back("--mouse");
       // The simulator publishes states until it ends: a second without one means it has.
       if (recording) a.insert(a.end(), {"--exit-when-idle", "1"});
-      child.finite = recording;
+      // A window the user closes (q, Esc) ends the run rather than being reopened.
+      child.finite = recording || !c.headless;
     } else if (node == "filter") {
       a.insert(a.end(), {"--gate", c.gate});
     } else if (node == "voice") {

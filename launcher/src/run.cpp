@@ -156,6 +156,7 @@ int run(const RunConfig& config, const RunPaths& paths) {
   std::string ended = "stopped";
   std::optional<Clock::time_point> finite_done_at, sensor_done_at;
   const auto sensor_in_run = config.has("sensor");
+  bool viewer_closed = false;
   while (true) {
     monitor.poll(board, 100ms);
     if (common::stop_requested()) {
@@ -179,6 +180,7 @@ int run(const RunConfig& config, const RunPaths& paths) {
           c.done = true;
           spdlog::info("{} finished", spec.program);
           if (spec.node == "sensor") sensor_done_at = now;
+          if (spec.node == "viewer" && !recording) viewer_closed = true;
           break;
         case ExitMeaning::Usage:
         case ExitMeaning::NoDevice: {
@@ -211,6 +213,10 @@ int run(const RunConfig& config, const RunPaths& paths) {
       }
     }
     if (failed) break;
+    if (viewer_closed) {
+      ended = "viewer window closed";
+      break;
+    }
 
     if (recording) {
       bool all_finite_done = true, any_finite = false;

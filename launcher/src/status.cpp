@@ -48,6 +48,12 @@ std::optional<double> StatusBoard::metric(const std::string& node, const std::st
   return m->second;
 }
 
+std::optional<double> StatusBoard::stage_latency(const std::string& stage, const char* percentile) const {
+  // The viewer reports the age of the state it shows (capture -> image) under its own name (issue 10).
+  if (const auto v = metric(stage, std::string("latency_") + percentile + "_ms")) return v;
+  return metric(stage, std::string("state_age_") + percentile + "_ms");
+}
+
 std::string StatusBoard::line(int restarts) const {
   const auto frames = metric("sensor", "frames");
   const auto tracked = metric("sensor", "tracked_frames");
@@ -57,7 +63,7 @@ std::string StatusBoard::line(int restarts) const {
                      number(tracked_pct) + "%, gate " + gate_text(metric("filter", "gate"), metric("filter", "gate_opened_by")) +
                      ", strokes " + number(metric("filter", "strokes")) + ", cuts " + number(metric("sim", "cuts")) +
                      ", pieces " + number(metric("sim", "pieces")) + ", p50 ms";
-  for (const char* stage : kStages) text += std::string(" ") + stage + " " + number(metric(stage, "latency_p50_ms"), "%.1f");
+  for (const char* stage : kStages) text += std::string(" ") + stage + " " + number(stage_latency(stage, "p50"), "%.1f");
   text += ", restarts " + std::to_string(restarts);
   return text;
 }
@@ -80,10 +86,9 @@ nlohmann::json StatusBoard::summary() const {
   // End to end is the simulator's figure: capture of the depth frame -> the published cloth state.
   put("e2e_p50_ms", "sim", "latency_p50_ms");
   put("e2e_p99_ms", "sim", "latency_p99_ms");
-  for (const char* stage : kStages) {
-    put((std::string(stage) + "_p50_ms").c_str(), stage, "latency_p50_ms");
-    put((std::string(stage) + "_p99_ms").c_str(), stage, "latency_p99_ms");
-  }
+  for (const char* stage : kStages)
+    for (const char* p : {"p50", "p99"})
+      if (const auto v = stage_latency(stage, p)) s[std::string(stage) + "_" + p + "_ms"] = *v;
   std::uint64_t rejected = 0;
   for (const auto& [name, report] : nodes_) rejected += report.rejected;
   s["rejected_inputs"] = rejected;

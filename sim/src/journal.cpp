@@ -54,6 +54,7 @@ std::optional<JournalRecord> parse_record(const std::string& line) {
   h.tracked = (flags & 1) != 0;
   h.cutting = (flags & 2) != 0;
   h.holding = (flags & 4) != 0;
+  h.sensor_id = r.sensor_id;  // the Session tells hand sources apart by it (mouse blade vs camera hand)
   return r;
 }
 

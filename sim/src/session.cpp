@@ -20,10 +20,15 @@ void Session::close_stroke() {
   if (!cutter_.stroke_open()) return;
   absorb(cutter_.end_stroke());
   const Pieces pieces = find_pieces(cloth_);
-  reports_.push_back({stroke_id_, cutter_.report(), pieces.count(), pieces.fallen()});
+  reports_.push_back({stroke_id_, cutter_.report(), pieces.count(), pieces.fallen(), stroke_sensor_});
 }
 
 void Session::on_hand(const HandInput& hand) {
+  const bool same_source = hand.sensor_id == stroke_sensor_ && hand.session_id == stroke_session_;
+  if (cutter_.stroke_open()) {
+    if (!same_source && time_s() - stroke_heard_s_ < kSilentSource_s) return;
+    if (same_source) stroke_heard_s_ = time_s();
+  }
   // The gate's verdict holds whether or not the hand is seen: it usually closes a stroke on samples
   // of a hand that has just been lost.
   const bool idle = !hand.cutting && !hand.holding;
@@ -38,10 +43,12 @@ void Session::on_hand(const HandInput& hand) {
     return;
   }
   hand_.reset();
-  if (cutter_.stroke_open() && (hand.stroke_id != stroke_id_ || hand.session_id != stroke_session_)) close_stroke();
+  if (cutter_.stroke_open() && (hand.stroke_id != stroke_id_ || !same_source)) close_stroke();
   if (!cutter_.stroke_open()) {
     stroke_id_ = hand.stroke_id;
+    stroke_sensor_ = hand.sensor_id;
     stroke_session_ = hand.session_id;
+    stroke_heard_s_ = time_s();
     absorb(cutter_.begin_stroke());
   }
   absorb(cutter_.add_sample({hand.time_s, hand.position_m}));

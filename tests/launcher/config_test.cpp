@@ -122,3 +122,23 @@ TEST(RunConfig, PrintedConfigReadsBackToTheSameRun) {
   EXPECT_EQ(to_json(once), to_json(twice));
   EXPECT_EQ(twice.grid, 32);
 }
+
+TEST(RunConfig, VideoByDefaultAndTheMouseBladeInsteadOfTheCamera) {
+  json j = default_config_json(true);
+  j["recording"] = "/rec";
+  auto children = plan(from_json(j));
+  EXPECT_TRUE(has_pair(child(children, "viewer").args, "--video", "out/run/video.mp4"));
+  j = default_config_json(true);
+  j["mouse"] = true;
+  children = plan(from_json(j));
+  std::vector<std::string> order;
+  for (const auto& c : children) order.push_back(c.node);
+  EXPECT_EQ(order, (std::vector<std::string>{"sim", "viewer"})) << "the mouse blade replaces sensor and filter";
+  const auto& v = child(children, "viewer").args;
+  EXPECT_NE(std::find(v.begin(), v.end(), "--mouse"), v.end());
+  j["headless"] = true;
+  EXPECT_THROW((void)from_json(j), std::invalid_argument) << "the mouse needs a window";
+  j = default_config_json(false);
+  j["video"] = "run.mov";
+  EXPECT_THROW((void)from_json(j), std::invalid_argument);
+}

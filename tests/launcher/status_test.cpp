@@ -40,6 +40,10 @@ TEST(StatusBoard, SummaryTakesCountsAndPerStageLatency) {
   EXPECT_EQ(s["e2e_p99_ms"], 4);
   EXPECT_EQ(s["sensor_p99_ms"], 2);
   EXPECT_FALSE(s.contains("viewer_p50_ms"));
+  // The viewer's own name for its figure (the age of the state it shows).
+  board.update(report("tachi-viewer", 4, 1, {{"state_age_p50_ms", 20}, {"state_age_p99_ms", 40}}));
+  EXPECT_EQ(board.summary()["viewer_p50_ms"], 20);
+  EXPECT_EQ(board.summary()["viewer_p99_ms"], 40);
 }
 
 TEST(StatusBoard, NewestReportWinsAndARestartReplacesItsPredecessor) {

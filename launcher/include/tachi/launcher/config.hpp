@@ -29,6 +29,8 @@ struct RunConfig {
   std::string secure;             ///< DDS Security folder (scripts/make_test_pki.sh) for every node; empty: none
   std::string out = "out/run";
   bool headless = true;
+  bool mouse = false;             ///< seed 001's blade: the viewer's --mouse cuts, no camera (sensor, filter)
+  std::string video = "video.mp4";///< the viewer's render of the run, in --out (.mp4 or .avi); empty: none
   double settle_s = 2.0;          ///< a recording run ends this long after the last hand sample
   std::vector<std::string> nodes; ///< subset of kNodes this launcher starts
   nlohmann::json node_options = nlohmann::json::object();  ///< {"sim": {"pin": "top-edge"}, ...}

@@ -33,6 +33,8 @@ class StatusBoard {
   [[nodiscard]] const std::map<std::string, NodeReport>& nodes() const { return nodes_; }
   /// A node's metric, if it reported it.
   [[nodiscard]] std::optional<double> metric(const std::string& node, const std::string& name) const;
+  /// A stage's capture -> output delay percentile ("p50", "p99"), ms.
+  [[nodiscard]] std::optional<double> stage_latency(const std::string& stage, const char* percentile) const;
 
   /// One line: frames, fps, tracked %, gate state and source, strokes, cuts, pieces, per-stage
   /// latency p50, restarts. Figures not reported yet show as "-".

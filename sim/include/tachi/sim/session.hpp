@@ -24,6 +24,7 @@ struct HandInput {
   bool cutting = false;
   bool holding = false;  ///< stroke open, hand beyond reach: the sample must not cut (GATE_HOLDING)
   std::uint64_t session_id = 0;  ///< the filter run that numbered the stroke: stroke 1 of a restarted filter is a new stroke
+  std::uint32_t sensor_id = 0;   ///< the hand source (camera hand, mouse blade): with session and stroke id, names a stroke
 };
 
 /// What one stroke did, reported when it closes.
@@ -32,6 +33,7 @@ struct CutReport {
   StrokeReport stroke;
   std::size_t pieces = 0;
   std::size_t fallen_pieces = 0;
+  std::uint32_t sensor_id = 0;  ///< the hand source that made the stroke
 };
 
 struct SessionOptions {
@@ -51,7 +53,10 @@ class Session {
   /// changes) and extends it; a HOLDING sample keeps the stroke open without cutting (the hand is
   /// leaving or briefly out of reach); an IDLE sample closes the open stroke, tracked or not (the
   /// filter's gate decides when a lost hand ends a stroke). Untracked or non-finite samples never cut.
+  /// Several sources may publish: while one source's stroke is open, the others' samples are ignored
+  /// (one blade cuts at a time), unless that source fell silent for kSilentSource_s.
   void on_hand(const HandInput& hand);
+  static constexpr double kSilentSource_s = 1.0;
   /// Closes the open stroke, if any (e.g. when the filter vanished mid-stroke).
   void end_stroke();
   /// Advances the cloth by one solver step.
@@ -78,6 +83,8 @@ class Session {
   std::optional<Eigen::Vector3f> hand_;  ///< last tracked hand position while not cutting
   std::uint32_t stroke_id_ = 0;
   std::uint64_t stroke_session_ = 0;
+  std::uint32_t stroke_sensor_ = 0;     ///< source of the open stroke
+  double stroke_heard_s_ = 0.0;         ///< time_s() of that source's last sample
   std::optional<TopologyChange> pending_;
   std::vector<CutReport> reports_;
   std::uint64_t steps_ = 0;

@@ -243,8 +243,14 @@ int run_live(const ViewerOptions& o) {
   if (!o.headless && std::getenv("DISPLAY") == nullptr)
     throw std::runtime_error("no display (DISPLAY is not set); use --headless with --video, --snapshot or --frames-dir");
 
-  bus::Participant dds{o.bus.domain, o.bus.dds_config, {o.bus.secure_dir, o.bus.identity}};
+  // DDS Security (issue 13): the viewer's grant may not publish strokes; the mouse blade is the
+  // "mouse" identity, whose grant adds tachi/hand/stroke (scripts/make_test_pki.sh).
+  const std::string identity = o.mouse && o.bus.identity == "viewer" ? "mouse" : o.bus.identity;
+  bus::Participant dds{o.bus.domain, o.bus.dds_config, {o.bus.secure_dir, identity}};
   bus::Reader<tachi_msg_ClothTopology> topologies{dds, bus::topics::cloth_topology};
+  // Issue 11: keyframes + deltas -> the current topology, the one way every reader assembles it.
+  bus::Reader<tachi_msg_ClothTopologyDelta> topology_deltas{dds, bus::topics::cloth_topology_delta};
+  bus::TopologyAssembler topology;
   bus::Reader<tachi_msg_ClothState> states{dds, bus::topics::cloth_state};
   bus::Reader<tachi_msg_StrokeSample> strokes{dds, bus::topics::stroke};
   bus::Reader<tachi_msg_CutEvent> cuts{dds, bus::topics::cut_event};
@@ -253,6 +259,7 @@ int run_live(const ViewerOptions& o) {
   if (o.mouse) blade_writer.emplace(dds, bus::topics::stroke);
   bus::WaitSet waitset{dds};
   waitset.attach(topologies);
+  waitset.attach(topology_deltas);
   waitset.attach(states);
   waitset.attach(strokes);
   waitset.attach(cuts);
@@ -329,10 +336,21 @@ int run_live(const ViewerOptions& o) {
     } else {
       waitset.wait(wait);
     }
+    // A keyframe the scene refuses (a version jump, indices out of range) must not become the base the
+    // deltas apply to either: the scene judges it first.
+    bool topology_changed = false;
     for (const auto& t : topologies.take()) {
       ++messages_in;
-      if (plausible(*t, guard)) count(state.on_topology(from_msg(*t)));
+      if (!plausible(*t, guard)) continue;
+      const auto rejected = state.on_topology(from_msg(*t));
+      count(rejected);
+      if (!rejected) topology.on_keyframe(*t);
     }
+    for (const auto& d : topology_deltas.take()) {
+      ++messages_in;
+      topology_changed = topology.on_delta(*d) || topology_changed;
+    }
+    if (topology_changed) count(state.on_topology(from_assembler(topology)));
     for (const auto& s : states.take(8)) {
       ++messages_in;
       if (!plausible(*s, guard)) continue;

@@ -24,6 +24,20 @@ TopologyUpdate from_msg(const tachi_msg_ClothTopology& msg) {
   return update;
 }
 
+TopologyUpdate from_assembler(bus::TopologyAssembler& topology) {
+  TopologyUpdate update;
+  update.version = topology.version();
+  update.session_id = topology.session_id();
+  update.columns = topology.columns();
+  update.rows = topology.rows();
+  update.triangles = topology.triangles();
+  update.pinned = topology.pinned();
+  update.grid.reserve(topology.particle_grid().size());
+  for (const tachi_msg_GridCoord& g : topology.particle_grid()) update.grid.push_back(packed(g));
+  update.duplicated_from = topology.take_duplicated_from();
+  return update;
+}
+
 StateUpdate from_msg(const tachi_msg_ClothState& msg) {
   StateUpdate update;
   update.frame = msg.frame;

@@ -3,11 +3,14 @@
 
 #include "tachi/bus/input_guard.hpp"
 #include "tachi/bus/topics.hpp"
+#include "tachi/bus/topology_assembler.hpp"
 #include "tachi/viewer/controls.hpp"
 #include "tachi/viewer/scene_state.hpp"
 
 namespace tachi::viewer {
 TopologyUpdate from_msg(const tachi_msg_ClothTopology& msg);
+/// The topology a TopologyAssembler built from keyframes and deltas (issue 11); takes its split-off list.
+TopologyUpdate from_assembler(bus::TopologyAssembler& topology);
 StateUpdate from_msg(const tachi_msg_ClothState& msg);
 HandUpdate from_msg(const tachi_msg_StrokeSample& msg);
 CutUpdate from_msg(const tachi_msg_CutEvent& msg);

@@ -204,7 +204,7 @@ int main(int argc, char** argv) try {
   echo->add_option("topic", topic, "Topic, e.g. tachi/cloth/cut")->required()->check([](const std::string& t) {
     return launcher::known_topic(t) ? std::string{}
                                     : "unknown topic; known: tachi/hand/raw, tachi/voice/command, tachi/hand/stroke, "
-                                      "tachi/cloth/topology, tachi/cloth/state, tachi/cloth/cut, tachi/node/status";
+                                      "tachi/cloth/topology, tachi/cloth/topology_delta, tachi/cloth/state, tachi/cloth/cut, tachi/node/status";
   });
   tachi::common::add_bus_flags(*echo, bus);
   echo->add_option("--count", count, "Stop after this many samples (0: until SIGINT)");

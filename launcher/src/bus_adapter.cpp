@@ -57,6 +57,14 @@ json to_json(const tachi_msg_ClothTopology& m, bool full) {
           {"duplicated_from", sequence(m.duplicated_from, full, same)},
           {"changed_triangles", sequence(m.changed_triangles, full, same)}, {"session_id", m.session_id}};
 }
+json to_json(const tachi_msg_ClothTopologyDelta& m, bool full) {
+  return {{"cloth_id", m.cloth_id}, {"session_id", m.session_id}, {"base_version", m.base_version}, {"version", m.version},
+          {"new_particle_grid", sequence(m.new_particle_grid, full, grid)},
+          {"new_particle_pinned", sequence(m.new_particle_pinned, full, same)},
+          {"removed_triangles", sequence(m.removed_triangles, full, same)},
+          {"added_triangles", sequence(m.added_triangles, full, same)},
+          {"duplicated_from", sequence(m.duplicated_from, full, same)}};
+}
 json to_json(const tachi_msg_ClothState& m, bool full) {
   return {{"cloth_id", m.cloth_id}, {"frame", m.frame}, {"sim_time_ns", m.sim_time_ns},
           {"topology_version", m.topology_version}, {"positions", sequence(m.positions, full, same)},
@@ -152,7 +160,7 @@ void RunMonitor::poll(StatusBoard& board, std::chrono::milliseconds timeout) {
 bool known_topic(const std::string& topic) {
   namespace t = bus::topics;
   for (const char* name : {t::raw_hand.name, t::voice_command.name, t::stroke.name, t::cloth_topology.name,
-                           t::cloth_state.name, t::cut_event.name, t::node_status.name})
+                           t::cloth_topology_delta.name, t::cloth_state.name, t::cut_event.name, t::node_status.name})
     if (topic == name) return true;
   return false;
 }
@@ -164,6 +172,7 @@ std::uint64_t echo(const bus::Participant& p, const std::string& topic, std::uin
   if (topic == t::voice_command.name) return echo_topic(p, t::voice_command, count, full, timeout);
   if (topic == t::stroke.name) return echo_topic(p, t::stroke, count, full, timeout);
   if (topic == t::cloth_topology.name) return echo_topic(p, t::cloth_topology, count, full, timeout);
+  if (topic == t::cloth_topology_delta.name) return echo_topic(p, t::cloth_topology_delta, count, full, timeout);
   if (topic == t::cloth_state.name) return echo_topic(p, t::cloth_state, count, full, timeout);
   if (topic == t::cut_event.name) return echo_topic(p, t::cut_event, count, full, timeout);
   if (topic == t::node_status.name) return echo_topic(p, t::node_status, count, full, timeout);

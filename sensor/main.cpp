@@ -131,15 +131,15 @@ int main(int argc, char** argv) try {
   tachi::sensor::use_one_opencv_thread();
   tachi::sensor::HandFinder finder(source->model());
   std::uint64_t frames = 0, tracked = 0;
+  tachi::sensor::DepthFrame buffer;  // reused: no 614 KB allocation (and its page faults) per frame
   tachi::common::LatencyWindow latency;
   tachi::common::PeerWait waiting_for_filter("tachi-filter", o.bus.domain);
   const auto started = std::chrono::steady_clock::now();
-  tachi::sensor::DepthFrame buffer;  // reused: no 614 KB allocation (and its page faults) per frame
   while (!tachi::common::stop_requested() && (o.max_frames == 0 || frames < o.max_frames)) {
     if (!source->next_into(buffer)) break;
+    const tachi::sensor::DepthFrame* frame = &buffer;
     // End-to-end latency starts when the frame reaches this process (the recording's pacing is before it).
     const std::int64_t acquired_ns = tachi::common::wall_clock_ns();
-    const tachi::sensor::DepthFrame* frame = &buffer;
     const auto hand = finder.find(*frame);
     if (recorder) {
       recorder->write_depth(*frame);

@@ -104,11 +104,9 @@ int run_live(const OfflineOptions& shared, std::optional<int> max_steps, const L
   TopologyMessage topology;
   topology.fill(live.cloth_id, session.cloth(), nullptr, session_id);
   topology_writer.write(topology.msg());
-  constexpr auto kTopologyPeriod = std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(1.0 / 30.0));
   constexpr auto kKeyframePeriod = std::chrono::seconds(1);
   bus::Writer<tachi_msg_ClothTopologyDelta> delta_writer{dds, bus::topics::cloth_topology_delta};
   TopologyDeltaMessage delta{session.cloth()};
-  auto last_topology = Clock::now();
   auto last_keyframe = Clock::now();
   bool keyframe_due = false;
   std::uint64_t topology_updates = 0;
@@ -126,31 +124,41 @@ int run_live(const OfflineOptions& shared, std::optional<int> max_steps, const L
   heartbeat.set_metric("blade", static_cast<double>(shared.blade));  // index of Blade: the viewer's HUD names it
   // acquired_ns of the newest applied hand sample: every state published from then on reflects it.
   std::int64_t newest_acquired_ns = 0;
+  std::int64_t pending_latency_ns = 0;  // oldest applied sample whose state waits for its topology delta
   common::LatencyWindow latency;
   common::PeerWait waiting_for_filter("tachi-filter", live.bus.domain);
 
-  // Topology changes are merged in the session and published as deltas at most 30 times a second (a
-  // stroke cuts on most steps at 60 Hz); the whole topology goes out as a keyframe for late joiners and
-  // readers that missed a delta at most once a second while cuts go on (issue 11). Called after every
-  // batch of stroke samples and every step; cut events go out as soon as a stroke closes.
+  // Topology changes and closed strokes go out before the state that indexes the new topology.
+  // Changes are merged in the session and published as deltas at a bounded rate: a token bucket of 30 a
+  // second (two in hand), so a 30 Hz hand gets a delta with each cutting sample while a burst cannot
+  // exceed the bound; the whole topology goes out as a keyframe for late joiners and readers that missed
+  // a delta at most once a second while cuts go on (issue 11). Returns false while a change waits for a
+  // token: a state published then would index a topology no reader has yet.
+  double delta_tokens = 2.0;
+  auto last_refill = Clock::now();
   const auto publish_changes = [&] {
-    if (Clock::now() - last_topology >= kTopologyPeriod) {
+    const auto now = Clock::now();
+    delta_tokens = std::min(2.0, delta_tokens + 30.0 * std::chrono::duration<double>(now - last_refill).count());
+    last_refill = now;
+    bool in_sync = !session.topology_changed();
+    if (!in_sync && delta_tokens >= 1.0) {
       if (const auto change = session.take_topology_change()) {
         delta.fill(live.cloth_id, session.cloth(), *change, session_id);
         delta_writer.write(delta.msg());
         ++messages_out;
         ++topology_updates;
         topology_bytes += delta.payload_bytes();
-        last_topology = Clock::now();
+        delta_tokens -= 1.0;
         keyframe_due = true;
       }
+      in_sync = true;
     }
-    if (keyframe_due && Clock::now() - last_keyframe >= kKeyframePeriod) {
+    if (keyframe_due && now - last_keyframe >= kKeyframePeriod) {
       topology.fill(live.cloth_id, session.cloth(), nullptr, session_id);
       topology_writer.write(topology.msg());
       ++messages_out;
       keyframe_due = false;
-      last_keyframe = Clock::now();
+      last_keyframe = now;
     }
     for (const auto& report : session.take_cut_reports()) {
       cut_writer.write(cut_msg(live.cloth_id, session.cloth().topology_version, report, cut_line, session_id));
@@ -162,6 +170,7 @@ int run_live(const OfflineOptions& shared, std::optional<int> max_steps, const L
       heartbeat.set_metric("fallen_pieces", static_cast<double>(report.fallen_pieces));
       cut_length_m += report.stroke.cut_length_m;
     }
+    return in_sync;
   };
   const auto publish_state = [&] {
     auto msg = state_msg(live.cloth_id, session.steps(), session.time_s(), session.cloth(), session_id);
@@ -202,8 +211,8 @@ int run_live(const OfflineOptions& shared, std::optional<int> max_steps, const L
     // reflects it goes out now rather than at the next 60 Hz step: capture -> state latency.
     if (batch_acquired_ns > 0) {
       newest_acquired_ns = batch_acquired_ns;
-      publish_changes();
-      latency.add_since(batch_acquired_ns, publish_state());
+      if (publish_changes()) latency.add_since(batch_acquired_ns, publish_state());
+      else if (pending_latency_ns == 0) pending_latency_ns = batch_acquired_ns;
       heartbeat.set_metric("latency_p50_ms", latency.percentile(50));
       heartbeat.set_metric("latency_p99_ms", latency.percentile(99));
     }
@@ -228,8 +237,13 @@ int run_live(const OfflineOptions& shared, std::optional<int> max_steps, const L
         next_step = Clock::now() + period;
         ++overruns;
       }
-      publish_changes();
-      if (session.steps() % static_cast<std::uint64_t>(live.state_every) == 0) publish_state();
+      const bool in_sync = publish_changes();
+      if (in_sync && session.steps() % static_cast<std::uint64_t>(live.state_every) == 0) {
+        const std::int64_t published_ns = publish_state();
+        // A cutting sample whose delta waited for a token is reflected by this state: its latency counts here.
+        if (pending_latency_ns > 0) latency.add_since(pending_latency_ns, published_ns);
+        pending_latency_ns = 0;
+      }
       heartbeat.set_metric("cuts", static_cast<double>(cuts));
       heartbeat.set_metric("cut_length_m", cut_length_m);
       heartbeat.set_metric("steps", static_cast<double>(session.steps()));
@@ -273,12 +287,12 @@ int run_live(const OfflineOptions& shared, std::optional<int> max_steps, const L
   summary.extra["hand_samples"] = samples_in;
   summary.extra["hand_samples_rejected"] = rejected;
   summary.extra["step_overruns"] = overruns;
-  summary.extra["latency_p50_ms"] = latency.percentile(50);
-  summary.extra["latency_p99_ms"] = latency.percentile(99);
-  summary.extra["latency_ms"] = latency.values();  // capture -> published state per depth frame (the last 1024)
   summary.extra["topology_updates"] = topology_updates;
   summary.extra["topology_bytes_per_update"] = topology_updates > 0 ? topology_bytes / topology_updates : 0;
   summary.extra["topology_keyframe_bytes"] = topology.payload_bytes();
+  summary.extra["latency_p50_ms"] = latency.percentile(50);
+  summary.extra["latency_p99_ms"] = latency.percentile(99);
+  summary.extra["latency_ms"] = latency.values();  // capture -> published state per depth frame (the last 1024)
   spdlog::info("tachi-sim: stopped after {} steps ({} hand samples, {} pieces)", summary.steps, samples_in, summary.pieces);
   if (!shared.export_dir.empty()) export_run(summary, session.cloth(), shared.export_dir, &session.cutter());
   return common::kExitOk;

@@ -59,10 +59,10 @@ make_ca() {  # name common-name
 make_ca identity_ca "tachi identity CA"
 make_ca permissions_ca "tachi permissions CA"
 
-topics_xml() {  # space-separated topic names -> <topic> elements
-  local t
+topics_xml() (  # space-separated topic names -> <topic> elements
+  set -f  # "*" (monitor reads every topic) is a DDS topic expression, not a glob over this folder
   for t in $1; do printf '            <topic>%s</topic>\n' "$t"; done
-}
+)
 
 # A day back, so a clock a little behind the signing host still accepts the grants.
 now=$(date -u -d "-1 day" +%Y-%m-%dT%H:%M:%S)

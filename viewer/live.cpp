@@ -243,7 +243,10 @@ int run_live(const ViewerOptions& o) {
   if (!o.headless && std::getenv("DISPLAY") == nullptr)
     throw std::runtime_error("no display (DISPLAY is not set); use --headless with --video, --snapshot or --frames-dir");
 
-  bus::Participant dds{o.bus.domain, o.bus.dds_config, {o.bus.secure_dir, o.bus.identity}};
+  // DDS Security (issue 13): the viewer's grant may not publish strokes; the mouse blade is the
+  // "mouse" identity, whose grant adds tachi/hand/stroke (scripts/make_test_pki.sh).
+  const std::string identity = o.mouse && o.bus.identity == "viewer" ? "mouse" : o.bus.identity;
+  bus::Participant dds{o.bus.domain, o.bus.dds_config, {o.bus.secure_dir, identity}};
   bus::Reader<tachi_msg_ClothTopology> topologies{dds, bus::topics::cloth_topology};
   // Issue 11: keyframes + deltas -> the current topology, the one way every reader assembles it.
   bus::Reader<tachi_msg_ClothTopologyDelta> topology_deltas{dds, bus::topics::cloth_topology_delta};

@@ -12,7 +12,8 @@ std::string journal_fingerprint(const SessionOptions& o) {
   std::ostringstream f;
   f << "grid=" << o.cloth.columns << 'x' << o.cloth.rows << " size=" << std::hexfloat << o.cloth.width_m << 'x'
     << o.cloth.height_m << " mass=" << o.cloth.total_mass_kg << std::defaultfloat
-    << " pin=" << static_cast<int>(o.cloth.pin) << " blade=" << to_string(o.stroke.blade) << " dt=" << std::hexfloat
+    << " pin=" << static_cast<int>(o.cloth.pin) << " blade=" << to_string(o.stroke.blade)
+    << " cut=" << to_string(o.stroke.mode) << " dt=" << std::hexfloat
     << o.solver.dt << std::defaultfloat << " substeps=" << o.solver.substeps << " iterations=" << o.solver.iterations
     << " hand=" << std::hexfloat << o.hand_radius_m;
   return f.str();

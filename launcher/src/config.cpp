@@ -219,6 +219,8 @@ std::vector<ChildSpec> plan(const RunConfig& c) {
     auto& a = child.args;
     if (node == "sim") {
       a.insert(a.end(), {"--grid", std::to_string(c.grid), "--export", (out / kSimExportDir).string()});
+      // No lost cuts (issue 13): a simulator the launcher restarts replays this run's journal.
+      a.insert(a.end(), {"--journal", (out / "sim.journal").string()});
       if (!c.blade.empty()) a.insert(a.end(), {"--blade", c.blade});
       // With a recording, the cloth has settled this long after the last hand sample: the run's end.
       if (recording) a.insert(a.end(), {"--exit-when-idle", json(c.settle_s).dump()});

@@ -33,7 +33,7 @@ struct Supervised {
 void clear_outputs(const fs::path& out) {
   fs::create_directories(out);
   for (const auto* name : {"summary.json", "cloth.obj", "pattern.svg", "final.png", "video.mp4", "video.avi",
-                           "latency.png", "trajectory.png", "config.json"})
+                           "latency.png", "trajectory.png", "config.json", "sim.journal"})
     fs::remove(out / name);
   fs::remove_all(out / kSimExportDir);
   fs::remove_all(out / "trace");

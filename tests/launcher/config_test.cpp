@@ -32,6 +32,7 @@ TEST(RunConfig, DefaultsStartTheFourNodesConsumersFirstOnOneDomain) {
   EXPECT_TRUE(has_pair(child(children, "sensor").args, "--recording", "/rec"));
   EXPECT_TRUE(has_pair(child(children, "sim").args, "--pin", "top-edge"));
   EXPECT_TRUE(has_pair(child(children, "sim").args, "--export", "out/run/sim"));
+  EXPECT_TRUE(has_pair(child(children, "sim").args, "--journal", "out/run/sim.journal"));
   EXPECT_TRUE(child(children, "sensor").finite);
   EXPECT_FALSE(child(children, "filter").finite);
   // Without a display the viewer runs headless.

@@ -49,12 +49,10 @@ void add_live_flags(CLI::App& app, LiveOptions& options) {
 }
 
 int run_live(const OfflineOptions& shared, std::optional<int> max_steps, const LiveOptions& live) {
-  SessionOptions session_options;
-  session_options.cloth = shared.cloth;
-  session_options.solver = shared.solver;
-  session_options.stroke.blade = shared.blade;
-  session_options.hand_radius_m = live.hand_radius_m;
-  Session session{session_options};
+  SessionOptions options = session_options(shared);
+  options.hand_radius_m = live.hand_radius_m;
+  Session session{options};
+  session.set_shapes(shared.spheres, shared.ground);
 
   bus::Participant dds{live.bus.domain, live.bus.dds_config};
   bus::Reader<tachi_msg_StrokeSample> strokes{dds, bus::topics::stroke};
@@ -68,11 +66,19 @@ int run_live(const OfflineOptions& shared, std::optional<int> max_steps, const L
   topology_writer.write(topology.msg());
   std::vector<tachi_msg_GridCoord> cut_line;
 
-  const auto period = std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(shared.solver.dt));
+  ObjectMessage object;
+  std::optional<bus::Writer<tachi_msg_SceneObject>> object_writer;
+  if (session.object() != nullptr) {
+    // Transient-local: a viewer that starts later still gets the object it should draw.
+    object_writer.emplace(dds, bus::topics::scene_object);
+    object_writer->write(object.fill(live.cloth_id, session.object()->points()));
+  }
+
+  const auto period = std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(options.solver.dt));
   const auto start = Clock::now();
   auto next_step = start;
   auto last_hand = start;
-  std::uint64_t samples_in = 0, messages_out = 1, rejected = 0, overruns = 0;
+  std::uint64_t samples_in = 0, messages_out = 1, rejected = 0, overruns = 0, grabs_refused = 0;
   bool had_filter = false;
   std::vector<double> step_ms;
 
@@ -80,7 +86,12 @@ int run_live(const OfflineOptions& shared, std::optional<int> max_steps, const L
     strokes.wait_for_data(std::max(next_step - Clock::now(), Clock::duration::zero()));
     for (const auto& sample : strokes.take()) {
       if (const auto input = from_msg(*sample)) {
-        session.on_hand({input->stroke_id, input->time_s, input->position_m, input->tracked, input->cutting, input->holding});
+        session.on_hand({input->stroke_id, input->time_s, input->position_m, input->tracked, input->cutting, input->holding,
+                         input->grabbing});
+        if (const auto why = session.take_grab_refusal()) {
+          spdlog::warn("tachi-sim: {}", *why);
+          ++grabs_refused;
+        }
         ++samples_in;
         last_hand = Clock::now();
       } else if (++rejected == 1 || rejected % 100 == 0) {
@@ -117,7 +128,7 @@ int run_live(const OfflineOptions& shared, std::optional<int> max_steps, const L
                      report.stroke.particles_duplicated, report.stroke.cut_length_m, report.pieces, report.fallen_pieces);
       }
       if (session.steps() % static_cast<std::uint64_t>(live.state_every) == 0) {
-        state_writer.write(state_msg(live.cloth_id, session.steps(), session.time_s(), session.cloth()));
+        state_writer.write(state_msg(live.cloth_id, session.steps(), session.time_s(), session.cloth(), session.held_particle()));
         ++messages_out;
       }
       heartbeat.update(overruns > 0 ? tachi_msg_NODE_DEGRADED : tachi_msg_NODE_RUNNING, samples_in, messages_out,
@@ -138,7 +149,7 @@ int run_live(const OfflineOptions& shared, std::optional<int> max_steps, const L
   }
   for (const auto& report : session.take_cut_reports())
     cut_writer.write(cut_msg(live.cloth_id, session.cloth().topology_version, report, cut_line));
-  state_writer.write(state_msg(live.cloth_id, session.steps(), session.time_s(), session.cloth()));
+  state_writer.write(state_msg(live.cloth_id, session.steps(), session.time_s(), session.cloth(), session.held_particle()));
   // Let late readers (viewer, tests) receive the final topology and cuts before the process goes.
   topology_writer.wait_for_acks(std::chrono::seconds(1));
   cut_writer.wait_for_acks(std::chrono::seconds(1));
@@ -146,10 +157,12 @@ int run_live(const OfflineOptions& shared, std::optional<int> max_steps, const L
   Summary summary = summarize(session.cloth());
   summary.steps = static_cast<int>(session.steps());
   add_cut_summary(summary, session.cloth(), session.cutter());
+  add_session_summary(summary, session);
   add_step_times(summary, step_ms);
   summary.extra["hand_samples"] = samples_in;
   summary.extra["hand_samples_rejected"] = rejected;
   summary.extra["step_overruns"] = overruns;
+  summary.extra["grabs_refused"] = grabs_refused;
   spdlog::info("tachi-sim: stopped after {} steps ({} hand samples, {} pieces)", summary.steps, samples_in, summary.pieces);
   if (!shared.export_dir.empty()) export_run(summary, session.cloth(), shared.export_dir);
   return common::kExitOk;

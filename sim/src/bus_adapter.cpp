@@ -24,6 +24,7 @@ std::optional<StrokeInput> from_msg(const tachi_msg_StrokeSample& msg) {
   input.tracked = msg.tracked;
   input.cutting = msg.gate == tachi_msg_GATE_CUTTING;
   input.holding = msg.gate == tachi_msg_GATE_HOLDING;
+  input.grabbing = msg.gate == tachi_msg_GATE_GRABBING;
   return input;
 }
 
@@ -57,8 +58,10 @@ void TopologyMessage::fill(std::uint32_t cloth_id, const Cloth& cloth, const Top
   point_at(msg_.changed_triangles, changed_triangles_);
 }
 
-tachi_msg_ClothState state_msg(std::uint32_t cloth_id, std::uint64_t frame, double sim_time_s, const Cloth& cloth) {
+tachi_msg_ClothState state_msg(std::uint32_t cloth_id, std::uint64_t frame, double sim_time_s, const Cloth& cloth,
+                               std::optional<std::uint32_t> held) {
   tachi_msg_ClothState msg{};
+  msg.held_particle = held ? static_cast<std::int32_t>(*held) : -1;
   msg.cloth_id = cloth_id;
   msg.frame = frame;
   msg.sim_time_ns = static_cast<std::int64_t>(std::llround(sim_time_s * 1e9));
@@ -68,6 +71,16 @@ tachi_msg_ClothState state_msg(std::uint32_t cloth_id, std::uint64_t frame, doub
   msg.positions._length = msg.positions._maximum = static_cast<std::uint32_t>(3 * cloth.particle_count());
   msg.positions._release = false;
   return msg;
+}
+
+const tachi_msg_SceneObject& ObjectMessage::fill(std::uint32_t cloth_id, const std::vector<Eigen::Vector3f>& points) {
+  xyz_.clear();
+  xyz_.reserve(3 * points.size());
+  for (const Eigen::Vector3f& p : points) xyz_.insert(xyz_.end(), {p.x(), p.y(), p.z()});
+  msg_ = {};
+  msg_.cloth_id = cloth_id;
+  point_at(msg_.points, xyz_);
+  return msg_;
 }
 
 }  // namespace tachi::sim

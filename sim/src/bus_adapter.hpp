@@ -20,6 +20,7 @@ struct StrokeInput {
   bool tracked = false;
   bool cutting = false;
   bool holding = false;
+  bool grabbing = false;  ///< GATE_GRABBING: the hand holds the cloth
 };
 
 /// Rejects samples a filter should never send but a faulty peer might: non-finite coordinates or a
@@ -46,6 +47,18 @@ class TopologyMessage {
 
 /// A ClothState message whose positions point straight at the cloth's position array
 /// (Eigen::Vector3f is three packed floats). Valid until the cloth's particle arrays grow.
-tachi_msg_ClothState state_msg(std::uint32_t cloth_id, std::uint64_t frame, double sim_time_s, const Cloth& cloth);
+/// `held`: the particle the hand holds (held_particle, -1 when none).
+tachi_msg_ClothState state_msg(std::uint32_t cloth_id, std::uint64_t frame, double sim_time_s, const Cloth& cloth,
+                               std::optional<std::uint32_t> held = std::nullopt);
+
+/// Owns the array a SceneObject message points into.
+class ObjectMessage {
+ public:
+  const tachi_msg_SceneObject& fill(std::uint32_t cloth_id, const std::vector<Eigen::Vector3f>& points);
+
+ private:
+  tachi_msg_SceneObject msg_{};
+  std::vector<float> xyz_;
+};
 
 }  // namespace tachi::sim

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace tachi::sim {
 
@@ -20,9 +21,14 @@ std::optional<std::string> validate(const ProvotParams& p) {
 ProvotSolver::ProvotSolver(ProvotParams params) : params_(std::move(params)) {}
 
 void ProvotSolver::refresh(const Cloth& cloth) {
+  std::vector<std::uint32_t> fixed;
+  for (std::size_t i = 0; i < cloth.particle_count(); ++i) {
+    if (cloth.inverse_mass[i] == 0.0F) fixed.push_back(static_cast<std::uint32_t>(i));
+  }
   if (cache_valid_ && cached_version_ == cloth.topology_version && cached_springs_ == cloth.spring_count() &&
-      cached_particles_ == cloth.particle_count())
+      cached_particles_ == cloth.particle_count() && fixed == cached_fixed_)
     return;
+  cached_fixed_ = std::move(fixed);
   const SpringStiffness k = spring_stiffness(params_.material, cloth.spacing_x(), cloth.spacing_y());
   // Stability cap: h^2 * (sum of the spring constants at a particle) / m <= 1, half the explicit limit.
   // A grid particle has 4 springs of each family; the lightest particle (a cut halves masses) decides.
@@ -47,10 +53,38 @@ void ProvotSolver::refresh(const Cloth& cloth) {
     if (limited) limited_.push_back(static_cast<std::uint32_t>(springs_.size()));
     springs_.push_back({cloth.spring_a[s], cloth.spring_b[s], cloth.rest_length[s], ks, c, limited});
   }
+  order_outwards(cloth);
   cached_version_ = cloth.topology_version;
   cached_springs_ = cloth.spring_count();
   cached_particles_ = cloth.particle_count();
   cache_valid_ = true;
+}
+
+void ProvotSolver::order_outwards(const Cloth& cloth) {
+  // Breadth-first hop count from the fixed particles over the constrained springs: sweeping the
+  // deformation constraint in that order carries a correction from a pin to the far edge in one sweep
+  // (in index order it needs one sweep per row), the same reason the PBD solver sweeps from its pins.
+  const std::size_t n = cloth.particle_count();
+  std::vector<std::vector<std::uint32_t>> next(n);
+  for (const std::uint32_t k : limited_) {
+    next[springs_[k].a].push_back(springs_[k].b);
+    next[springs_[k].b].push_back(springs_[k].a);
+  }
+  constexpr std::uint32_t kUnreached = std::numeric_limits<std::uint32_t>::max();
+  std::vector<std::uint32_t> hops(n, kUnreached);
+  std::vector<std::uint32_t> queue(cached_fixed_.begin(), cached_fixed_.end());
+  for (const std::uint32_t f : queue) hops[f] = 0;
+  for (std::size_t head = 0; head < queue.size(); ++head) {
+    const std::uint32_t i = queue[head];
+    for (const std::uint32_t j : next[i]) {
+      if (hops[j] != kUnreached) continue;
+      hops[j] = hops[i] + 1;
+      queue.push_back(j);
+    }
+  }
+  std::stable_sort(limited_.begin(), limited_.end(), [&](std::uint32_t x, std::uint32_t y) {
+    return std::min(hops[springs_[x].a], hops[springs_[x].b]) < std::min(hops[springs_[y].a], hops[springs_[y].b]);
+  });
 }
 
 void ProvotSolver::step(Cloth& cloth, const Colliders& colliders) {

@@ -2,6 +2,7 @@
 // test plays the sensor (raw hand samples in the camera frame) and the voice (commands on the bus).
 // Voice "grab", the hand moves, voice "release": the cloth moved with the hand, and let go.
 #include "process.hpp"
+#include "scratch_dir.hpp"
 #include "tachi/bus/topics.hpp"
 #include "tachi/filter/workspace.hpp"
 
@@ -9,6 +10,7 @@
 
 #include <csignal>
 #include <cstring>
+#include <fstream>
 #include <thread>
 
 namespace {
@@ -101,6 +103,34 @@ TEST(GrabPipeline, VoiceGrabTheHandMovesVoiceReleaseTheClothMovedWithTheHand) {
   EXPECT_EQ(sim.wait(10s), 0) << sim.err();
   EXPECT_EQ(filter.wait(10s), 0) << filter.err();
   EXPECT_EQ(sim.err().find("grab refused"), std::string::npos) << sim.err();
+}
+
+TEST(ObjectTopic, TheSimulatorPublishesItsObjectForLateViewers) {
+  constexpr unsigned kObjectDomain = 201;
+  const tachi::test::ScratchDir dir{"object_topic"};
+  {
+    std::ofstream ply{dir / "line.ply"};
+    ply << "ply\nformat ascii 1.0\nelement vertex 10\nproperty float x\nproperty float y\nproperty float z\nend_header\n";
+    for (int i = 0; i < 10; ++i) ply << 0.1 * i << " 0 0\n";
+  }
+  tachi::test::ChildProcess sim({TACHI_SIM_EXE, "--grid", "8", "--domain", std::to_string(kObjectDomain), "--duration", "20",
+                                 "--object", (dir / "line.ply").string(), "--object-pose", "0,-0.7,0.2"});
+  tachi::bus::Participant dds{kObjectDomain};
+  tachi::bus::Reader<tachi_msg_ClothState> states{dds, tachi::bus::topics::cloth_state};
+  ASSERT_TRUE(states.wait_for_writers(1, 20s)) << sim.err();
+  std::this_thread::sleep_for(300ms);
+  // A viewer that joins after the publication still gets it (transient-local).
+  tachi::bus::Reader<tachi_msg_SceneObject> objects{dds, tachi::bus::topics::scene_object};
+  ASSERT_TRUE(objects.wait_for_data(10s)) << sim.err();
+  const auto got = objects.take();
+  ASSERT_FALSE(got.empty());
+  const auto& msg = *got.back();
+  ASSERT_EQ(msg.points._length, 30u);
+  EXPECT_NEAR(msg.points._buffer[27], 0.9F, 1e-5F);
+  EXPECT_NEAR(msg.points._buffer[28], -0.7F, 1e-5F);
+  EXPECT_NEAR(msg.points._buffer[29], 0.2F, 1e-5F);
+  sim.signal(SIGINT);
+  EXPECT_EQ(sim.wait(10s), 0) << sim.err();
 }
 
 }  // namespace

@@ -6,7 +6,7 @@
 //   2. symplectic Euler  v += h F / m,  x += h v
 //   3. deformation constraint: every structural or shear spring longer than (1 + max_strain) L is shortened
 //      back, both ends moving half-way, or only the free end when the other is fixed (Provot section 5),
-//      swept until none is over-stretched or the pass budget is spent
+//      swept outwards from the fixed particles until none is over-stretched or the pass budget is spent
 //   4. collisions by projection with friction; v = (x - x_start) / h, so the correction does not leave
 //      velocities that fight it
 // Explicit integration is stable only for h^2 sum_k k / m < ~2 per particle (Gershgorin bound on the
@@ -64,6 +64,7 @@ class ProvotSolver {
     bool limited;  ///< structural or shear: subject to the deformation constraint
   };
   void refresh(const Cloth& cloth);
+  void order_outwards(const Cloth& cloth);
   void substep(Cloth& cloth, const Colliders& colliders, float h);
 
   ProvotParams params_;
@@ -73,6 +74,7 @@ class ProvotSolver {
   std::size_t cached_springs_ = 0;
   std::size_t cached_particles_ = 0;
   bool cache_valid_ = false;
+  std::vector<std::uint32_t> cached_fixed_;  ///< pinned or held particles (inverse mass 0) the order starts from
   std::vector<PackedSpring> springs_;
   std::vector<std::uint32_t> limited_;  ///< indices into springs_ of the constrained springs
   std::vector<Eigen::Vector3f> force_;

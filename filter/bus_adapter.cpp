@@ -32,9 +32,10 @@ VoiceCommandKind from_msg(const tachi_msg_VoiceCommand& msg) {
   }
 }
 
-tachi_msg_StrokeSample to_msg(const StrokeSample& s, std::uint32_t sensor_id) {
+tachi_msg_StrokeSample to_msg(const StrokeSample& s, std::uint32_t sensor_id, std::uint64_t session_id) {
   tachi_msg_StrokeSample m{};
   m.sensor_id = sensor_id;
+  m.session_id = session_id;
   m.stroke_id = s.stroke_id;
   m.frame = s.frame;
   m.time_ns = s.stamp_ns;

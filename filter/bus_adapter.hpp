@@ -10,6 +10,7 @@ namespace tachi::filter {
 
 HandSample from_msg(const tachi_msg_RawHandSample& msg);
 VoiceCommandKind from_msg(const tachi_msg_VoiceCommand& msg);
-tachi_msg_StrokeSample to_msg(const StrokeSample& sample, std::uint32_t sensor_id);
+/// `session_id` names this filter run (bus::new_session_id): with sensor_id and stroke_id it names a stroke.
+tachi_msg_StrokeSample to_msg(const StrokeSample& sample, std::uint32_t sensor_id, std::uint64_t session_id);
 
 }  // namespace tachi::filter

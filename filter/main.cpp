@@ -1,6 +1,7 @@
 // tachi-filter: raw hand samples -> smoothed, gated strokes. Offline (CSV in, CSV out) or on the DDS bus.
 #include "bus_adapter.hpp"
 #include "tachi/bus/heartbeat.hpp"
+#include "tachi/bus/input_guard.hpp"
 #include "tachi/bus/topics.hpp"
 #include "tachi/common/app.hpp"
 #include "tachi/filter/config.hpp"
@@ -29,6 +30,13 @@ struct Options {
   std::string log_level;
   tachi::common::BusOptions bus;
 };
+
+// A Kinect v1 sees 0.4-4 m; a camera-frame hand beyond 20 m on any axis is a faulty or hostile peer.
+constexpr float kMaxHandRange_m = 20.0F;
+// Hand samples carry no session id: a sensor whose clock jumps back by more than this restarted.
+constexpr std::int64_t kSensorRestartGap_ns = 1'000'000'000;
+// The largest cloth tachi-sim builds (4096 x 4096 particles, cut up to twice over), xyz each.
+constexpr std::size_t kMaxClothFloats = std::size_t{3} * 4096 * 4096 * 2;
 
 struct TimedCommand {
   double time_s;
@@ -96,7 +104,7 @@ int run_offline(const Options& o, const tachi::filter::FilterConfig& config) {
 int run_bus(const Options& o, const tachi::filter::FilterConfig& config) {
   namespace bus = tachi::bus;
   using namespace std::chrono_literals;
-  bus::Participant dds{o.bus.domain, o.bus.dds_config};
+  bus::Participant dds{o.bus.domain, o.bus.dds_config, {o.bus.secure_dir, o.bus.identity}};
   bus::Reader<tachi_msg_RawHandSample> hands{dds, bus::topics::raw_hand};
   bus::Reader<tachi_msg_VoiceCommand> voice{dds, bus::topics::voice_command};
   bus::Reader<tachi_msg_ClothState> cloth{dds, bus::topics::cloth_state};
@@ -107,6 +115,13 @@ int run_bus(const Options& o, const tachi::filter::FilterConfig& config) {
   waitset.attach(cloth);
 
   bus::Heartbeat heartbeat{dds, "tachi-filter"};
+  // Hostile or faulty input is refused before the filter sees it, and counted in the heartbeat.
+  bus::InputGuard guard{[&](std::string_view reason) {
+    heartbeat.count_rejected(reason);
+    if (heartbeat.rejected() == 1 || heartbeat.rejected() % 100 == 0)
+      spdlog::warn("{} input samples rejected (last: {})", heartbeat.rejected(), reason);
+  }};
+  const std::uint64_t session_id = bus::new_session_id();
   tachi::filter::StrokeFilter filter{config};
   std::uint64_t in_count = 0;
   std::uint64_t out_count = 0;
@@ -124,12 +139,15 @@ int run_bus(const Options& o, const tachi::filter::FilterConfig& config) {
     auto states = cloth.take();
     if (!states.empty()) {
       const auto& newest = *states.back();
-      filter.on_cloth_state({newest.positions._buffer, newest.positions._length});
+      if (guard.size(newest.positions._length, kMaxClothFloats, 3))
+        filter.on_cloth_state({newest.positions._buffer, newest.positions._length});
     }
     for (const auto& h : hands.take()) {
       ++in_count;
+      if (h->tracked && !guard.position(h->position_m.x, h->position_m.y, h->position_m.z, kMaxHandRange_m)) continue;
+      if (!guard.time(h->sensor_id, h->capture_time_ns, kSensorRestartGap_ns)) continue;
       const auto stroke = filter.on_hand(tachi::filter::from_msg(*h));
-      strokes.write(tachi::filter::to_msg(stroke, h->sensor_id));
+      strokes.write(tachi::filter::to_msg(stroke, h->sensor_id, session_id));
       ++out_count;
     }
     heartbeat.update(tachi_msg_NODE_RUNNING, in_count, out_count, "gate " + tachi::filter::to_string(config.gate.mode));

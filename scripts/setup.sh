@@ -23,6 +23,8 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev libbullet-dev
   # multi-host tests in network namespaces; the capture that proves DDS stays on loopback
   iproute2 tcpdump
+  # DDS Security test PKI (scripts/make_test_pki.sh); libFuzzer targets and sanitizer builds (-DTACHI_FUZZ=ON)
+  openssl clang
   # viewer under a virtual display
   xvfb
 )

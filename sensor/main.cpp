@@ -119,13 +119,14 @@ int main(int argc, char** argv) try {
   std::optional<tachi::bus::Writer<tachi_msg_RawHandSample>> writer;
   std::optional<tachi::bus::Heartbeat> heartbeat;
   if (!o.no_dds) {
-    dds.emplace(o.bus.domain, o.bus.dds_config);
+    dds.emplace(o.bus.domain, o.bus.dds_config, tachi::bus::Security{o.bus.secure_dir, o.bus.identity});
     writer.emplace(*dds, tachi::bus::topics::raw_hand);
     heartbeat.emplace(*dds, "tachi-sensor");
     if (o.wait_readers > 0 && !writer->wait_for_readers(o.wait_readers, std::chrono::seconds(5)))
       spdlog::warn("only {} of {} readers after 5 s; publishing anyway", writer->matched_readers(), o.wait_readers);
   }
 
+  tachi::sensor::use_one_opencv_thread();
   tachi::sensor::HandFinder finder(source->model());
   std::uint64_t frames = 0, tracked = 0;
   while (!tachi::common::stop_requested() && (o.max_frames == 0 || frames < o.max_frames)) {

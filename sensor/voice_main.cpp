@@ -44,7 +44,7 @@ class CommandPublisher {
  public:
   CommandPublisher(const Options& o) : source_id_(o.source_id) {
     if (o.no_dds) return;
-    dds_.emplace(o.bus.domain, o.bus.dds_config);
+    dds_.emplace(o.bus.domain, o.bus.dds_config, tachi::bus::Security{o.bus.secure_dir, o.bus.identity});
     writer_.emplace(*dds_, tachi::bus::topics::voice_command);
     heartbeat_.emplace(*dds_, "tachi-voice");
   }

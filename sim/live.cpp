@@ -2,6 +2,8 @@
 
 #include "src/bus_adapter.hpp"
 #include "tachi/bus/heartbeat.hpp"
+#include "tachi/bus/input_guard.hpp"
+#include "tachi/sim/journal.hpp"
 #include "tachi/sim/session.hpp"
 
 #include <spdlog/spdlog.h>
@@ -13,7 +15,7 @@ namespace {
 using Clock = std::chrono::steady_clock;
 
 tachi_msg_CutEvent cut_msg(std::uint32_t cloth_id, std::uint32_t version, const CutReport& report,
-                           std::vector<tachi_msg_GridCoord>& line) {
+                           std::vector<tachi_msg_GridCoord>& line, std::uint64_t session_id) {
   line.clear();
   for (const GridCoord g : report.stroke.cut_line)
     line.push_back({static_cast<std::uint16_t>(g.u), static_cast<std::uint16_t>(g.v)});
@@ -28,7 +30,15 @@ tachi_msg_CutEvent cut_msg(std::uint32_t cloth_id, std::uint32_t version, const 
   msg.pieces = static_cast<std::uint32_t>(report.pieces);
   msg.fallen_pieces = static_cast<std::uint32_t>(report.fallen_pieces);
   msg.cut_length_m = report.stroke.cut_length_m;
+  msg.session_id = session_id;
   return msg;
+}
+
+void journal_append(Journal& journal, const JournalRecord& record) {
+  const bool was_full = journal.full();
+  if (!journal.append(record) && !was_full)
+    spdlog::error("tachi-sim: journal {} is full ({} MB); later samples are not journaled", journal.path().string(),
+                  Journal::kMaxBytes >> 20);  // tachi-sim uses the default bound
 }
 
 }  // namespace
@@ -44,6 +54,9 @@ void add_live_flags(CLI::App& app, LiveOptions& options) {
   app.add_option("--exit-when-idle", options.exit_when_idle_s,
                  "Live: stop when no hand sample arrived for this many seconds after the first (0: never)")
       ->check(CLI::NonNegativeNumber);
+  app.add_option("--journal", options.journal,
+                 "Live: journal every applied hand sample to FILE; a restarted simulator given the same FILE replays it "
+                 "to the same cloth and cuts, then resumes (docs/reliability.md)");
   app.add_option("--hand-radius", options.hand_radius_m, "Live: the idle hand pushes the cloth as a sphere of this radius, m (0: off)")
       ->check(CLI::Range(0.0F, 1.0F));
 }
@@ -53,16 +66,38 @@ int run_live(const OfflineOptions& shared, std::optional<int> max_steps, const L
   options.hand_radius_m = live.hand_radius_m;
   Session session{options};
   session.set_shapes(shared.spheres, shared.ground);
+  // No lost cuts: replay what a previous run of this journal applied, then append to it.
+  std::optional<Journal> journal;
+  std::map<std::pair<std::uint32_t, std::uint64_t>, std::int64_t> replayed;
+  if (!live.journal.empty()) {
+    const auto t0 = Clock::now();
+    journal.emplace(live.journal, journal_fingerprint(options));
+    replayed = replay(journal->recovered(), session);
+    (void)session.take_cut_reports();  // the previous run reported them
+    (void)session.take_topology_change();  // published whole below
+    if (!journal->recovered().empty())
+      spdlog::info("tachi-sim: replayed {} journal records ({} steps, {} cut particles) from {} in {:.0f} ms",
+                   journal->recovered().size(), session.steps(), session.cutter().total().particles_duplicated,
+                   live.journal, std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
+  }
 
-  bus::Participant dds{live.bus.domain, live.bus.dds_config};
+  bus::Participant dds{live.bus.domain, live.bus.dds_config, {live.bus.secure_dir, live.bus.identity}};
   bus::Reader<tachi_msg_StrokeSample> strokes{dds, bus::topics::stroke};
   bus::Writer<tachi_msg_ClothTopology> topology_writer{dds, bus::topics::cloth_topology};
   bus::Writer<tachi_msg_ClothState> state_writer{dds, bus::topics::cloth_state};
   bus::Writer<tachi_msg_CutEvent> cut_writer{dds, bus::topics::cut_event};
   bus::Heartbeat heartbeat{dds, "tachi-sim"};
+  // Each run is a new session: readers follow it even though its topology version starts again.
+  const std::uint64_t session_id = bus::new_session_id();
+  std::uint64_t rejected = 0;
+  bus::InputGuard guard{[&](std::string_view reason) {
+    heartbeat.count_rejected(reason);
+    if (++rejected == 1 || rejected % 100 == 0)
+      spdlog::warn("tachi-sim: {} hand samples rejected (last: {})", rejected, reason);
+  }};
 
   TopologyMessage topology;
-  topology.fill(live.cloth_id, session.cloth(), nullptr);
+  topology.fill(live.cloth_id, session.cloth(), nullptr, session_id);
   topology_writer.write(topology.msg());
   std::vector<tachi_msg_GridCoord> cut_line;
 
@@ -71,39 +106,50 @@ int run_live(const OfflineOptions& shared, std::optional<int> max_steps, const L
   if (session.object() != nullptr) {
     // Transient-local: a viewer that starts later still gets the object it should draw.
     object_writer.emplace(dds, bus::topics::scene_object);
-    object_writer->write(object.fill(live.cloth_id, session.object()->points()));
+    object_writer->write(object.fill(live.cloth_id, session.object()->points(), session_id));
   }
 
   const auto period = std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(options.solver.dt));
   const auto start = Clock::now();
   auto next_step = start;
   auto last_hand = start;
-  std::uint64_t samples_in = 0, messages_out = 1, rejected = 0, overruns = 0, grabs_refused = 0;
+  std::uint64_t samples_in = 0, messages_out = 1, overruns = 0, grabs_refused = 0;
   bool had_filter = false;
   std::vector<double> step_ms;
 
   common::run_until_stopped([&] {
     strokes.wait_for_data(std::max(next_step - Clock::now(), Clock::duration::zero()));
     for (const auto& sample : strokes.take()) {
-      if (const auto input = from_msg(*sample)) {
-        session.on_hand({input->stroke_id, input->time_s, input->position_m, input->tracked, input->cutting, input->holding,
-                         input->grabbing});
-        if (const auto why = session.take_grab_refusal()) {
-          spdlog::warn("tachi-sim: {}", *why);
-          ++grabs_refused;
-        }
-        ++samples_in;
-        last_hand = Clock::now();
-      } else if (++rejected == 1 || rejected % 100 == 0) {
-        spdlog::warn("tachi-sim: {} hand samples rejected (non-finite or > 100 m from the cloth)", rejected);
+      const auto input = from_msg(*sample);
+      if (!input) {
+        guard.reject("out_of_range");  // non-finite or > 100 m from the cloth
+        continue;
       }
+      // Re-delivered by the filter's history after a restart, and already replayed from the journal.
+      if (const auto it = replayed.find({input->sensor_id, input->session_id});
+          it != replayed.end() && sample->time_ns <= it->second)
+        continue;
+      // A stroke is (sensor, filter session, stroke id): its samples' times never go back.
+      if (!guard.time(input->session_id ^ input->sensor_id, sample->time_ns)) continue;
+      const HandInput hand{input->stroke_id, input->time_s,  input->position_m,  input->tracked,
+                           input->cutting,   input->holding, input->session_id, input->grabbing};
+      session.on_hand(hand);
+      if (const auto why = session.take_grab_refusal()) {
+        spdlog::warn("tachi-sim: {}", *why);
+        ++grabs_refused;
+      }
+      if (journal) journal_append(*journal, {JournalRecord::Kind::Hand, session.steps(), input->sensor_id, sample->time_ns, hand});
+      ++samples_in;
+      last_hand = Clock::now();
     }
     // A filter that vanished mid-stroke would leave the stroke open forever: close it.
     const bool has_filter = strokes.matched_writers() > 0;
     if (had_filter && !has_filter && session.cutter().stroke_open()) {
       spdlog::warn("tachi-sim: the stroke publisher went away mid-stroke; closing the stroke");
       session.end_stroke();
+      if (journal) journal_append(*journal, {JournalRecord::Kind::EndStroke, session.steps()});
     }
+    if (journal) journal->flush();
     had_filter = has_filter;
 
     const auto now = Clock::now();
@@ -117,18 +163,19 @@ int run_live(const OfflineOptions& shared, std::optional<int> max_steps, const L
         ++overruns;
       }
       if (const auto change = session.take_topology_change()) {
-        topology.fill(live.cloth_id, session.cloth(), &*change);
+        topology.fill(live.cloth_id, session.cloth(), &*change, session_id);
         topology_writer.write(topology.msg());
         ++messages_out;
       }
       for (const auto& report : session.take_cut_reports()) {
-        cut_writer.write(cut_msg(live.cloth_id, session.cloth().topology_version, report, cut_line));
+        cut_writer.write(cut_msg(live.cloth_id, session.cloth().topology_version, report, cut_line, session_id));
         ++messages_out;
         spdlog::info("tachi-sim: stroke {} cut {} particles over {:.3f} m; {} pieces, {} falling", report.stroke_id,
                      report.stroke.particles_duplicated, report.stroke.cut_length_m, report.pieces, report.fallen_pieces);
       }
       if (session.steps() % static_cast<std::uint64_t>(live.state_every) == 0) {
-        state_writer.write(state_msg(live.cloth_id, session.steps(), session.time_s(), session.cloth(), session.held_particle()));
+        state_writer.write(
+            state_msg(live.cloth_id, session.steps(), session.time_s(), session.cloth(), session_id, session.held_particle()));
         ++messages_out;
       }
       heartbeat.update(overruns > 0 ? tachi_msg_NODE_DEGRADED : tachi_msg_NODE_RUNNING, samples_in, messages_out,
@@ -143,13 +190,18 @@ int run_live(const OfflineOptions& shared, std::optional<int> max_steps, const L
   });
 
   session.end_stroke();
+  if (journal) {
+    journal_append(*journal, {JournalRecord::Kind::EndStroke, session.steps()});
+    journal->flush();
+  }
   if (const auto change = session.take_topology_change()) {
-    topology.fill(live.cloth_id, session.cloth(), &*change);
+    topology.fill(live.cloth_id, session.cloth(), &*change, session_id);
     topology_writer.write(topology.msg());
   }
   for (const auto& report : session.take_cut_reports())
-    cut_writer.write(cut_msg(live.cloth_id, session.cloth().topology_version, report, cut_line));
-  state_writer.write(state_msg(live.cloth_id, session.steps(), session.time_s(), session.cloth(), session.held_particle()));
+    cut_writer.write(cut_msg(live.cloth_id, session.cloth().topology_version, report, cut_line, session_id));
+  state_writer.write(
+      state_msg(live.cloth_id, session.steps(), session.time_s(), session.cloth(), session_id, session.held_particle()));
   // Let late readers (viewer, tests) receive the final topology and cuts before the process goes.
   topology_writer.wait_for_acks(std::chrono::seconds(1));
   cut_writer.wait_for_acks(std::chrono::seconds(1));
@@ -164,7 +216,7 @@ int run_live(const OfflineOptions& shared, std::optional<int> max_steps, const L
   summary.extra["step_overruns"] = overruns;
   summary.extra["grabs_refused"] = grabs_refused;
   spdlog::info("tachi-sim: stopped after {} steps ({} hand samples, {} pieces)", summary.steps, samples_in, summary.pieces);
-  if (!shared.export_dir.empty()) export_run(summary, session.cloth(), shared.export_dir);
+  if (!shared.export_dir.empty()) export_run(summary, session.cloth(), shared.export_dir, &session.cutter());
   return common::kExitOk;
 }
 

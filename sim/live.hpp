@@ -13,6 +13,7 @@ struct LiveOptions {
   double duration_s = 0.0;        ///< stop after this long (0: until SIGINT/SIGTERM)
   double exit_when_idle_s = 0.0;  ///< stop when no hand sample arrived for this long after the first (0: never)
   float hand_radius_m = 0.0F;     ///< the idle hand as a collider sphere (0: off)
+  std::string journal;            ///< replay then append every applied hand sample here (empty: no journal)
 };
 
 void add_live_flags(CLI::App& app, LiveOptions& options);

@@ -7,6 +7,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <filesystem>
 #include <iostream>
@@ -55,7 +56,7 @@ int main(int argc, char** argv) try {
     throw std::runtime_error("no display (DISPLAY is not set); use --headless with --snapshot or --frames-dir");
   if (!o.frames_dir.empty()) std::filesystem::create_directories(o.frames_dir);
 
-  tachi::bus::Participant dds{o.bus.domain, o.bus.dds_config};
+  tachi::bus::Participant dds{o.bus.domain, o.bus.dds_config, {o.bus.secure_dir, o.bus.identity}};
   tachi::bus::Reader<tachi_msg_ClothTopology> topologies{dds, tachi::bus::topics::cloth_topology};
   tachi::bus::Reader<tachi_msg_ClothState> states{dds, tachi::bus::topics::cloth_state};
   tachi::bus::Reader<tachi_msg_StrokeSample> strokes{dds, tachi::bus::topics::stroke};
@@ -65,6 +66,10 @@ int main(int argc, char** argv) try {
   waitset.attach(strokes);
 
   tachi::bus::Heartbeat heartbeat{dds, "tachi-viewer"};
+  tachi::bus::InputGuard guard{[&](std::string_view reason) {
+    heartbeat.count_rejected(reason);
+    spdlog::warn("tachi-viewer: cloth message rejected ({})", reason);
+  }};
   std::uint64_t messages_in = 0;
   viewer::SceneState scene;
   viewer::View view;
@@ -79,12 +84,14 @@ int main(int argc, char** argv) try {
 
   tachi::common::run_until_stopped([&] {
     const auto now = std::chrono::steady_clock::now();
-    waitset.wait(std::max(next_frame - now, std::chrono::steady_clock::duration(1ms)));
+    // At most 100 ms: a signal does not wake a DDS waitset, and at --fps 1 a whole frame is too long to stop in.
+    waitset.wait(std::clamp(next_frame - now, std::chrono::steady_clock::duration(1ms), std::chrono::steady_clock::duration(100ms)));
     for (const auto& t : topologies.take()) {
-      scene.on_topology(viewer::from_msg(*t));
       ++messages_in;
+      if (viewer::plausible(*t, guard)) scene.on_topology(viewer::from_msg(*t));
     }
     for (const auto& s : states.take(8)) {
+      if (!viewer::plausible(*s, guard)) continue;
       scene.on_state(viewer::from_msg(*s));
       last_state = std::chrono::steady_clock::now();
       ++messages_in;

@@ -7,12 +7,14 @@
 //     interleaved with LibriVox reading. No recording of a person saying the default phrases exists here.
 // Prints counts per group; docs/benchmarks.md ("Filter and voice") records a run.
 #include "tachi/sensor/voice_spotter.hpp"
+#include "tachi/common/app.hpp"
 #include "voice_fixture.hpp"
 
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <map>
+#include <optional>
 #include <random>
 
 namespace {
@@ -60,9 +62,14 @@ double rms(const std::vector<std::int16_t>& s) {
 }  // namespace
 
 int main(int argc, char** argv) try {
-  // Optional: a kws threshold for the default phrases (both), e.g. 1e-30, instead of the config default.
+  CLI::App app{"tachi-voice-eval: detection rate and false alarms of the voice keyword spotter (docs/voice.md)"};
+  app.name("tachi-voice-eval");
   VoiceConfig commands;
-  if (argc > 1) for (auto& p : commands.phrases) p.threshold = std::stod(argv[1]);
+  std::optional<double> threshold;
+  app.add_option("threshold", threshold, "kws threshold for both default phrases, e.g. 1e-30 (default: the config's)")
+      ->check(CLI::Range(1e-100, 1.0));
+  if (const int rc = tachi::common::parse(app, argc, argv); rc >= 0) return rc;
+  if (threshold) for (auto& p : commands.phrases) p.threshold = *threshold;
   std::printf("default phrases at thresholds %g / %g\n", commands.phrases[0].threshold, commands.phrases[1].threshold);
   const auto t0 = std::chrono::steady_clock::now();
   std::printf("%-58s %5s %8s %8s %6s %7s %8s\n", "group", "cmds", "detected", "rate", "wrong", "f.alarm", "audio_s");

@@ -12,6 +12,7 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "tachi/common/app.hpp"
 #include "tachi/sensor/depth_source.hpp"
 #include "tachi/sensor/hand_csv.hpp"
 #include "tachi/sensor/hand_finder.hpp"
@@ -82,14 +83,31 @@ std::pair<std::vector<double>, Evaluation> run(const std::vector<DepthFrame>& fr
 }  // namespace
 
 int main(int argc, char** argv) {
-  const std::filesystem::path dir = argc > 1 ? argv[1] : TACHI_RECORDINGS_DIR;
-  const int repeat = argc > 2 ? std::max(1, std::atoi(argv[2])) : 5;
-  const bool per_frame = argc > 3 && std::string(argv[3]) == "per-frame";  // first pass's ms per frame to stderr
+  CLI::App app{"tachi-sensor-bench: hand extraction speed and accuracy on the bundled recordings, against a "
+               "nearest-blob baseline (docs/benchmarks.md)"};
+  app.name("tachi-sensor-bench");
+  std::string recordings = TACHI_RECORDINGS_DIR;
+  int repeat = 5;
+  std::string per_frame_word;
+  app.add_option("recordings", recordings, "Folder holding the push, jitter, straight_cut, curve and top_edge recordings")
+      ->check(CLI::ExistingDirectory)
+      ->capture_default_str();
+  app.add_option("passes", repeat, "Passes per scenario")->check(CLI::Range(1, 1000))->capture_default_str();
+  app.add_option("per-frame", per_frame_word, "\"per-frame\": also print the first pass's ms per frame to stderr")
+      ->check(CLI::IsMember({"per-frame"}));
+  if (const int rc = tachi::common::parse(app, argc, argv); rc >= 0) return rc;
+  const std::filesystem::path dir = recordings;
+  const bool per_frame = !per_frame_word.empty();
   std::printf("recordings %s, %d passes per scenario, one thread, thread CPU time per frame\n\n", dir.c_str(), repeat);
   std::printf("%-13s %6s | %9s %9s %7s %5s | %9s %9s %7s %5s | %7s\n", "scenario", "frames", "tachi ms", "RMS mm",
               "tracked", "phant", "blob ms", "RMS mm", "tracked", "phant", "speedup");
   std::vector<double> all_ours, all_base;
-  for (const char* name : {"push", "jitter", "straight_cut", "curve", "top_edge"}) {
+  // Every rendered scenario (a folder with a ground truth), in name order.
+  std::vector<std::string> names;
+  for (const auto& entry : std::filesystem::directory_iterator(dir))
+    if (std::filesystem::exists(entry.path() / "ground_truth.csv")) names.push_back(entry.path().filename().string());
+  std::sort(names.begin(), names.end());
+  for (const auto& name : names) {
     try {
       RecordingSource source(dir / name, Playback{0.0, false});
       const DepthModel model = source.model();
@@ -100,18 +118,18 @@ int main(int argc, char** argv) {
         return [finder = std::make_shared<HandFinder>(model)](const DepthFrame& f) { return finder->find(f); };
       });
       if (per_frame) {
-        for (std::size_t i = 0; i < ours_ms.size() && i < frames.size(); ++i) std::fprintf(stderr, "%s %zu %.3f\n", name, i, ours_ms[i]);
+        for (std::size_t i = 0; i < ours_ms.size() && i < frames.size(); ++i) std::fprintf(stderr, "%s %zu %.3f\n", name.c_str(), i, ours_ms[i]);
       }
       const auto [base_ms, base] = run(frames, truth, repeat, [&] {
         return [&model](const DepthFrame& f) { return nearest_blob(f.raw, model); };
       });
       all_ours.insert(all_ours.end(), ours_ms.begin(), ours_ms.end());
       all_base.insert(all_base.end(), base_ms.begin(), base_ms.end());
-      std::printf("%-13s %6zu | %9.3f %9.2f %7.4f %5zu | %9.3f %9.1f %7.4f %5zu | %6.1fx\n", name, frames.size(),
+      std::printf("%-13s %6zu | %9.3f %9.2f %7.4f %5zu | %9.3f %9.1f %7.4f %5zu | %6.1fx\n", name.c_str(), frames.size(),
                   median(ours_ms), ours.rms_m * 1000, ours.tracked_ratio, ours.phantoms, median(base_ms), base.rms_m * 1000,
                   base.tracked_ratio, base.phantoms, median(base_ms) / median(ours_ms));
     } catch (const std::exception& e) {
-      std::fprintf(stderr, "tachi-sensor-bench: %s: %s\n", name, e.what());
+      std::fprintf(stderr, "tachi-sensor-bench: %s: %s\n", name.c_str(), e.what());
       return 1;
     }
   }

@@ -3,7 +3,11 @@
 #include <spdlog/sinks/stdout_color_sinks.h>  // declares stderr_color_mt too
 #include <spdlog/spdlog.h>
 
+#include <cmath>
 #include <csignal>
+#include <cstdlib>
+#include <optional>
+#include <thread>
 #include <iostream>
 
 namespace tachi::common {
@@ -17,6 +21,23 @@ const std::map<std::string, spdlog::level::level_enum> kLevels{
     {"trace", spdlog::level::trace}, {"debug", spdlog::level::debug}, {"info", spdlog::level::info},
     {"warn", spdlog::level::warn},   {"error", spdlog::level::err},   {"critical", spdlog::level::critical},
     {"off", spdlog::level::off}};
+// CLI11's Range and NonNegativeNumber compare with < and >, which NaN passes, and a number too
+// large for a double reads as inf: so every value given to any flag that reads as a number must be
+// finite. One check here covers every flag of every executable, present and future.
+std::optional<std::string> first_non_finite_value(const CLI::App& app) {
+  for (const CLI::Option* option : app.get_options()) {
+    for (const std::string& value : option->results()) {
+      const char* begin = value.c_str();
+      char* end = nullptr;
+      const double number = std::strtod(begin, &end);
+      if (end != begin && *end == '\0' && !std::isfinite(number))
+        return option->get_name() + ": " + value + " is not a finite number";
+    }
+  }
+  for (const CLI::App* sub : app.get_subcommands())
+    if (auto bad = first_non_finite_value(*sub)) return bad;
+  return std::nullopt;
+}
 }  // namespace
 
 void add_log_level_flag(CLI::App& app, std::string& level) {
@@ -33,6 +54,16 @@ void add_bus_flags(CLI::App& app, BusOptions& options) {
   app.add_option("--dds-config", options.dds_config,
                  "Cyclone DDS XML config; default: the built-in loopback-only config (config/cyclonedds-loopback.xml)")
       ->check(CLI::ExistingFile);
+  app.add_option("--secure", options.secure_dir,
+                 "DDS Security: authenticate, access-control and encrypt with the certificates and grants in DIR "
+                 "(made by scripts/make_test_pki.sh; docs/reliability.md)")
+      ->check(CLI::ExistingDirectory);
+  // tachi-filter is "filter": each node's grant names only its own topics.
+  std::string name = app.get_name();
+  if (name.starts_with("tachi-")) name.erase(0, 6);
+  if (options.identity.empty()) options.identity = name;
+  app.add_option("--identity", options.identity, "With --secure: the identity (DIR/NAME.cert.pem and its grant) to use")
+      ->capture_default_str();
 }
 
 int parse(CLI::App& app, int argc, char** argv) {
@@ -53,6 +84,10 @@ int parse(CLI::App& app, int argc, char** argv) {
     std::cerr << app.get_name() << ": " << e.what() << '\n';
     return kExitUsage;
   }
+  if (const auto bad = first_non_finite_value(app)) {
+    std::cerr << app.get_name() << ": " << *bad << '\n';
+    return kExitUsage;
+  }
   return -1;
 }
 
@@ -71,6 +106,16 @@ void install_stop_handlers() {
 
 bool stop_requested() { return g_stop.load(); }
 void request_stop() { g_stop.store(true); }
+
+bool sleep_unless_stopped(std::chrono::steady_clock::time_point until) {
+  constexpr auto kSlice = std::chrono::milliseconds(10);
+  while (!stop_requested()) {
+    const auto now = std::chrono::steady_clock::now();
+    if (now >= until) return true;
+    std::this_thread::sleep_for(std::min<std::chrono::steady_clock::duration>(until - now, kSlice));
+  }
+  return false;
+}
 
 void run_until_stopped(const std::function<bool()>& tick) {
   while (!stop_requested()) {

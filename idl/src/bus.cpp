@@ -1,10 +1,13 @@
 #include "tachi/bus/bus.hpp"
 
+#include "tachi/common/app.hpp"
 #include "tachi/common/text_file.hpp"
 
+#include <filesystem>
 #include <map>
 #include <memory>
 #include <mutex>
+#include <random>
 #include <thread>
 
 namespace tachi::bus {
@@ -19,6 +22,55 @@ struct DomainEntry {
 std::mutex g_domains_mutex;
 std::map<std::uint32_t, DomainEntry> g_domains;
 
+// Cyclone reads an empty config string as "use the defaults", which multicast on every interface,
+// and one that does not start with '<' as a file name: both are errors here, naming the file.
+std::string read_dds_config(const std::string& path) {
+  std::string xml = common::read_text_file(path, "DDS config file");
+  const auto first = xml.find_first_not_of(" \t\r\n");
+  if (first == std::string::npos)
+    throw std::runtime_error("DDS config file " + path + " is empty (refusing Cyclone's network defaults)");
+  if (xml[first] != '<') throw std::runtime_error("DDS config file " + path + " is not XML (expected <CycloneDDS>)");
+  return xml;
+}
+
+// Security's files, checked before Cyclone sees them so the error names the file (Cyclone's own says
+// only "Not allowed by security" or "Error"), then given as the participant's dds.sec.* properties.
+std::string security_file(const Security& security, const std::string& name) {
+  std::error_code ec;
+  const auto path = std::filesystem::absolute(std::filesystem::path(security.dir) / name, ec);
+  if (!std::filesystem::is_regular_file(path, ec)) {
+    throw std::runtime_error("--secure " + security.dir + ": " + path.string() + " " +
+                             (std::filesystem::exists(path, ec) ? "is not a file" : "does not exist") +
+                             " (make the directory with scripts/make_test_pki.sh)");
+  }
+  return "file:" + path.string();
+}
+
+void set_security_properties(dds_qos_t* qos, const Security& security) {
+  if (security.identity.empty()) throw std::runtime_error("--secure " + security.dir + ": no identity given");
+  const struct {
+    const char* name;
+    std::string value;
+  } properties[] = {
+      {"dds.sec.auth.library.path", "dds_security_auth"},
+      {"dds.sec.auth.library.init", "init_authentication"},
+      {"dds.sec.auth.library.finalize", "finalize_authentication"},
+      {"dds.sec.crypto.library.path", "dds_security_crypto"},
+      {"dds.sec.crypto.library.init", "init_crypto"},
+      {"dds.sec.crypto.library.finalize", "finalize_crypto"},
+      {"dds.sec.access.library.path", "dds_security_ac"},
+      {"dds.sec.access.library.init", "init_access_control"},
+      {"dds.sec.access.library.finalize", "finalize_access_control"},
+      {"dds.sec.auth.identity_ca", security_file(security, "identity_ca.pem")},
+      {"dds.sec.auth.identity_certificate", security_file(security, security.identity + ".cert.pem")},
+      {"dds.sec.auth.private_key", security_file(security, security.identity + ".key.pem")},
+      {"dds.sec.access.permissions_ca", security_file(security, "permissions_ca.pem")},
+      {"dds.sec.access.governance", security_file(security, "governance.p7s")},
+      {"dds.sec.access.permissions", security_file(security, "permissions.p7s")},
+  };
+  for (const auto& p : properties) dds_qset_prop(qos, p.name, p.value.c_str());
+}
+
 // A participant created in a domain that was not explicitly created gets Cyclone's default
 // config, which multicasts on every interface. So the domain entry is recorded only after
 // dds_create_domain succeeded, and any failure leaves no entry behind.
@@ -28,9 +80,10 @@ void acquire_domain(std::uint32_t id, const std::string& config_file) {
     ++it->second.users;
     return;
   }
-  const std::string xml = config_file.empty() ? std::string(kLoopbackConfigXml) : common::read_text_file(config_file, "DDS config file");
-  const dds_entity_t domain =
-      check(dds_create_domain(id, xml.c_str()), "create DDS domain " + std::to_string(id) + ": dds_create_domain");
+  const std::string xml = config_file.empty() ? std::string(kLoopbackConfigXml) : read_dds_config(config_file);
+  const dds_entity_t domain = check(
+      dds_create_domain(id, xml.c_str()),
+      "create DDS domain " + std::to_string(id) + (config_file.empty() ? "" : " from " + config_file) + ": dds_create_domain");
   g_domains.emplace(id, DomainEntry{domain, 1});
 }
 
@@ -55,6 +108,13 @@ QosPtr make_qos(QosProfile profile) {
       break;
     case QosProfile::Commands:
       dds_qset_reliability(qos.get(), DDS_RELIABILITY_RELIABLE, DDS_SECS(1));
+      dds_qset_history(qos.get(), DDS_HISTORY_KEEP_LAST, 1024);
+      break;
+    case QosProfile::Strokes:
+      // The writer keeps its last 1024 samples (~30 s of hand) for readers that join late: a
+      // simulator restarted after a crash catches up on the stroke instead of losing its middle.
+      dds_qset_reliability(qos.get(), DDS_RELIABILITY_RELIABLE, DDS_SECS(1));
+      dds_qset_durability(qos.get(), DDS_DURABILITY_TRANSIENT_LOCAL);
       dds_qset_history(qos.get(), DDS_HISTORY_KEEP_LAST, 1024);
       break;
     case QosProfile::Topology:
@@ -86,12 +146,24 @@ dds_return_t check(dds_return_t rc, std::string_view context) {
   return rc;
 }
 
-Participant::Participant(std::uint32_t domain, const std::string& config_file) : domain_(domain) {
+std::uint64_t new_session_id() {
+  std::random_device entropy;
+  std::uint64_t id = 0;
+  while (id == 0) id = (static_cast<std::uint64_t>(entropy()) << 32) ^ entropy();
+  return id;
+}
+
+Participant::Participant(std::uint32_t domain, const std::string& config_file, const Security& security)
+    : domain_(domain) {
+  QosPtr qos(dds_create_qos(), &dds_delete_qos);
+  if (security.enabled()) set_security_properties(qos.get(), security);
   acquire_domain(domain, config_file);
-  participant_ = dds_create_participant(domain, nullptr, nullptr);
+  participant_ = dds_create_participant(domain, qos.get(), nullptr);
   if (participant_ < 0) {
     release_domain(domain);
-    check(participant_, "create participant in domain " + std::to_string(domain) + ": dds_create_participant");
+    check(participant_, "create participant in domain " + std::to_string(domain) +
+                            (security.enabled() ? " with identity " + security.identity + " of " + security.dir : "") +
+                            ": dds_create_participant");
   }
 }
 
@@ -139,8 +211,9 @@ std::uint32_t matched_writers(dds_entity_t reader) {
 bool wait_until_count(const std::function<std::uint32_t()>& count, std::uint32_t n,
                       std::chrono::nanoseconds timeout) {
   const auto deadline = std::chrono::steady_clock::now() + timeout;
+  // A stop request (SIGINT/SIGTERM) ends the wait too: a process waiting for a peer must still stop.
   while (count() < n) {
-    if (std::chrono::steady_clock::now() >= deadline) return false;
+    if (std::chrono::steady_clock::now() >= deadline || common::stop_requested()) return false;
     std::this_thread::sleep_for(std::chrono::milliseconds(5));
   }
   return true;

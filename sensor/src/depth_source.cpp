@@ -1,6 +1,8 @@
 #include "tachi/sensor/depth_source.hpp"
 
-#include <thread>
+#include "tachi/common/app.hpp"
+
+#include <algorithm>
 
 namespace tachi::sensor {
 
@@ -36,9 +38,12 @@ std::optional<DepthFrame> RecordingSource::next() {
       start_wall_ = now;
       start_host_ns_ = frame.stamp_ns;
     } else {
-      const auto due = *start_wall_ + std::chrono::nanoseconds(static_cast<std::int64_t>(
-                                          static_cast<double>(frame.stamp_ns - start_host_ns_) / playback_.rate));
-      if (due > now) std::this_thread::sleep_until(due);
+      // In double seconds, capped: a host time that jumps by hours, or --rate 1e-9, must not overflow
+      // the clock. The wait ends at SIGINT/SIGTERM (the stream then ends here).
+      const double wait_s = static_cast<double>(frame.stamp_ns - start_host_ns_) * 1e-9 / playback_.rate;
+      const auto due = *start_wall_ + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                                          std::chrono::duration<double>(std::min(wait_s, 1e9)));
+      if (due > now && !common::sleep_unless_stopped(due)) return std::nullopt;
     }
   }
   ++position_;

@@ -97,9 +97,20 @@ std::vector<IndexEntry> read_index(const std::filesystem::path& dir) {
       throw RecordingError("recording " + dir.string() + ": INDEX.txt line " + std::to_string(number) + " \"" + shown +
                            "\": " + why);
     }
-    if (!std::filesystem::is_regular_file(dir / e->file))
-      throw RecordingError("recording " + dir.string() + ": INDEX.txt line " + std::to_string(number) + " lists " +
-                           e->file + ", which does not exist");
+    const std::string where = "recording " + dir.string() + ": INDEX.txt line " + std::to_string(number) + " lists " + e->file;
+    std::error_code ec;
+    const auto status = std::filesystem::status(dir / e->file, ec);
+    if (!std::filesystem::exists(status)) throw RecordingError(where + ", which does not exist");
+    if (!std::filesystem::is_regular_file(status)) throw RecordingError(where + ", which is not a regular file");
+    // fakenect-record writes the index as the frames arrive: host time never goes back.
+    if (!entries.empty() && e->host_time_ns < entries.back().host_time_ns)
+      throw RecordingError(where + ": host time goes back (after " + entries.back().file + "; INDEX.txt out of order?)");
+    if (e->kind == EntryKind::Accel) {
+      const auto size = std::filesystem::file_size(dir / e->file, ec);
+      if (size != kAccelDumpBytes)
+        throw RecordingError(where + ", which is " + std::to_string(size) + " bytes; an accelerometer dump is " +
+                             std::to_string(kAccelDumpBytes) + " (freenect_raw_tilt_state)");
+    }
     any_depth = any_depth || e->kind == EntryKind::Depth;
     entries.push_back(std::move(*e));
   }
@@ -147,6 +158,9 @@ std::variant<std::monostate, DepthFileError> decode_depth_pgm(std::span<const ch
   if (bytes.size() - pos < kDataBytes)
     return DepthFileError{"truncated: " + std::to_string(bytes.size() - pos) + " of " + std::to_string(kDataBytes) +
                           " data bytes"};
+  if (bytes.size() - pos > kDataBytes)
+    return DepthFileError{"trailing garbage: " + std::to_string(bytes.size() - pos - kDataBytes) +
+                          " bytes after the " + std::to_string(kDataBytes) + " data bytes"};
   raw.resize(kDepthPixels);
   const auto* data = reinterpret_cast<const unsigned char*>(bytes.data() + pos);
   std::size_t out_of_range = 0;
@@ -169,8 +183,15 @@ std::variant<std::monostate, DepthFileError> decode_depth_pgm(std::span<const ch
 void read_depth_file(const std::filesystem::path& file, std::vector<std::uint16_t>& raw) {
   std::ifstream in(file, std::ios::binary);
   if (!in) throw RecordingError(file.string() + ": cannot open");
-  // Header (<= ~64 bytes) + data; read a little more to tell "too long" apart from "exact".
-  std::vector<char> bytes(static_cast<std::size_t>(kDepthPixels) * 2 + 256);
+  // Header (<= ~64 bytes, more with comments) + data; read a little more to tell "too long" apart from
+  // "exact". A file longer than that is garbage after the data whatever its header: say how much.
+  constexpr std::size_t kMaxBytes = static_cast<std::size_t>(kDepthPixels) * 2 + 4096;
+  std::error_code ec;
+  const auto size = std::filesystem::file_size(file, ec);
+  if (!ec && size > kMaxBytes)
+    throw RecordingError(file.string() + ": trailing garbage: " + std::to_string(size) + " bytes, a depth frame is " +
+                         std::to_string(static_cast<std::size_t>(kDepthPixels) * 2) + " plus a short header");
+  std::vector<char> bytes(kMaxBytes);
   in.read(bytes.data(), static_cast<std::streamsize>(bytes.size()));
   bytes.resize(static_cast<std::size_t>(in.gcount()));
   const auto result = decode_depth_pgm(bytes, raw);

@@ -7,6 +7,7 @@
 #include <numbers>
 #include <random>
 #include <stdexcept>
+#include <utility>
 
 #include <Eigen/Geometry>
 #include <nlohmann/json.hpp>
@@ -200,6 +201,14 @@ ScenarioSpec load_scenario(const std::filesystem::path& path) {
     s.distractor = j["distractor"].get<bool>();
   }
   s.distractor_from_s = number(j, "distractor_from_s", 0.0, file);
+  for (const auto& [key, flag] : {std::pair{"fingers_together", &s.fingers_together}, {"second_person", &s.second_person}}) {
+    if (!j.contains(key)) continue;
+    if (!j[key].is_boolean()) throw std::runtime_error("scenario " + file + ": \"" + key + "\" must be true or false");
+    *flag = j[key].get<bool>();
+  }
+  s.second_person_z = number(j, "second_person_z", s.second_person_z, file);
+  if (!(s.second_person_z >= 1.8 && s.second_person_z <= 2.6))
+    throw std::runtime_error("scenario " + file + ": \"second_person_z\" must be in [1.8, 2.6] m (behind the user, before the wall)");
   if (!(s.fps > 0 && s.fps <= 120)) throw std::runtime_error("scenario " + file + ": \"fps\" must be in (0, 120]");
   if (s.jitter_m < 0 || s.noise_raw < 0 || s.edge_dropout < 0 || s.edge_dropout > 1 || s.dropout_blobs < 0)
     throw std::runtime_error("scenario " + file + ": jitter_m, noise_raw, dropout_blobs must be >= 0 and edge_dropout in [0, 1]");
@@ -360,10 +369,15 @@ struct SyntheticScene::Impl {
     palm_disc = {Primitive::Disc, kPalm, palm, Vec3::Zero(), Vec3(kPalmHalfWidth, kPalmHalfHeight, 0), r, w, n};
     prims.push_back(palm_disc);
     prims.push_back({Primitive::Ellipsoid, kArm, palm - 0.030 * n, Vec3::Zero(), Vec3(0.034, 0.040, 0.012), {}, {}, {}});
-    // Fingers, spread, their front surface level with the palm's.
+    // Fingers, their front surface level with the palm's: spread, or side by side and touching
+    // (no gaps for the hand finder to see).
     const double finger_r = 0.0085;
-    const std::array<double, 4> across{-0.028, -0.0095, 0.0095, 0.028}, length{0.068, 0.078, 0.074, 0.060},
-        spread{-14, -5, 4, 13};
+    std::array<double, 4> across{-0.028, -0.0095, 0.0095, 0.028}, spread{-14, -5, 4, 13};
+    const std::array<double, 4> length{0.068, 0.078, 0.074, 0.060};
+    if (spec.fingers_together) {
+      across = {-3 * finger_r, -finger_r, finger_r, 3 * finger_r};
+      spread = {0, 0, 0, 0};
+    }
     for (std::size_t f = 0; f < 4; ++f) {
       const Vec3 base = palm + across[f] * r + 0.040 * w - finger_r * n;
       const Vec3 dirf = std::cos(spread[f] * deg) * w + std::sin(spread[f] * deg) * r;
@@ -372,6 +386,18 @@ struct SyntheticScene::Impl {
     const Vec3 thumb_base = palm + 0.036 * r - 0.015 * w - 0.010 * n;
     const Vec3 thumb_dir = (std::cos(40 * deg) * r + std::sin(40 * deg) * w).normalized();
     prims.push_back(capsule(kFinger, thumb_base, thumb_base + 0.055 * thumb_dir, 0.010));
+    if (spec.second_person) {
+      // Walks behind the user from left to right at 0.6 m/s, arms hanging, swinging a little.
+      const double duration = spec.path.back().t;
+      const Vec3 c(-0.9 + 1.8 * t / std::max(duration, 1e-3), 0.0, spec.second_person_z);
+      const double swing = 0.06 * std::sin(2 * std::numbers::pi * 0.9 * t);
+      prims.push_back({Primitive::Ellipsoid, kBody, c + Vec3(0, 0.30, 0), Vec3::Zero(), Vec3(0.17, 0.34, 0.11), {}, {}, {}});
+      prims.push_back(sphere(kBody, c + Vec3(0, -0.30, 0), 0.10));
+      for (const double side : {-1.0, 1.0}) {
+        const Vec3 s0 = c + Vec3(side * 0.19, 0.0, -0.02);
+        prims.push_back(capsule(kBody, s0, s0 + Vec3(side * 0.04, 0.55, side * swing), 0.04));
+      }
+    }
     if (spec.distractor && t >= spec.distractor_from_s - 1e-9)
       prims.push_back({Primitive::Box, kDistractor, Vec3(0.28, 0.12, 0.66), Vec3(0.46, 0.60, 0.80), {}, {}, {}, {}});
     return prims;

@@ -18,6 +18,8 @@ std::optional<StrokeInput> from_msg(const tachi_msg_StrokeSample& msg) {
   const Eigen::Vector3f p(msg.position_m.x, msg.position_m.y, msg.position_m.z);
   if (msg.tracked && (!p.allFinite() || p.cwiseAbs().maxCoeff() > kFarFromAnyCloth_m)) return std::nullopt;
   StrokeInput input;
+  input.sensor_id = msg.sensor_id;
+  input.session_id = msg.session_id;
   input.stroke_id = msg.stroke_id;
   input.time_s = static_cast<double>(msg.time_ns) * 1e-9;
   input.position_m = p;
@@ -28,7 +30,8 @@ std::optional<StrokeInput> from_msg(const tachi_msg_StrokeSample& msg) {
   return input;
 }
 
-void TopologyMessage::fill(std::uint32_t cloth_id, const Cloth& cloth, const TopologyChange* change) {
+void TopologyMessage::fill(std::uint32_t cloth_id, const Cloth& cloth, const TopologyChange* change,
+                           std::uint64_t session_id) {
   triangles_.clear();
   for (std::size_t t = 0; t < cloth.triangle_count(); ++t)
     if (cloth.triangle_alive[t]) triangles_.insert(triangles_.end(), cloth.triangles[t].begin(), cloth.triangles[t].end());
@@ -44,6 +47,7 @@ void TopologyMessage::fill(std::uint32_t cloth_id, const Cloth& cloth, const Top
   }
   msg_ = {};
   msg_.cloth_id = cloth_id;
+  msg_.session_id = session_id;
   msg_.version = cloth.topology_version;
   msg_.base_version = published_version_.value_or(cloth.topology_version);
   published_version_ = cloth.topology_version;
@@ -59,10 +63,11 @@ void TopologyMessage::fill(std::uint32_t cloth_id, const Cloth& cloth, const Top
 }
 
 tachi_msg_ClothState state_msg(std::uint32_t cloth_id, std::uint64_t frame, double sim_time_s, const Cloth& cloth,
-                               std::optional<std::uint32_t> held) {
+                               std::uint64_t session_id, std::optional<std::uint32_t> held) {
   tachi_msg_ClothState msg{};
   msg.held_particle = held ? static_cast<std::int32_t>(*held) : -1;
   msg.cloth_id = cloth_id;
+  msg.session_id = session_id;
   msg.frame = frame;
   msg.sim_time_ns = static_cast<std::int64_t>(std::llround(sim_time_s * 1e9));
   msg.topology_version = cloth.topology_version;
@@ -73,12 +78,14 @@ tachi_msg_ClothState state_msg(std::uint32_t cloth_id, std::uint64_t frame, doub
   return msg;
 }
 
-const tachi_msg_SceneObject& ObjectMessage::fill(std::uint32_t cloth_id, const std::vector<Eigen::Vector3f>& points) {
+const tachi_msg_SceneObject& ObjectMessage::fill(std::uint32_t cloth_id, const std::vector<Eigen::Vector3f>& points,
+                                                 std::uint64_t session_id) {
   xyz_.clear();
   xyz_.reserve(3 * points.size());
   for (const Eigen::Vector3f& p : points) xyz_.insert(xyz_.end(), {p.x(), p.y(), p.z()});
   msg_ = {};
   msg_.cloth_id = cloth_id;
+  msg_.session_id = session_id;
   point_at(msg_.points, xyz_);
   return msg_;
 }

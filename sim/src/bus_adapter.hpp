@@ -14,6 +14,8 @@ namespace tachi::sim {
 
 /// A hand sample as the simulator uses it (world frame, seconds on the sender's clock).
 struct StrokeInput {
+  std::uint32_t sensor_id = 0;
+  std::uint64_t session_id = 0;  ///< the publishing filter's run
   std::uint32_t stroke_id = 0;
   double time_s = 0.0;
   Eigen::Vector3f position_m = Eigen::Vector3f::Zero();
@@ -32,7 +34,7 @@ class TopologyMessage {
  public:
   /// Full topology of `cloth` (live triangles only) plus the change list since the previously
   /// filled version (the change may merge several cuts).
-  void fill(std::uint32_t cloth_id, const Cloth& cloth, const TopologyChange* change);
+  void fill(std::uint32_t cloth_id, const Cloth& cloth, const TopologyChange* change, std::uint64_t session_id = 0);
   const tachi_msg_ClothTopology& msg() const { return msg_; }
 
  private:
@@ -49,12 +51,13 @@ class TopologyMessage {
 /// (Eigen::Vector3f is three packed floats). Valid until the cloth's particle arrays grow.
 /// `held`: the particle the hand holds (held_particle, -1 when none).
 tachi_msg_ClothState state_msg(std::uint32_t cloth_id, std::uint64_t frame, double sim_time_s, const Cloth& cloth,
-                               std::optional<std::uint32_t> held = std::nullopt);
+                               std::uint64_t session_id = 0, std::optional<std::uint32_t> held = std::nullopt);
 
 /// Owns the array a SceneObject message points into.
 class ObjectMessage {
  public:
-  const tachi_msg_SceneObject& fill(std::uint32_t cloth_id, const std::vector<Eigen::Vector3f>& points);
+  const tachi_msg_SceneObject& fill(std::uint32_t cloth_id, const std::vector<Eigen::Vector3f>& points,
+                                    std::uint64_t session_id = 0);
 
  private:
   tachi_msg_SceneObject msg_{};

@@ -45,6 +45,7 @@ Cloth::Cloth(const ClothConfig& config)
       position.emplace_back(static_cast<float>(u) * spacing_x_ - 0.5F * config.width_m,
                             0.5F * config.height_m - static_cast<float>(v) * spacing_y_, 0.0F);
       grid.push_back({u, v});
+      rest_uv.emplace_back(static_cast<float>(u), static_cast<float>(v));
     }
   }
   velocity.assign(n, Eigen::Vector3f::Zero());
@@ -96,6 +97,7 @@ Cloth::Cloth(const ClothConfig& config)
     }
   }
   topology_version = 0;
+  spring_edits.clear();  // construction is not an edit: a solver starts with a full build
 }
 
 std::size_t Cloth::alive_spring_count() const {
@@ -127,6 +129,7 @@ void Cloth::reserve(std::size_t particles, std::size_t springs) {
   reserve_touched(mass, particles);
   reserve_touched(inverse_mass, particles);
   reserve_touched(grid, particles);
+  reserve_touched(rest_uv, particles);
   reserve_touched(pinned, particles);
   reserve_touched(spring_incidence_, particles);
   reserve_touched(triangle_incidence_, particles);
@@ -143,11 +146,13 @@ std::size_t Cloth::duplicate_particle(std::size_t i) {
   const Eigen::Vector3f p = position[i];
   const Eigen::Vector3f vel = velocity[i];
   const GridCoord g = grid[i];
+  const Eigen::Vector2f uv = rest_uv[i];
   const std::uint8_t is_pinned = pinned[i];
   const float half = 0.5F * mass[i];
   position.push_back(p);
   velocity.push_back(vel);
   grid.push_back(g);
+  rest_uv.push_back(uv);
   pinned.push_back(is_pinned);
   mass[i] = half;
   mass.push_back(half);
@@ -161,6 +166,38 @@ std::size_t Cloth::duplicate_particle(std::size_t i) {
   return copy;
 }
 
+std::size_t Cloth::add_particle_between(std::size_t a, std::size_t b, float t, float new_mass) {
+  const std::size_t p = position.size();
+  // By value first: push_back may reallocate the vectors these come from.
+  const Eigen::Vector3f x = (1.0F - t) * position[a] + t * position[b];
+  const Eigen::Vector3f vel = (1.0F - t) * velocity[a] + t * velocity[b];
+  const Eigen::Vector2f uv = (1.0F - t) * rest_uv[a] + t * rest_uv[b];
+  const bool fixed = inverse_mass[a] == 0.0F && inverse_mass[b] == 0.0F;
+  const bool is_pinned = pinned[a] != 0 && pinned[b] != 0;
+  position.push_back(x);
+  velocity.push_back(vel);
+  rest_uv.push_back(uv);
+  grid.push_back({static_cast<int>(std::lround(uv.x())), static_cast<int>(std::lround(uv.y()))});
+  pinned.push_back(is_pinned ? 1 : 0);
+  mass.push_back(new_mass);
+  inverse_mass.push_back(fixed ? 0.0F : 1.0F / new_mass);
+  spring_incidence_.emplace_back();
+  triangle_incidence_.emplace_back();
+  ++topology_version;
+  return p;
+}
+
+void Cloth::set_mass(std::size_t i, float new_mass) {
+  mass[i] = new_mass;
+  if (inverse_mass[i] != 0.0F) inverse_mass[i] = 1.0F / new_mass;
+}
+
+float Cloth::rest_distance(std::size_t i, std::size_t j) const {
+  const float dx = (rest_uv[i].x() - rest_uv[j].x()) * spacing_x_;
+  const float dy = (rest_uv[i].y() - rest_uv[j].y()) * spacing_y_;
+  return std::sqrt(dx * dx + dy * dy);
+}
+
 float Cloth::grid_rest_length(GridCoord a, GridCoord b) const {
   const float dx = static_cast<float>(a.u - b.u) * spacing_x_;
   const float dy = static_cast<float>(a.v - b.v) * spacing_y_;
@@ -171,11 +208,12 @@ std::uint32_t Cloth::add_spring(std::uint32_t a, std::uint32_t b, SpringKind spr
   const auto k = static_cast<std::uint32_t>(spring_a.size());
   spring_a.push_back(a);
   spring_b.push_back(b);
-  rest_length.push_back(grid_rest_length(grid[a], grid[b]));
+  rest_length.push_back(rest_distance(a, b));
   kind.push_back(spring_kind);
   alive.push_back(1);
   spring_incidence_[a].push_back(k);
   spring_incidence_[b].push_back(k);
+  spring_edits.push_back(k);
   ++topology_version;
   return k;
 }
@@ -185,6 +223,7 @@ void Cloth::remove_spring(std::uint32_t k) {
   alive[k] = 0;
   spring_incidence_[spring_a[k]].erase(k);
   spring_incidence_[spring_b[k]].erase(k);
+  spring_edits.push_back(k);
   ++topology_version;
 }
 
@@ -192,6 +231,7 @@ bool Cloth::rewire_spring(std::uint32_t k, std::uint32_t old_endpoint, std::uint
   std::uint32_t* end = spring_a[k] == old_endpoint ? &spring_a[k] : spring_b[k] == old_endpoint ? &spring_b[k] : nullptr;
   if (end == nullptr) return false;
   *end = new_endpoint;
+  spring_edits.push_back(k);
   if (alive[k] != 0) {
     spring_incidence_[old_endpoint].erase(k);
     spring_incidence_[new_endpoint].push_back(k);

@@ -110,4 +110,27 @@ float cut_line_length(std::span<const GridCoord> line, float spacing_x, float sp
   return length;
 }
 
+std::optional<std::pair<double, double>> clip_to_rectangle(const Eigen::Vector2d& a, const Eigen::Vector2d& b,
+                                                            double max_u, double max_v) {
+  double t0 = 0.0;
+  double t1 = 1.0;
+  const Eigen::Vector2d d = b - a;
+  const std::array<double, 4> p{-d.x(), d.x(), -d.y(), d.y()};
+  const std::array<double, 4> q{a.x(), max_u - a.x(), a.y(), max_v - a.y()};
+  for (std::size_t i = 0; i < 4; ++i) {
+    if (p[i] == 0.0) {
+      if (q[i] < 0.0) return std::nullopt;
+      continue;
+    }
+    const double r = q[i] / p[i];
+    if (p[i] < 0.0) {
+      t0 = std::max(t0, r);
+    } else {
+      t1 = std::min(t1, r);
+    }
+  }
+  if (t0 > t1) return std::nullopt;
+  return std::pair{t0, t1};
+}
+
 }  // namespace tachi::sim

@@ -3,6 +3,8 @@
 #include "tachi/sim/pieces.hpp"
 #include "tachi/sim/stroke.hpp"
 
+#include <spdlog/spdlog.h>
+
 #include <algorithm>
 #include <charconv>
 #include <chrono>
@@ -10,7 +12,10 @@
 #include <fstream>
 #include <limits>
 #include <map>
+#include <string>
 #include <stdexcept>
+
+#include <sys/resource.h>
 
 namespace tachi::sim {
 
@@ -117,8 +122,38 @@ SessionOptions session_options(const OfflineOptions& o) {
   if (o.substeps_given) s.provot.substeps = o.solver.substeps;
   s.stroke.blade = o.blade;
   s.blade_force_n = o.blade_force_n;
+  s.stroke.mode = o.cut_mode;
   s.object = o.object;
   return s;
+}
+
+std::uint64_t available_memory_bytes() {
+  std::uint64_t available = 0;
+  std::ifstream meminfo{"/proc/meminfo"};
+  std::string key;
+  std::uint64_t kb = 0;
+  std::string unit;
+  while (meminfo >> key >> kb >> unit) {
+    if (key == "MemAvailable:") {
+      available = kb * 1024;
+      break;
+    }
+  }
+  // An address-space limit (ulimit -v) binds before physical memory does.
+  rlimit limit{};
+  if (getrlimit(RLIMIT_AS, &limit) == 0 && limit.rlim_cur != RLIM_INFINITY)
+    available = available == 0 ? limit.rlim_cur : std::min<std::uint64_t>(available, limit.rlim_cur);
+  return available;
+}
+
+std::optional<std::string> memory_shortfall(int columns, int rows) {
+  const double need = kPeakBytesPerParticle * static_cast<double>(columns) * static_cast<double>(rows);
+  const auto available = static_cast<double>(available_memory_bytes());
+  if (available <= 0.0 || need <= available) return std::nullopt;
+  char text[200];
+  std::snprintf(text, sizeof text, "a %dx%d cloth needs about %.1f GB and this machine has %.1f GB available; use a smaller grid",
+                columns, rows, need / 1e9, available / 1e9);
+  return text;
 }
 
 void add_offline_flags(CLI::App& app, OfflineOptions& o) {
@@ -129,6 +164,8 @@ void add_offline_flags(CLI::App& app, OfflineOptions& o) {
            if (!grid) {
              throw CLI::ValidationError("--grid", "'" + text + "' is not N or NxM with N, M in 2..4096");
            }
+           if (const auto shortfall = memory_shortfall(grid->first, grid->second))
+             throw CLI::ValidationError("--grid", *shortfall);
            o.cloth.columns = grid->first;
            o.cloth.rows = grid->second;
          },
@@ -203,6 +240,16 @@ void add_offline_flags(CLI::App& app, OfflineOptions& o) {
          "Blade sharpness (seed 001 Figure 4): razor, scalpel, utility, kitchen, hunting or worn; it cuts only when "
          "its contact force reaches the blade's sharpness force, else it drags the cloth")
       ->default_str("scalpel");
+  app.add_option_function<std::string>(
+         "--cut-mode",
+         [&o](const std::string& text) {
+           const auto mode = parse_cut_mode(text);
+           if (!mode) throw CLI::ValidationError("--cut-mode", "'" + text + "' is not exact, grid or delete");
+           o.cut_mode = *mode;
+         },
+         "How strokes cut: exact (along the stroke's own path, splitting triangles), grid (seed 000: along grid "
+         "lines, eqs. 1-4) or delete (seed 001: the crossed triangles are deleted, completeCUT)")
+      ->default_str("exact");
   app.add_option_function<float>(
          "--blade-force",
          [&o](float n) {
@@ -219,7 +266,7 @@ nlohmann::json to_json(const Summary& s) {
   nlohmann::json j{
       {"particles", s.particles},   {"springs", s.springs},       {"triangles", s.triangles},
       {"pieces", s.pieces},         {"max_strain", s.max_strain}, {"steps", s.steps},
-      {"step_ms_median", s.step_ms_median}, {"step_ms_p95", s.step_ms_p95},
+      {"step_ms_median", s.step_ms_median}, {"step_ms_p95", s.step_ms_p95}, {"step_ms_max", s.step_ms_max},
       {"columns", s.columns},       {"rows", s.rows},
   };
   for (const auto& [key, value] : s.extra.items()) j[key] = value;
@@ -231,7 +278,7 @@ void write_obj(const Cloth& cloth, const std::filesystem::path& file) {
   if (!out) throw std::runtime_error("cannot write " + file.string());
   out << "# tachi cloth: " << cloth.particle_count() << " particles, " << cloth.alive_triangle_count()
       << " triangles\n";
-  char line[96];
+  char line[128];
   for (const Eigen::Vector3f& p : cloth.position) {
     std::snprintf(line, sizeof line, "v %.6f %.6f %.6f\n", static_cast<double>(p.x()), static_cast<double>(p.y()),
                   static_cast<double>(p.z()));
@@ -239,16 +286,94 @@ void write_obj(const Cloth& cloth, const std::filesystem::path& file) {
   }
   const double du = cloth.columns > 1 ? 1.0 / (cloth.columns - 1) : 0.0;
   const double dv = cloth.rows > 1 ? 1.0 / (cloth.rows - 1) : 0.0;
-  for (const GridCoord& g : cloth.grid) {
-    std::snprintf(line, sizeof line, "vt %.6f %.6f\n", g.u * du, 1.0 - g.v * dv);
+  for (const Eigen::Vector2f& uv : cloth.rest_uv) {
+    std::snprintf(line, sizeof line, "vt %.6f %.6f\n", uv.x() * du, 1.0 - uv.y() * dv);
     out << line;
   }
+  // Area-weighted vertex normals: the sum of the (unnormalised) face normals around each particle.
+  std::vector<Eigen::Vector3f> normal(cloth.particle_count(), Eigen::Vector3f::Zero());
   for (std::size_t t = 0; t < cloth.triangle_count(); ++t) {
     if (cloth.triangle_alive[t] == 0) continue;
     const auto& tri = cloth.triangles[t];
-    out << "f " << tri[0] + 1 << '/' << tri[0] + 1 << ' ' << tri[1] + 1 << '/' << tri[1] + 1 << ' ' << tri[2] + 1
-        << '/' << tri[2] + 1 << '\n';
+    const Eigen::Vector3f n =
+        (cloth.position[tri[1]] - cloth.position[tri[0]]).cross(cloth.position[tri[2]] - cloth.position[tri[0]]);
+    for (const std::uint32_t p : tri) normal[p] += n;
   }
+  for (Eigen::Vector3f& n : normal) {
+    const float length = n.norm();
+    n = length > 0.0F && std::isfinite(length) ? Eigen::Vector3f{n / length} : Eigen::Vector3f::UnitZ();
+    std::snprintf(line, sizeof line, "vn %.5f %.5f %.5f\n", static_cast<double>(n.x()), static_cast<double>(n.y()),
+                  static_cast<double>(n.z()));
+    out << line;
+  }
+  // One group per piece, in piece order, so a modelling tool selects each cut-off piece on its own.
+  const Pieces pieces = find_pieces(cloth);
+  std::vector<std::vector<std::uint32_t>> faces(pieces.count());
+  for (std::uint32_t t = 0; t < cloth.triangle_count(); ++t) {
+    if (cloth.triangle_alive[t] != 0) faces[pieces.piece_of[cloth.triangles[t][0]]].push_back(t);
+  }
+  for (std::size_t piece = 0; piece < faces.size(); ++piece) {
+    if (faces[piece].empty()) continue;
+    out << "g piece_" << piece << '\n';
+    for (const std::uint32_t t : faces[piece]) {
+      const auto& tri = cloth.triangles[t];
+      out << 'f';
+      for (const std::uint32_t p : tri) out << ' ' << p + 1 << '/' << p + 1 << '/' << p + 1;
+      out << '\n';
+    }
+  }
+  if (!out) throw std::runtime_error("error while writing " + file.string());
+}
+
+void write_pattern_svg(const Cloth& cloth, const StrokeCutter& cutter, const std::filesystem::path& file) {
+  std::ofstream out{file};
+  if (!out) throw std::runtime_error("cannot write " + file.string());
+  const double mm_u = 1000.0 * cloth.spacing_x();
+  const double mm_v = 1000.0 * cloth.spacing_y();
+  const double width = mm_u * (cloth.columns - 1);
+  const double height = mm_v * (cloth.rows - 1);
+  constexpr double kMargin = 10.0;
+  char buffer[160];
+  std::snprintf(buffer, sizeof buffer,
+                "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"%.1fmm\" height=\"%.1fmm\" "
+                "viewBox=\"%.1f %.1f %.1f %.1f\">\n",
+                width + 2 * kMargin, height + 2 * kMargin, -kMargin, -kMargin, width + 2 * kMargin,
+                height + 2 * kMargin);
+  out << buffer << "<!-- tachi pattern: piece outlines in rest coordinates (mm) and the cut paths -->\n";
+  // A piece's outline: its mesh edges that border one live triangle only.
+  std::map<std::pair<std::uint32_t, std::uint32_t>, int> edges;
+  for (std::size_t t = 0; t < cloth.triangle_count(); ++t) {
+    if (cloth.triangle_alive[t] == 0) continue;
+    const auto& tri = cloth.triangles[t];
+    for (std::size_t i = 0; i < 3; ++i) {
+      const std::uint32_t a = tri[i];
+      const std::uint32_t b = tri[(i + 1) % 3];
+      ++edges[{std::min(a, b), std::max(a, b)}];
+    }
+  }
+  const Pieces pieces = find_pieces(cloth);
+  std::vector<std::string> outline(pieces.count());
+  const auto point = [&](const Eigen::Vector2f& uv) {
+    std::snprintf(buffer, sizeof buffer, "%.2f %.2f", uv.x() * mm_u, uv.y() * mm_v);
+    return std::string{buffer};
+  };
+  for (const auto& [edge, count] : edges) {
+    if (count != 1) continue;
+    outline[pieces.piece_of[edge.first]] +=
+        "M" + point(cloth.rest_uv[edge.first]) + " L" + point(cloth.rest_uv[edge.second]) + " ";
+  }
+  for (std::size_t piece = 0; piece < outline.size(); ++piece) {
+    if (outline[piece].empty()) continue;
+    out << "<path id=\"piece_" << piece << "\" fill=\"none\" stroke=\"black\" stroke-width=\"0.5\" d=\""
+        << outline[piece] << "\"/>\n";
+  }
+  for (const auto& path : cutter.paths()) {
+    if (path.size() < 2) continue;
+    out << "<polyline class=\"cut\" fill=\"none\" stroke=\"red\" stroke-width=\"0.3\" stroke-dasharray=\"2 1\" points=\"";
+    for (const Eigen::Vector2f& uv : path) out << point(uv) << ' ';
+    out << "\"/>\n";
+  }
+  out << "</svg>\n";
   if (!out) throw std::runtime_error("error while writing " + file.string());
 }
 
@@ -282,6 +407,9 @@ Summary run_offline(const OfflineOptions& options) {
     std::ifstream in{options.stroke_file};
     if (!in) throw std::runtime_error("cannot read " + options.stroke_file.string());
     stroke = parse_stroke_csv(in);
+    for (const auto& problem : stroke.problems) spdlog::warn("{} {}; row skipped", options.stroke_file.string(), problem);
+    if (stroke.skipped_rows > stroke.problems.size())
+      spdlog::warn("{}: {} rows skipped in all", options.stroke_file.string(), stroke.skipped_rows);
     if (!stroke.error.empty()) throw std::runtime_error(options.stroke_file.string() + ": " + stroke.error);
   }
   std::size_t next_sample = 0;
@@ -311,7 +439,7 @@ Summary run_offline(const OfflineOptions& options) {
   summary.extra["stroke_samples_applied"] = next_sample;
   summary.extra["stroke_rows_skipped"] = stroke.skipped_rows;
   add_step_times(summary, step_ms);
-  if (!options.export_dir.empty()) export_run(summary, session.cloth(), options.export_dir);
+  if (!options.export_dir.empty()) export_run(summary, session.cloth(), options.export_dir, &session.cutter());
   return summary;
 }
 
@@ -327,6 +455,35 @@ void add_session_summary(Summary& summary, const Session& session) {
   summary.extra["lowest_y_m"] = cloth.particle_count() > 0 ? lowest : 0.0F;
 }
 
+
+namespace {
+
+/// How far the cut strays from the stroke's path on the cloth, in cells: exact mode measures its cut edges
+/// against the segments that made them; grid mode its cut-line particles against the stroke's path; delete
+/// mode (no cut edge, holes) reports the grid mode's measure of nothing: 0.
+double cut_deviation_cells(const StrokeCutter& cutter) {
+  if (const ExactCutter* exact = cutter.exact()) return exact->max_deviation_cells();
+  const auto& line = cutter.total().cut_line;
+  double worst = 0.0;
+  for (const GridCoord g : line) {
+    const Eigen::Vector2d p{g.u, g.v};
+    double nearest = std::numeric_limits<double>::infinity();
+    for (const auto& path : cutter.paths()) {
+      for (std::size_t i = 0; i + 1 < path.size(); ++i) {
+        const Eigen::Vector2d a = path[i].cast<double>();
+        const Eigen::Vector2d d = path[i + 1].cast<double>() - a;
+        const double s = d.squaredNorm() > 0.0 ? std::clamp((p - a).dot(d) / d.squaredNorm(), 0.0, 1.0) : 0.0;
+        nearest = std::min(nearest, (p - (a + s * d)).norm());
+      }
+      if (path.size() == 1) nearest = std::min(nearest, (p - path[0].cast<double>()).norm());
+    }
+    if (std::isfinite(nearest)) worst = std::max(worst, nearest);
+  }
+  return worst;
+}
+
+}  // namespace
+
 void add_cut_summary(Summary& summary, const Cloth& cloth, const StrokeCutter& cutter) {
   const StrokeReport& cut = cutter.total();
   nlohmann::json cut_line = nlohmann::json::array();
@@ -339,18 +496,23 @@ void add_cut_summary(Summary& summary, const Cloth& cloth, const StrokeCutter& c
   summary.extra["blade"] = std::string{to_string(cutter.options().blade)};
   summary.extra["blade_force_n"] = sharpness(cutter.options().blade).force_n();
   summary.extra["topology_version"] = cloth.topology_version;
+  summary.extra["cut_mode"] = std::string{to_string(cutter.options().mode)};
+  summary.extra["cut_deviation_cells_max"] = cut_deviation_cells(cutter);
 }
 
 void add_step_times(Summary& summary, const std::vector<double>& step_ms) {
   summary.step_ms_median = percentile(step_ms, 0.5);
   summary.step_ms_p95 = percentile(step_ms, 0.95);
+  summary.step_ms_max = step_ms.empty() ? 0.0 : *std::max_element(step_ms.begin(), step_ms.end());
 }
 
-void export_run(const Summary& summary, const Cloth& cloth, const std::filesystem::path& dir) {
+void export_run(const Summary& summary, const Cloth& cloth, const std::filesystem::path& dir,
+                const StrokeCutter* cutter) {
   std::error_code ec;
   std::filesystem::create_directories(dir, ec);
   if (ec) throw std::runtime_error("cannot create " + dir.string() + ": " + ec.message());
   write_obj(cloth, dir / "cloth.obj");
+  if (cutter != nullptr) write_pattern_svg(cloth, *cutter, dir / "pattern.svg");
   const auto json_path = dir / "summary.json";
   std::ofstream out{json_path};
   out << to_json(summary).dump(2) << '\n';

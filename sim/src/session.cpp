@@ -117,9 +117,10 @@ void Session::on_hand(const HandInput& hand) {
     return;
   }
   hand_.reset();
-  if (stroke_active_ && hand.stroke_id != stroke_id_) close_stroke();
+  if (stroke_active_ && (hand.stroke_id != stroke_id_ || hand.session_id != stroke_session_)) close_stroke();
   if (!stroke_active_) {
     stroke_id_ = hand.stroke_id;
+    stroke_session_ = hand.session_id;
     stroke_active_ = true;
     absorb(cutter_.begin_stroke());
   }

@@ -4,9 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
-#include <functional>
 #include <limits>
-#include <queue>
 #include <utility>
 
 namespace tachi::sim {
@@ -54,19 +52,40 @@ std::optional<const char*> validate(const SolverParams& p) {
 
 Solver::Solver(SolverParams params) : params_(std::move(params)) {}
 
+namespace {
+
+constexpr std::uint32_t kNone = 0xFFFFFFFFU;
+constexpr float kInf = std::numeric_limits<float>::infinity();
+
+/// Octile distance between two rest coordinates (cells): the length of the shortest path along a
+/// grid's structural and shear springs, which Dijkstra over an uncut grid measures.
+float octile(const Cloth& cloth, const Eigen::Vector2f& a, const Eigen::Vector2f& b) {
+  const float du = std::abs(a.x() - b.x());
+  const float dv = std::abs(a.y() - b.y());
+  const float diagonal = std::min(du, dv);
+  return (du - diagonal) * cloth.spacing_x() + (dv - diagonal) * cloth.spacing_y() +
+         diagonal * std::hypot(cloth.spacing_x(), cloth.spacing_y());
+}
+
+}  // namespace
+
+std::size_t Solver::attachment_count() const {
+  return static_cast<std::size_t>(std::count_if(attachments_.begin(), attachments_.end(),
+                                                [](const Attachment& a) { return std::isfinite(a.length2); }));
+}
+
 void Solver::build_groups(const std::vector<PackedSpring>& springs, const std::vector<std::uint32_t>& keys,
-                          std::uint32_t dummy, std::vector<Group>& groups) {
+                          std::vector<Group>& groups) {
   // Four springs of one sweep class (same row and colour) never share a particle on the grid; the check
   // below also keeps that true for springs a cut added or rewired, so the four lanes stay independent.
-  groups.clear();
   Group g{};
   int lanes = 0;
   std::uint32_t group_key = 0;
   auto flush = [&] {
     if (lanes == 0) return;
     for (int l = lanes; l < 4; ++l) {
-      g.a[l] = dummy;  // padding lane: a particle with inverse mass 0 on both ends does nothing
-      g.b[l] = dummy;
+      g.a[l] = 0;  // padding lane: the fixed particle 0 on both ends does nothing
+      g.b[l] = 0;
       g.rest2[l] = 1.0F;
     }
     groups.push_back(g);
@@ -74,14 +93,14 @@ void Solver::build_groups(const std::vector<PackedSpring>& springs, const std::v
   };
   for (std::size_t k = 0; k < springs.size(); ++k) {
     const PackedSpring& sp = springs[k];
+    const std::uint32_t a = sp.a + 1;
+    const std::uint32_t b = sp.b + 1;
     bool clash = lanes > 0 && keys[k] != group_key;
-    for (int l = 0; l < lanes && !clash; ++l) {
-      clash = g.a[l] == sp.a || g.a[l] == sp.b || g.b[l] == sp.a || g.b[l] == sp.b;
-    }
+    for (int l = 0; l < lanes && !clash; ++l) clash = g.a[l] == a || g.a[l] == b || g.b[l] == a || g.b[l] == b;
     if (clash) flush();
     if (lanes == 0) group_key = keys[k];
-    g.a[lanes] = sp.a;
-    g.b[lanes] = sp.b;
+    g.a[lanes] = a;
+    g.b[lanes] = b;
     g.rest2[lanes] = sp.rest * sp.rest;
     if (++lanes == 4) flush();
   }
@@ -99,171 +118,342 @@ void Solver::refresh_caches(const Cloth& cloth) {
                              cached_springs_ == cloth.spring_count() &&
                              cached_particles_ == cloth.particle_count();
   if (topology_same && pins == cached_pins_) return;
-
-  if (!topology_same) {
-    // Counting sort by (family, sweep key), keeping spring-index order inside a key: linear time.
-    std::uint32_t key_count = 0;
-    std::vector<std::uint32_t> key(cloth.spring_count());
-    for (std::size_t k = 0; k < cloth.spring_count(); ++k) {
-      key[k] = sweep_key(cloth.kind[k], cloth.grid[cloth.spring_a[k]], cloth.grid[cloth.spring_b[k]]);
-      key_count = std::max(key_count, key[k] + 1);
-    }
-    std::vector<PackedSpring>* out[3] = {&structural_, &shear_, &bend_};
-    std::vector<std::uint32_t> start;
-    for (std::size_t f = 0; f < 3; ++f) {
-      const auto family = static_cast<SpringKind>(f);
-      start.assign(static_cast<std::size_t>(key_count) + 1, 0);
-      std::size_t count = 0;
-      for (std::size_t k = 0; k < cloth.spring_count(); ++k) {
-        if (cloth.alive[k] == 0 || cloth.kind[k] != family) continue;
-        ++start[key[k] + 1];
-        ++count;
-      }
-      for (std::size_t i = 1; i < start.size(); ++i) start[i] += start[i - 1];
-      out[f]->resize(count);
-      std::vector<std::uint32_t> sorted_key(count);
-      for (std::size_t k = 0; k < cloth.spring_count(); ++k) {
-        if (cloth.alive[k] == 0 || cloth.kind[k] != family) continue;
-        sorted_key[start[key[k]]] = key[k];
-        (*out[f])[start[key[k]]++] = {cloth.spring_a[k], cloth.spring_b[k], cloth.rest_length[k]};
-      }
-      build_groups(*out[f], sorted_key, static_cast<std::uint32_t>(cloth.particle_count()), groups_[f]);
-    }
+  // Incremental only when the change is one the cloth logged: springs edited through its functions and
+  // particles appended. Anything else (new pins, a grab, arrays edited directly) is rebuilt in full.
+  const bool logged = cache_valid_ && pins == cached_pins_ && cloth.spring_edits.size() > edits_read_ &&
+                      cloth.spring_count() >= cached_springs_ && cloth.particle_count() >= cached_particles_;
+  if (logged) {
+    update_incrementally(cloth);
+  } else {
+    full_build(cloth, std::move(pins));
   }
-  cached_pins_ = std::move(pins);
-  build_attachments(cloth);
+  // Blanked lanes still cost a load and a store each: past half the batches, compact them.
+  if (blanked_ * 2 > lanes_) full_build(cloth, cached_pins_);
   cached_version_ = cloth.topology_version;
   cached_springs_ = cloth.spring_count();
   cached_particles_ = cloth.particle_count();
+  edits_read_ = cloth.spring_edits.size();
   cache_valid_ = true;
+}
+
+void Solver::full_build(const Cloth& cloth, std::vector<std::uint32_t> pins) {
+  ++full_builds_;
+  for (auto& g : groups_) g.clear();
+  slot_.assign(cloth.spring_count(), Slot{});
+  lanes_ = 0;
+  blanked_ = 0;
+  std::vector<std::uint32_t> all;
+  all.reserve(cloth.spring_count());
+  for (std::uint32_t k = 0; k < cloth.spring_count(); ++k) {
+    if (cloth.alive[k] != 0) all.push_back(k);
+  }
+  cached_pins_ = std::move(pins);
+  build_attachments(cloth);
+  strain_limit_.clear();
+  limit_slot_.assign(cloth.spring_count(), kNone);
+  append_springs(cloth, all);
+  lanes_ = 0;
+  for (const auto& g : groups_) lanes_ += 4 * g.size();
+}
+
+void Solver::append_springs(const Cloth& cloth, const std::vector<std::uint32_t>& springs) {
+  // Sorted by (family, sweep key, spring index): a counting sort would be linear, but the keys of a full
+  // build are few per row and a cut's springs are few, so std::sort on packed 64-bit keys is as fast.
+  std::array<std::vector<std::uint64_t>, 3> order;
+  for (const std::uint32_t k : springs) {
+    if (cloth.alive[k] == 0) continue;
+    const std::uint32_t key = sweep_key(cloth.kind[k], cloth.grid[cloth.spring_a[k]], cloth.grid[cloth.spring_b[k]]);
+    order[static_cast<std::size_t>(cloth.kind[k])].push_back((static_cast<std::uint64_t>(key) << 32U) | k);
+  }
+  std::vector<PackedSpring> packed;
+  std::vector<std::uint32_t> keys;
+  std::vector<Group> fresh;
+  for (std::size_t f = 0; f < 3; ++f) {
+    std::sort(order[f].begin(), order[f].end());
+    packed.clear();
+    keys.clear();
+    for (const std::uint64_t e : order[f]) {
+      const auto k = static_cast<std::uint32_t>(e & 0xFFFFFFFFU);
+      packed.push_back({cloth.spring_a[k], cloth.spring_b[k], cloth.rest_length[k]});
+      keys.push_back(static_cast<std::uint32_t>(e >> 32U));
+    }
+    fresh.clear();
+    build_groups(packed, keys, fresh);
+    // Find where each spring landed (build_groups keeps the order, filling lanes in sequence).
+    const auto base = static_cast<std::uint32_t>(groups_[f].size());
+    std::size_t next = 0;
+    for (std::uint32_t g = 0; g < fresh.size(); ++g) {
+      for (std::uint8_t l = 0; l < 4 && next < order[f].size(); ++l) {
+        const auto k = static_cast<std::uint32_t>(order[f][next] & 0xFFFFFFFFU);
+        if (fresh[g].a[l] != cloth.spring_a[k] + 1 || fresh[g].b[l] != cloth.spring_b[k] + 1) continue;
+        slot_[k] = {base + g, l, static_cast<std::uint8_t>(f)};
+        ++next;
+      }
+    }
+    groups_[f].insert(groups_[f].end(), fresh.begin(), fresh.end());
+    if (f != static_cast<std::size_t>(SpringKind::Structural)) continue;
+    // The strain limit sweeps outwards from the pins (by the rest distance of the spring's nearer end);
+    // a cut's new springs go last. Pieces no pin holds (+inf) come after the rest.
+    const std::size_t first = strain_limit_.size();
+    for (const std::uint64_t e : order[f]) {
+      const auto k = static_cast<std::uint32_t>(e & 0xFFFFFFFFU);
+      std::uint32_t a = cloth.spring_a[k];
+      std::uint32_t b = cloth.spring_b[k];
+      if (nearest_[b] < nearest_[a]) std::swap(a, b);
+      strain_limit_.push_back({a, b, cloth.rest_length[k]});
+    }
+    std::vector<std::pair<float, std::uint32_t>> by_level;
+    by_level.reserve(order[f].size());
+    for (std::size_t i = 0; i < order[f].size(); ++i) {
+      by_level.emplace_back(nearest_[strain_limit_[first + i].a], static_cast<std::uint32_t>(i));
+    }
+    // Quantised to half a spacing, then stable: ties keep the grid order (measured in docs/sim.md).
+    const float unit = 0.5F * std::min(cloth.spacing_x(), cloth.spacing_y());
+    for (auto& [level, i] : by_level) level = std::isfinite(level) ? std::floor(level / unit) : kInf;
+    std::stable_sort(by_level.begin(), by_level.end(),
+                     [](const auto& x, const auto& y) { return x.first < y.first; });
+    std::vector<PackedSpring> sorted;
+    sorted.reserve(by_level.size());
+    for (const auto& [level, i] : by_level) {
+      const auto k = static_cast<std::uint32_t>(order[f][i] & 0xFFFFFFFFU);
+      limit_slot_[k] = static_cast<std::uint32_t>(first + sorted.size());
+      sorted.push_back(strain_limit_[first + i]);
+    }
+    std::copy(sorted.begin(), sorted.end(), strain_limit_.begin() + static_cast<std::ptrdiff_t>(first));
+  }
+}
+
+void Solver::update_incrementally(const Cloth& cloth) {
+  ++incremental_updates_;
+  slot_.resize(cloth.spring_count(), Slot{});
+  limit_slot_.resize(cloth.spring_count(), kNone);
+  // The springs the cut edited, once each; the particles they touched before and after.
+  std::vector<std::uint32_t> edited(cloth.spring_edits.begin() + static_cast<std::ptrdiff_t>(edits_read_),
+                                    cloth.spring_edits.end());
+  std::sort(edited.begin(), edited.end());
+  edited.erase(std::unique(edited.begin(), edited.end()), edited.end());
+  std::vector<std::uint32_t> touched;
+  for (const std::uint32_t k : edited) {
+    Slot& s = slot_[k];
+    if (s.group != kNone) {
+      Group& g = groups_[s.family][s.group];
+      touched.push_back(g.a[s.lane] - 1);
+      touched.push_back(g.b[s.lane] - 1);
+      g.a[s.lane] = 0;  // blanked: both ends on the fixed particle, so the lane does nothing
+      g.b[s.lane] = 0;
+      g.rest2[s.lane] = 1.0F;
+      s = Slot{};
+      ++blanked_;
+    }
+    if (limit_slot_[k] != kNone) {
+      strain_limit_[limit_slot_[k]].rest = kInf;  // never over the limit: skipped
+      limit_slot_[k] = kNone;
+    }
+    if (cloth.alive[k] != 0) {
+      touched.push_back(cloth.spring_a[k]);
+      touched.push_back(cloth.spring_b[k]);
+    }
+  }
+  for (std::size_t i = cached_particles_; i < cloth.particle_count(); ++i) touched.push_back(static_cast<std::uint32_t>(i));
+  std::sort(touched.begin(), touched.end());
+  touched.erase(std::unique(touched.begin(), touched.end()), touched.end());
+  update_attachments(cloth, touched);
+  append_springs(cloth, edited);
+}
+
+void Solver::run_search(const Cloth& cloth, Search& search, const std::vector<std::uint8_t>* only) {
+  // Dijkstra over live structural and shear springs (rest lengths). With `only`, the distances of the
+  // other particles are final and only the marked ones are relaxed (the decremental case: a cut only
+  // lengthens paths, so a particle whose shortest path the cut did not touch keeps it).
+  auto& heap = heap_;
+  const auto greater = [](const auto& x, const auto& y) { return x.first > y.first; };
+  std::make_heap(heap.begin(), heap.end(), greater);
+  while (!heap.empty()) {
+    std::pop_heap(heap.begin(), heap.end(), greater);
+    const auto [d, i] = heap.back();
+    heap.pop_back();
+    if (d > search.dist[i]) continue;
+    for (const std::uint32_t k : cloth.springs_of(i)) {
+      if (cloth.kind[k] == SpringKind::Bend) continue;
+      const std::uint32_t j = cloth.spring_a[k] == i ? cloth.spring_b[k] : cloth.spring_a[k];
+      if (only != nullptr && (*only)[j] == 0) continue;
+      const float dj = d + cloth.rest_length[k];
+      if (dj < search.dist[j]) {
+        search.dist[j] = dj;
+        search.parent[j] = i;
+        search.owner[j] = search.owner[i];
+        heap.emplace_back(dj, j);
+        std::push_heap(heap.begin(), heap.end(), greater);
+      }
+    }
+  }
+}
+
+void Solver::attach(const Cloth& cloth, Search& search, std::uint32_t i) {
+  // Dijkstra over springs measures octile paths, up to 8 % longer than the straight line: that much
+  // slack lets the middle of a wide drape sag by centimetres. Where the path is no longer than the
+  // octile distance of the two rest coordinates (no cut in the way), the straight rest distance is the
+  // geodesic, so it is used instead; behind a cut the path length is kept.
+  float length2 = kInf;
+  if (cloth.inverse_mass[i] != 0.0F && std::isfinite(search.dist[i])) {
+    const std::uint32_t pin = search.owner[i];
+    const bool unobstructed =
+        search.dist[i] <= octile(cloth, cloth.rest_uv[i], cloth.rest_uv[pin]) * (1.0F + 1e-4F) + 1e-6F;
+    const float length = unobstructed ? cloth.rest_distance(i, pin) : search.dist[i];
+    length2 = length * length;
+  }
+  std::uint32_t& slot = search.attachment[i];
+  if (slot == kNone) {
+    if (!std::isfinite(length2)) return;
+    slot = static_cast<std::uint32_t>(attachments_.size());
+    attachments_.push_back({i, search.owner[i], length2});
+  } else {
+    // A disabled tether keeps a valid pin index (itself): the step reads it before comparing.
+    attachments_[slot] = {i, std::isfinite(length2) ? search.owner[i] : i, length2};
+  }
 }
 
 void Solver::build_attachments(const Cloth& cloth) {
   attachments_.clear();
-  strain_limit_.clear();
+  searches_.clear();
   const std::size_t n = cloth.particle_count();
-  if (cached_pins_.empty()) {
-    strain_limit_ = structural_;
-    return;
-  }
-  // Adjacency over live structural and shear springs (rest geometry), CSR form.
-  std::vector<std::uint32_t> offsets(n + 1, 0);
-  for (const auto* family : {&structural_, &shear_}) {
-    for (const PackedSpring& s : *family) {
-      ++offsets[s.a + 1];
-      ++offsets[s.b + 1];
-    }
-  }
-  for (std::size_t i = 0; i < n; ++i) offsets[i + 1] += offsets[i];
-  std::vector<std::pair<std::uint32_t, float>> edges(offsets[n]);
-  std::vector<std::uint32_t> fill(offsets.begin(), offsets.end() - 1);
-  for (const auto* family : {&structural_, &shear_}) {
-    for (const PackedSpring& s : *family) {
-      edges[fill[s.a]++] = {s.b, s.rest};
-      edges[fill[s.b]++] = {s.a, s.rest};
-    }
-  }
-  // Geodesic rest distance from a set of sources (Dijkstra); `owner` says which pin is nearest.
-  using Item = std::pair<float, std::uint32_t>;
-  std::vector<float> dist(n);
-  std::vector<std::uint32_t> owner(n);
-  auto dijkstra = [&](const std::vector<std::uint32_t>& sources) {
-    std::fill(dist.begin(), dist.end(), std::numeric_limits<float>::infinity());
-    std::priority_queue<Item, std::vector<Item>, std::greater<>> queue;
-    for (const std::uint32_t s : sources) {
-      dist[s] = 0.0F;
-      owner[s] = s;
-      queue.emplace(0.0F, s);
-    }
-    while (!queue.empty()) {
-      const auto [d, i] = queue.top();
-      queue.pop();
-      if (d > dist[i]) continue;
-      for (std::uint32_t e = offsets[i]; e < offsets[i + 1]; ++e) {
-        const auto [j, len] = edges[e];
-        if (d + len < dist[j]) {
-          dist[j] = d + len;
-          owner[j] = owner[i];
-          queue.emplace(dist[j], j);
-        }
-      }
-    }
-  };
-  // Dijkstra over springs measures octile paths, up to 8 % longer than the straight line: that much
-  // slack lets the middle of a wide drape sag by centimetres. Where the path is no longer than the
-  // octile distance of the two grid coordinates (no cut in the way), the straight rest distance is the
-  // geodesic, so it is used instead; behind a cut the path length is kept.
-  auto octile = [&](GridCoord a, GridCoord b) {
-    const float dx = std::abs(static_cast<float>(a.u - b.u)) * cloth.spacing_x();
-    const float dy = std::abs(static_cast<float>(a.v - b.v)) * cloth.spacing_y();
-    const float diagonal = std::min(dx / cloth.spacing_x(), dy / cloth.spacing_y());
-    return dx + dy - diagonal * (cloth.spacing_x() + cloth.spacing_y()) +
-           diagonal * std::hypot(cloth.spacing_x(), cloth.spacing_y());
-  };
-  auto collect = [&] {
-    for (std::size_t i = 0; i < n; ++i) {
-      if (cloth.inverse_mass[i] == 0.0F || !std::isfinite(dist[i])) continue;
-      const GridCoord gi = cloth.grid[i];
-      const GridCoord gp = cloth.grid[owner[i]];
-      const bool unobstructed = dist[i] <= octile(gi, gp) * (1.0F + 1e-4F) + 1e-6F;
-      const float length = unobstructed ? cloth.grid_rest_length(gi, gp) : dist[i];
-      attachments_.push_back({static_cast<std::uint32_t>(i), owner[i], length * length});
-    }
-  };
+  nearest_.assign(n, kInf);
+  if (cached_pins_.empty()) return;
   // A few pins (corners): every particle is tethered to each of them. Many pins (an edge): only to
   // its nearest, as Kim et al. do, which keeps the cost at one tether per particle.
   constexpr std::size_t kAllPinsUpTo = 4;
   if (cached_pins_.size() <= kAllPinsUpTo) {
-    // One search per pin; the distance to the nearest pin is their minimum.
-    std::vector<float> nearest(n, std::numeric_limits<float>::infinity());
-    for (const std::uint32_t pin : cached_pins_) {
-      dijkstra({pin});
-      if (params_.long_range_attachments) collect();
-      for (std::size_t i = 0; i < n; ++i) nearest[i] = std::min(nearest[i], dist[i]);
-    }
-    dist.swap(nearest);
+    for (const std::uint32_t pin : cached_pins_) searches_.push_back({{pin}, {}, {}, {}, {}});
   } else {
-    dijkstra(cached_pins_);
-    if (params_.long_range_attachments) collect();
+    searches_.push_back({cached_pins_, {}, {}, {}, {}});
   }
+  for (Search& search : searches_) {
+    search.dist.assign(n, kInf);
+    search.parent.assign(n, kNone);
+    search.owner.assign(n, kNone);
+    search.attachment.assign(n, kNone);
+    heap_.clear();
+    for (const std::uint32_t s : search.sources) {
+      search.dist[s] = 0.0F;
+      search.owner[s] = s;
+      heap_.emplace_back(0.0F, s);
+    }
+    run_search(cloth, search, nullptr);
+    for (std::uint32_t i = 0; i < n; ++i) {
+      if (params_.long_range_attachments) attach(cloth, search, i);
+      nearest_[i] = std::min(nearest_[i], search.dist[i]);
+    }
+  }
+}
 
-  // Provot's deformation constraint is swept outwards from the pins (by geodesic distance of the
-  // spring's nearer end): a correction near a pin then reaches the far edge within one sweep more often
-  // than in grid order (measured in docs/sim.md). Pieces no pin holds (+inf) come last, in grid order.
-  // Counting sort on the distance in half-spacings: linear time, stable, so ties keep grid order.
-  const float unit = 0.5F * std::min(cloth.spacing_x(), cloth.spacing_y());
-  std::vector<std::uint32_t> level(structural_.size());
-  std::uint32_t top = 0;
-  for (std::size_t k = 0; k < structural_.size(); ++k) {
-    const float key = std::min(dist[structural_[k].a], dist[structural_[k].b]);
-    level[k] = std::isfinite(key) ? static_cast<std::uint32_t>(key / unit) : std::numeric_limits<std::uint32_t>::max();
-    if (level[k] != std::numeric_limits<std::uint32_t>::max()) top = std::max(top, level[k]);
+void Solver::update_attachments(const Cloth& cloth, const std::vector<std::uint32_t>& touched) {
+  const std::size_t n = cloth.particle_count();
+  nearest_.resize(n, kInf);
+  if (searches_.empty()) return;
+  // Decremental shortest paths (Ramalingam and Reps 1996): a particle is affected when the spring to its
+  // parent on the shortest-path tree is gone, or it is new; so is everything below it on the tree.
+  // Only those are searched again, from the distances of their unaffected neighbours.
+  const auto has_edge = [&](std::uint32_t i, std::uint32_t j) {
+    for (const std::uint32_t k : cloth.springs_of(i)) {
+      if (cloth.kind[k] != SpringKind::Bend && (cloth.spring_a[k] == j || cloth.spring_b[k] == j)) return true;
+    }
+    return false;
+  };
+  std::vector<std::uint32_t> stack;
+  std::vector<std::uint32_t> all_affected(touched);
+  std::vector<std::uint32_t> child_start;
+  std::vector<std::uint32_t> children;
+  for (Search& search : searches_) {
+    const std::size_t old_n = search.dist.size();
+    search.dist.resize(n, kInf);
+    search.parent.resize(n, kNone);
+    search.owner.resize(n, kNone);
+    search.attachment.resize(n, kNone);
+    affected_.assign(n, 0);
+    stack.clear();
+    for (const std::uint32_t i : touched) {
+      const bool fresh = i >= old_n;
+      const bool orphaned = search.parent[i] != kNone && !has_edge(i, search.parent[i]);
+      if ((fresh || orphaned) && affected_[i] == 0) {
+        affected_[i] = 1;
+        stack.push_back(i);
+      }
+    }
+    if (stack.empty()) continue;
+    // Children lists of the tree (CSR), then everything below the affected particles.
+    child_start.assign(n + 1, 0);
+    for (std::size_t i = 0; i < n; ++i) {
+      if (search.parent[i] != kNone) ++child_start[search.parent[i] + 1];
+    }
+    for (std::size_t i = 0; i < n; ++i) child_start[i + 1] += child_start[i];
+    children.resize(child_start[n]);
+    {
+      std::vector<std::uint32_t> fill(child_start.begin(), child_start.end() - 1);
+      for (std::uint32_t i = 0; i < n; ++i) {
+        if (search.parent[i] != kNone) children[fill[search.parent[i]]++] = i;
+      }
+    }
+    std::vector<std::uint32_t> affected_list;
+    while (!stack.empty()) {
+      const std::uint32_t i = stack.back();
+      stack.pop_back();
+      affected_list.push_back(i);
+      for (std::uint32_t c = child_start[i]; c < child_start[i + 1]; ++c) {
+        const std::uint32_t j = children[c];
+        if (affected_[j] == 0) {
+          affected_[j] = 1;
+          stack.push_back(j);
+        }
+      }
+    }
+    for (const std::uint32_t i : affected_list) {
+      search.dist[i] = kInf;
+      search.parent[i] = kNone;
+      search.owner[i] = kNone;
+    }
+    heap_.clear();
+    for (const std::uint32_t i : affected_list) {
+      for (const std::uint32_t k : cloth.springs_of(i)) {
+        if (cloth.kind[k] == SpringKind::Bend) continue;
+        const std::uint32_t j = cloth.spring_a[k] == i ? cloth.spring_b[k] : cloth.spring_a[k];
+        if (affected_[j] != 0 || !std::isfinite(search.dist[j])) continue;
+        const float d = search.dist[j] + cloth.rest_length[k];
+        if (d < search.dist[i]) {
+          search.dist[i] = d;
+          search.parent[i] = j;
+          search.owner[i] = search.owner[j];
+        }
+      }
+      if (std::isfinite(search.dist[i])) heap_.emplace_back(search.dist[i], i);
+    }
+    run_search(cloth, search, &affected_);
+    for (const std::uint32_t i : affected_list) {
+      if (params_.long_range_attachments) attach(cloth, search, i);
+    }
+    all_affected.insert(all_affected.end(), affected_list.begin(), affected_list.end());
   }
-  std::vector<std::uint32_t> start(static_cast<std::size_t>(top) + 3, 0);
-  for (std::uint32_t& l : level) {
-    if (l == std::numeric_limits<std::uint32_t>::max()) l = top + 1;  // unpinned pieces last
-    ++start[l + 1];
+  // Nearest pin, for the strain limit's order of the new springs.
+  for (const std::uint32_t i : all_affected) {
+    float d = kInf;
+    for (const Search& search : searches_) d = std::min(d, search.dist[i]);
+    nearest_[i] = d;
   }
-  for (std::size_t l = 1; l < start.size(); ++l) start[l] += start[l - 1];
-  std::vector<std::uint32_t> keyed(structural_.size());
-  for (std::size_t k = 0; k < structural_.size(); ++k) keyed[start[level[k]]++] = static_cast<std::uint32_t>(k);
-  strain_limit_.reserve(keyed.size());
-  for (const std::uint32_t k : keyed) strain_limit_.push_back(structural_[k]);
 }
 
 void Solver::step(Cloth& cloth, const Colliders& colliders) {
   refresh_caches(cloth);
   const std::size_t n = cloth.particle_count();
   // Work on (x, y, z, w) quadruples: one aligned 16-byte load brings a position and its inverse mass.
+  // Element 0 is the padding lanes' particle (never moves: inverse mass 0); particle i is element i + 1.
   work_.resize(n + 1);
-  work_[n] = Eigen::Vector4f::Zero();  // the padding lanes' particle: never moves (inverse mass 0)
+  work_[0] = Eigen::Vector4f::Zero();
   old_work_.resize(n + 1);
   for (std::size_t i = 0; i < n; ++i) {
-    work_[i] << cloth.position[i], cloth.inverse_mass[i];
+    work_[i + 1] << cloth.position[i], cloth.inverse_mass[i];
   }
   const float h = params_.dt / static_cast<float>(params_.substeps);
   for (int s = 0; s < params_.substeps; ++s) substep(cloth, colliders, h, s == 0);
-  for (std::size_t i = 0; i < n; ++i) cloth.position[i] = work_[i].head<3>();
+  for (std::size_t i = 0; i < n; ++i) cloth.position[i] = work_[i + 1].head<3>();
 }
 
 namespace {
@@ -341,9 +531,11 @@ void sweep_near_rest(Vec4* x, const std::vector<Solver::Group>& groups, float al
 
 void Solver::substep(Cloth& cloth, const Colliders& colliders, float h, bool first) {
   const std::size_t n = cloth.particle_count();
-  Vec4* x = work_.data();
+  Vec4* const padded = work_.data();
+  Vec4* x = padded + 1;  // particle i
   Eigen::Vector3f* v = cloth.velocity.data();
   std::copy(work_.begin(), work_.end(), old_work_.begin());
+  const Vec4* old_x = old_work_.data() + 1;
 
   // 1. Prediction (symplectic Euler on external forces; seed 000's point-cloud repulsion is one of them).
   const float keep = std::max(0.0F, 1.0F - params_.damping * h);
@@ -373,8 +565,8 @@ void Solver::substep(Cloth& cloth, const Colliders& colliders, float h, bool fir
     const float full_h = params_.soft_every_substep ? h : params_.dt;
     const float shear_alpha = params_.shear_compliance / (full_h * full_h);
     const float bend_alpha = params_.bend_compliance / (full_h * full_h);
-    sweep_near_rest(x, groups_[1], shear_alpha);
-    sweep_near_rest(x, groups_[2], bend_alpha);
+    sweep_near_rest(padded, groups_[1], shear_alpha);
+    sweep_near_rest(padded, groups_[2], bend_alpha);
   }
 
   // 4. Structural springs, hard, Gauss-Seidel. Near rest length the square root is replaced by its
@@ -382,7 +574,7 @@ void Solver::substep(Cloth& cloth, const Colliders& colliders, float h, bool fir
   // the fixed point is still |d| = L, and step 5 below is exact.
   const float structural_alpha = params_.structural_compliance / (h * h);
   for (int it = 0; it < params_.iterations; ++it) {
-    sweep_near_rest(x, groups_[0], structural_alpha);
+    sweep_near_rest(padded, groups_[0], structural_alpha);
   }
 
   // 5. Provot's deformation constraint: a structural spring longer than (1 + max_strain) L is brought
@@ -415,13 +607,13 @@ void Solver::substep(Cloth& cloth, const Colliders& colliders, float h, bool fir
     for (std::size_t i = 0; i < n; ++i) {
       if (x[i].w() == 0.0F) continue;
       Eigen::Vector3f p = x[i].head<3>();
-      if (collide_with_friction(p, old_work_[i].head<3>(), colliders, h)) x[i].head<3>() = p;
+      if (collide_with_friction(p, old_x[i].head<3>(), colliders, h)) x[i].head<3>() = p;
     }
   }
   const float inv_h = 1.0F / h;
   for (std::size_t i = 0; i < n; ++i) {
     if (x[i].w() == 0.0F) continue;
-    v[i] = (x[i].head<3>() - old_work_[i].head<3>()) * inv_h;
+    v[i] = (x[i].head<3>() - old_x[i].head<3>()) * inv_h;
   }
 
 }

@@ -13,34 +13,24 @@
 
 namespace tachi::sim {
 
-namespace {
-
-/// Liang-Barsky: the part [t0, t1] of the segment a + t (b - a), t in [0, 1], inside the rectangle
-/// [0, max_u] x [0, max_v]; nothing when the segment misses it.
-std::optional<std::pair<double, double>> clip_to_rectangle(const Eigen::Vector2d& a, const Eigen::Vector2d& b,
-                                                            double max_u, double max_v) {
-  double t0 = 0.0;
-  double t1 = 1.0;
-  const Eigen::Vector2d d = b - a;
-  const std::array<double, 4> p{-d.x(), d.x(), -d.y(), d.y()};
-  const std::array<double, 4> q{a.x(), max_u - a.x(), a.y(), max_v - a.y()};
-  for (std::size_t i = 0; i < 4; ++i) {
-    if (p[i] == 0.0) {
-      if (q[i] < 0.0) return std::nullopt;
-      continue;
-    }
-    const double r = q[i] / p[i];
-    if (p[i] < 0.0) {
-      t0 = std::max(t0, r);
-    } else {
-      t1 = std::min(t1, r);
-    }
-  }
-  if (t0 > t1) return std::nullopt;
-  return std::pair{t0, t1};
+std::optional<CutMode> parse_cut_mode(std::string_view name) {
+  if (name == "exact") return CutMode::Exact;
+  if (name == "grid") return CutMode::Grid;
+  if (name == "delete") return CutMode::Delete;
+  return std::nullopt;
 }
 
-}  // namespace
+std::string_view to_string(CutMode mode) {
+  switch (mode) {
+    case CutMode::Exact:
+      return "exact";
+    case CutMode::Grid:
+      return "grid";
+    case CutMode::Delete:
+      return "delete";
+  }
+  return "exact";
+}
 
 StrokeFile parse_stroke_csv(std::istream& in) {
   StrokeFile out;
@@ -57,14 +47,35 @@ StrokeFile parse_stroke_csv(std::istream& in) {
     return out;
   }
   double last_t = -std::numeric_limits<double>::infinity();
+  const auto skip = [&](std::size_t line, const std::string& why) {
+    if (out.problems.size() < StrokeFile::kMaxProblems) out.problems.push_back("line " + std::to_string(line) + ": " + why);
+    ++out.skipped_rows;
+  };
   while (const auto row = csv.next()) {
     const auto& cells = row->cells;
     // Four numbers; a trailing comma has always been let through.
     const bool four = cells.size() == 4 || (cells.size() == 5 && cells[4].empty());
     std::array<std::optional<double>, 4> v;
     for (std::size_t i = 0; four && i < 4; ++i) v[i] = common::to_double(cells[i]);
-    if (!four || !v[0] || !v[1] || !v[2] || !v[3] || *v[0] < last_t) {
-      ++out.skipped_rows;
+    if (!four) {
+      skip(row->line, "expected 4 fields t,x,y,z, got " + std::to_string(cells.size()));
+      continue;
+    }
+    if (!v[0] || !v[1] || !v[2] || !v[3]) {
+      skip(row->line, "not four finite numbers");
+      continue;
+    }
+    // Out of range before out of order: one row with t = 1e30 must not make every later row "go back".
+    if (std::abs(*v[0]) > kMaxStrokeTime_s) {
+      skip(row->line, "time " + cells[0] + " s is out of range (|t| <= 1e6 s)");
+      continue;
+    }
+    if (std::max({std::abs(*v[1]), std::abs(*v[2]), std::abs(*v[3])}) > kMaxStrokeCoordinate_m) {
+      skip(row->line, "position is out of range (|x|, |y|, |z| <= 100 m)");
+      continue;
+    }
+    if (*v[0] < last_t) {
+      skip(row->line, "time " + cells[0] + " s goes back (the previous row is at " + std::to_string(last_t) + " s)");
       continue;
     }
     last_t = *v[0];
@@ -76,35 +87,28 @@ StrokeFile parse_stroke_csv(std::istream& in) {
 
 namespace {
 
-/// Offset of `point` from particle p in the local frame of the deformed grid (d position / du, d position / dv,
-/// from p's structural springs; the flat rest frame where a direction has none), in grid cells.
+/// Offset of `point` from particle p in the local frame of the deformed cloth, in grid cells: the frame
+/// J = d position / d (u, v) is fitted to p's structural springs by least squares, J = E U^T (U U^T)^-1
+/// with E their world vectors and U their rest-coordinate vectors (on the grid: the mean of the springs
+/// along u and along v); the flat rest frame where the springs do not span both directions.
 Eigen::Vector2d grid_offset(const Cloth& cloth, std::uint32_t p, const Eigen::Vector3f& point) {
-  Eigen::Vector3d eu = Eigen::Vector3d::Zero();
-  Eigen::Vector3d ev = Eigen::Vector3d::Zero();
-  int nu = 0;
-  int nv = 0;
+  Eigen::Matrix<double, 3, 2> eu = Eigen::Matrix<double, 3, 2>::Zero();
+  Eigen::Matrix2d uu = Eigen::Matrix2d::Zero();
   for (const std::uint32_t k : cloth.springs_of(p)) {
     if (cloth.kind[k] != SpringKind::Structural) continue;
     const std::uint32_t q = cloth.spring_a[k] == p ? cloth.spring_b[k] : cloth.spring_a[k];
     const Eigen::Vector3d e = (cloth.position[q] - cloth.position[p]).cast<double>();
-    const int du = cloth.grid[q].u - cloth.grid[p].u;
-    const int dv = cloth.grid[q].v - cloth.grid[p].v;
-    if (dv == 0) {
-      eu += du * e;
-      ++nu;
-    } else {
-      ev += dv * e;
-      ++nv;
-    }
+    const Eigen::Vector2d d = (cloth.rest_uv[q] - cloth.rest_uv[p]).cast<double>();
+    eu += e * d.transpose();
+    uu += d * d.transpose();
   }
-  eu = nu > 0 ? Eigen::Vector3d{eu / nu} : Eigen::Vector3d{cloth.spacing_x(), 0.0, 0.0};
-  ev = nv > 0 ? Eigen::Vector3d{ev / nv} : Eigen::Vector3d{0.0, -cloth.spacing_y(), 0.0};
+  Eigen::Matrix<double, 3, 2> frame;
+  frame << cloth.spacing_x(), 0.0, 0.0, -cloth.spacing_y(), 0.0, 0.0;
+  if (std::abs(uu.determinant()) > 1e-6 * std::max(uu.squaredNorm(), 1e-12)) frame = eu * uu.inverse();
   const Eigen::Vector3d r = (point - cloth.position[p]).cast<double>();
-  Eigen::Matrix2d m;
-  m << eu.dot(eu), eu.dot(ev), ev.dot(eu), ev.dot(ev);
-  const Eigen::Vector2d rhs{eu.dot(r), ev.dot(r)};
+  const Eigen::Matrix2d m = frame.transpose() * frame;
   if (!(std::abs(m.determinant()) > 1e-6 * m.squaredNorm())) return Eigen::Vector2d::Zero();
-  return m.inverse() * rhs;
+  return m.inverse() * (frame.transpose() * r);
 }
 
 /// The particle nearest to `point`, by looking at every one.
@@ -177,14 +181,19 @@ ClothPoint ClothLocator::locate(const Cloth& cloth, const Eigen::Vector3f& point
   out.particle = p;
   out.grid = cloth.grid[p];
   out.distance_m = std::sqrt(distance2(p));
-  out.uv = Eigen::Vector2d{out.grid.u + offset.x(), out.grid.v + offset.y()};
+  out.uv = cloth.rest_uv[p].cast<double>() + offset;
   out.inside = out.uv.x() >= -margin_ && out.uv.y() >= -margin_ && out.uv.x() <= cloth.columns - 1 + margin_ &&
                out.uv.y() <= cloth.rows - 1 + margin_;
   return out;
 }
 
 StrokeCutter::StrokeCutter(Cloth& cloth, StrokeOptions options)
-    : cloth_(&cloth), options_(options), cutter_(cloth), locator_(options.inside_margin_cells) {}
+    : cloth_(&cloth), options_(options), cutter_(cloth), locator_(options.inside_margin_cells) {
+  if (follows_path()) {
+    exact_.emplace(cloth);
+    options_.tolerance_cells = options_.exact_tolerance_cells;
+  }
+}
 
 TopologyChange StrokeCutter::begin_stroke() {
   TopologyChange change = end_stroke();
@@ -203,7 +212,41 @@ GridCoord StrokeCutter::boundary_point(const Eigen::Vector2d& uv) const {
   return {static_cast<int>(std::lround(u)), static_cast<int>(std::lround(v))};
 }
 
-void StrokeCutter::commit(GridCoord g, const Eigen::Vector3f& direction, TopologyChange& change) {
+Eigen::Vector2d StrokeCutter::clamp_uv(const Eigen::Vector2d& uv) const {
+  return {std::clamp(uv.x(), 0.0, static_cast<double>(cloth_->columns - 1)),
+          std::clamp(uv.y(), 0.0, static_cast<double>(cloth_->rows - 1))};
+}
+
+void StrokeCutter::commit(GridCoord g, const Eigen::Vector2d& uv, const Eigen::Vector3f& direction,
+                          TopologyChange& change) {
+  // The stroke's path on the cloth as the cut took it, in every mode (pattern.svg, cut_deviation_cells_max).
+  const Eigen::Vector2d to = clamp_uv(uv);
+  const bool moved = !path_end_ || (to - *path_end_).norm() > 1e-9;
+  if (!path_end_) paths_.emplace_back();
+  if (moved) paths_.back().push_back(to.cast<float>());
+  const std::optional<Eigen::Vector2d> from = path_end_;
+  path_end_ = to;
+  if (follows_path()) {
+    if (!from) {
+      ++report_.lines;
+      ++total_.lines;
+    }
+    if (!from || !moved) return;
+    // The cut goes straight from where it ended to this point of the stroke, on the stroke's own path.
+    const TopologyChange cut =
+        options_.mode == CutMode::Exact ? exact_->cut(*from, to) : exact_->remove_crossed(*from, to);
+    cutter_.refresh_copies();
+    const std::array<GridCoord, 2> ends{boundary_point(*from), boundary_point(to)};
+    apply_blade_drag(*cloth_, cutter_, ends, direction, options_.blade, options_.drag, drag_scratch_);
+    report_.particles_duplicated += cut.duplicated_from.size();
+    total_.particles_duplicated += cut.duplicated_from.size();
+    const auto length = static_cast<float>(
+        std::hypot((to.x() - from->x()) * cloth_->spacing_x(), (to.y() - from->y()) * cloth_->spacing_y()));
+    report_.cut_length_m += length;
+    total_.cut_length_m += length;
+    change.merge(cut);
+    return;
+  }
   const auto added = line_->append(g);
   if (added.size() < 2) return;
   const TopologyChange cut = cutter_.cut(added);
@@ -213,15 +256,18 @@ void StrokeCutter::commit(GridCoord g, const Eigen::Vector3f& direction, Topolog
   change.merge(cut);
 }
 
-void StrokeCutter::start_line(GridCoord g, const Eigen::Vector3f& direction, TopologyChange& change) {
+void StrokeCutter::start_line(GridCoord g, const Eigen::Vector2d& uv, const Eigen::Vector3f& direction,
+                              TopologyChange& change) {
   line_.emplace(cloth_->columns, cloth_->rows);
-  commit(g, direction, change);
+  path_end_.reset();
+  commit(g, uv, direction, change);
   pending_.clear();
 }
 
 void StrokeCutter::close_line() {
   if (!line_) return;
-  add_line_to_report(line_->finish());
+  path_end_.reset();
+  if (!follows_path()) add_line_to_report(line_->finish());
   line_.reset();
   pending_.clear();
 }
@@ -255,11 +301,11 @@ TopologyChange StrokeCutter::add_sample(const StrokeSample& sample) {
       if (previous_) entry = clip_to_rectangle(previous_->uv, point.uv, max_u, max_v);
       if (entry && entry->first > 0.0) {
         const Eigen::Vector2d at_edge = previous_->uv + entry->first * (point.uv - previous_->uv);
-        start_line(boundary_point(at_edge), last_direction_, change);
+        start_line(boundary_point(at_edge), at_edge, last_direction_, change);
         anchor_ = at_edge;
         pending_.push_back(point);
       } else {
-        start_line(point.grid, last_direction_, change);
+        start_line(point.grid, point.uv, last_direction_, change);
         anchor_ = point.uv;
       }
     } else {
@@ -284,30 +330,32 @@ TopologyChange StrokeCutter::add_sample(const StrokeSample& sample) {
     };
     if (pending_.size() >= 2 && !fits(point.uv)) {
       const Point keep = pending_[pending_.size() - 2];
-      commit(keep.grid, last_direction_, change);
+      commit(keep.grid, keep.uv, last_direction_, change);
       anchor_ = keep.uv;
       pending_.assign(1, point);
     }
     if (!pending_.empty() && (point.uv - anchor_).norm() >= options_.max_lag_cells) {
-      commit(point.grid, last_direction_, change);
+      commit(point.grid, point.uv, last_direction_, change);
       anchor_ = point.uv;
       pending_.clear();
     }
   } else if (line_) {
     // Leaving: the cut goes to where the stroke crosses the edge, not along it.
-    if (!pending_.empty()) commit(pending_.back().grid, last_direction_, change);
+    if (!pending_.empty()) commit(pending_.back().grid, pending_.back().uv, last_direction_, change);
     const Eigen::Vector2d from = previous_ ? previous_->uv : anchor_;
     const auto inside_part = clip_to_rectangle(from, point.uv, max_u, max_v);
     const Eigen::Vector2d at_edge = inside_part ? Eigen::Vector2d{from + inside_part->second * (point.uv - from)} : from;
-    commit(boundary_point(at_edge), last_direction_, change);
+    commit(boundary_point(at_edge), at_edge, last_direction_, change);
     close_line();
   } else if (previous_ && !previous_->inside) {
     // Both samples beyond the edge: a fast swipe may still cross the cloth between them.
     const auto inside_part = clip_to_rectangle(previous_->uv, point.uv, max_u, max_v);
     if (inside_part && inside_part->second - inside_part->first > 1e-9) {
       const Eigen::Vector2d d = point.uv - previous_->uv;
-      start_line(boundary_point(previous_->uv + inside_part->first * d), last_direction_, change);
-      commit(boundary_point(previous_->uv + inside_part->second * d), last_direction_, change);
+      const Eigen::Vector2d enter = previous_->uv + inside_part->first * d;
+      const Eigen::Vector2d leave = previous_->uv + inside_part->second * d;
+      start_line(boundary_point(enter), enter, last_direction_, change);
+      commit(boundary_point(leave), leave, last_direction_, change);
       close_line();
     }
   }
@@ -320,7 +368,7 @@ TopologyChange StrokeCutter::end_stroke() {
   if (!open_) return change;
   if (line_) {
     // Figure 5: the cut reaches the stroke's end point.
-    if (!pending_.empty()) commit(pending_.back().grid, last_direction_, change);
+    if (!pending_.empty()) commit(pending_.back().grid, pending_.back().uv, last_direction_, change);
     close_line();
   }
   open_ = false;

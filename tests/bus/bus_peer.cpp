@@ -36,7 +36,8 @@ void pace(std::chrono::steady_clock::time_point start, unsigned i, double rate_h
 
 int publish_strokes(const Options& o, bus::Participant& dds) {
   bus::Writer<tachi_msg_StrokeSample> writer{dds, bus::topics::stroke};
-  if (!writer.wait_for_readers(1, 20s)) throw std::runtime_error("no reader matched within 20 s");
+  if (!writer.wait_for_readers(1, std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::duration<double>(o.timeout_s))))
+    throw std::runtime_error("no reader matched within " + std::to_string(o.timeout_s) + " s");
   const auto start = std::chrono::steady_clock::now();
   for (unsigned i = 0; i < o.count; ++i) {
     pace(start, i, o.rate_hz);
@@ -174,12 +175,12 @@ int main(int argc, char** argv) try {
   app.add_option("--count", o.count, "Samples per key")->check(CLI::Range(1u, 100000u));
   app.add_option("--rate", o.rate_hz, "Publication rate, Hz")->check(CLI::Range(1.0, 10000.0));
   app.add_option("--bytes", o.bytes, "Cloth state payload size")->check(CLI::Range(4u, 16'000'000u));
-  app.add_option("--timeout", o.timeout_s, "Subscriber gives up after this many seconds")->check(CLI::PositiveNumber);
+  app.add_option("--timeout", o.timeout_s, "Subscriber gives up (stroke publisher waits for a reader) after this many seconds")->check(CLI::PositiveNumber);
   app.add_option("--linger", o.linger_s, "Topology publisher stays this long")->check(CLI::NonNegativeNumber);
   if (const int rc = tachi::common::parse(app, argc, argv); rc >= 0) return rc;
   tachi::common::install_stop_handlers();
 
-  bus::Participant dds{o.bus.domain, o.bus.dds_config};
+  bus::Participant dds{o.bus.domain, o.bus.dds_config, {o.bus.secure_dir, o.bus.identity}};
   if (o.role == "strokes-pub") return publish_strokes(o, dds);
   if (o.role == "strokes-sub") return subscribe_strokes(o, dds);
   if (o.role == "states-pub") return publish_states(o, dds);

@@ -85,8 +85,10 @@ TEST(SyntheticScene, WritesARecordingAndGroundTruth) {
 }
 
 TEST(ScenarioSpec, BundledSpecsLoad) {
-  for (const char* name : {"push", "jitter", "straight_cut", "curve", "top_edge"}) {
-    const auto spec = load_scenario(std::filesystem::path(TACHI_SCENARIO_DIR) / (std::string(name) + ".json"));
+  const auto names = test::scenario_names();
+  EXPECT_GE(names.size(), 11u);
+  for (const auto& name : names) {
+    const auto spec = load_scenario(std::filesystem::path(TACHI_SCENARIO_DIR) / (name + ".json"));
     EXPECT_EQ(spec.name, name);
     EXPECT_GE(spec.path.size(), 2u);
   }

@@ -3,6 +3,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <algorithm>
 #include <fstream>
 #include <random>
 #include <string>
@@ -36,5 +37,15 @@ inline std::vector<std::uint16_t> ramp_frame(std::uint16_t offset) {
 }
 
 inline std::string recordings_dir() { return TACHI_RECORDINGS_DIR; }
+
+/// Every bundled scenario (a spec in recordings/scenarios, rendered at build time), sorted, so a
+/// new spec is tested without being listed again here.
+inline std::vector<std::string> scenario_names() {
+  std::vector<std::string> names;
+  for (const auto& entry : std::filesystem::directory_iterator(TACHI_SCENARIO_DIR))
+    if (entry.path().extension() == ".json") names.push_back(entry.path().stem().string());
+  std::sort(names.begin(), names.end());
+  return names;
+}
 
 }  // namespace tachi::sensor::test

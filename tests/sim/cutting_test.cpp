@@ -7,6 +7,8 @@
 
 #include <gtest/gtest.h>
 
+#include "cut_test_support.hpp"
+
 #include <algorithm>
 #include <cstdio>
 #include <map>
@@ -19,38 +21,13 @@
 namespace tachi::sim {
 namespace {
 
-Cloth make_cloth(int columns, int rows, PinMode pin = PinMode::TopEdge) {
-  ClothConfig config;
-  config.columns = columns;
-  config.rows = rows;
-  config.pin = pin;
-  return Cloth{config};
-}
-
-double total_mass(const Cloth& cloth) { return std::accumulate(cloth.mass.begin(), cloth.mass.end(), 0.0); }
+using test::make_cloth;
+using test::total_mass;
+using test::triangle_pieces;
 
 std::vector<GridCoord> line_through(std::initializer_list<GridCoord> points, int columns, int rows) {
   const std::vector<GridCoord> p(points);
   return build_cut_line(p, columns, rows);
-}
-
-/// Number of connected pieces when particles are joined only through shared triangles.
-std::size_t triangle_pieces(const Cloth& cloth) {
-  std::vector<std::uint32_t> parent(cloth.particle_count());
-  std::iota(parent.begin(), parent.end(), 0U);
-  const auto find = [&](std::uint32_t i) {
-    while (parent[i] != i) i = parent[i] = parent[parent[i]];
-    return i;
-  };
-  for (std::size_t t = 0; t < cloth.triangle_count(); ++t) {
-    if (cloth.triangle_alive[t] == 0) continue;
-    const auto& tri = cloth.triangles[t];
-    parent[find(tri[1])] = find(tri[0]);
-    parent[find(tri[2])] = find(tri[0]);
-  }
-  std::set<std::uint32_t> roots;
-  for (std::uint32_t i = 0; i < cloth.particle_count(); ++i) roots.insert(find(i));
-  return roots.size();
 }
 
 /// How many cut edges meet at grid coordinate g.

@@ -22,6 +22,18 @@ TEST(SceneState, AnOlderTopologyArrivingLateIsIgnored) {
   EXPECT_EQ(state.scene().mesh.triangles.size(), 2u);
 }
 
+// Issue 13: a restarted simulator counts versions from 1 again; its new session is followed.
+TEST(SceneState, ARestartedSimulatorsNewSessionIsFollowedWhateverItsVersion) {
+  SceneState state;
+  state.on_topology({30, {{0, 1, 2}, {1, 2, 3}}, {}, 111});
+  state.on_topology({1, {{0, 1, 2}}, {}, 222});
+  EXPECT_EQ(state.scene().mesh.topology_version, 1u);
+  EXPECT_EQ(state.scene().mesh.triangles.size(), 1u);
+  state.on_topology({29, {{0, 1, 2}, {1, 2, 3}}, {}, 222});
+  state.on_topology({5, {{0, 1, 2}}, {}, 222});  // late, same session: ignored
+  EXPECT_EQ(state.scene().mesh.topology_version, 29u);
+}
+
 TEST(SceneState, StrokeTrailGrowsWhileCuttingAndRestartsWithTheNextStroke) {
   SceneState state;
   state.on_hand({1, {0.0f, 0.0f, 0.0f}, true, true, false});

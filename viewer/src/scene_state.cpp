@@ -5,8 +5,11 @@
 namespace tachi::viewer {
 
 void SceneState::on_topology(TopologyUpdate update) {
-  // An older topology arriving late changes nothing. The first one is taken whatever its version.
-  if (!scene_.mesh.triangles.empty() && update.version < scene_.mesh.topology_version) return;
+  // An older topology of the same simulator run arriving late changes nothing. The first one, and the
+  // first of a new run (a restarted simulator counts versions afresh), is taken whatever its version.
+  if (!scene_.mesh.triangles.empty() && update.session_id == session_id_ && update.version < scene_.mesh.topology_version)
+    return;
+  session_id_ = update.session_id;
   scene_.mesh.topology_version = update.version;
   scene_.mesh.triangles = std::move(update.triangles);
   scene_.mesh.pinned = std::move(update.pinned);

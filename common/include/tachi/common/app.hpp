@@ -24,11 +24,13 @@ enum ExitCode : int {
 struct BusOptions {
   unsigned domain = 0;         ///< DDS domain id (0..232)
   std::string dds_config;      ///< Cyclone XML file; empty = the loopback config built in
+  std::string secure_dir;      ///< DDS Security files (scripts/make_test_pki.sh); empty = no security
+  std::string identity;        ///< whose certificate and grant to use; default: the program's name without "tachi-"
 };
 
 /// Adds `--log-level` to an app; the chosen level is applied by parse().
 void add_log_level_flag(CLI::App& app, std::string& level);
-/// Adds `--domain` and `--dds-config`.
+/// Adds `--domain`, `--dds-config`, `--secure` and `--identity`.
 void add_bus_flags(CLI::App& app, BusOptions& options);
 
 /// Routes spdlog's default logger to stderr under the program's name, then parses argv. Returns an exit code when the process should stop now (help printed: 0;
@@ -43,6 +45,10 @@ void install_stop_handlers();
 /// True once SIGINT or SIGTERM has arrived (or request_stop was called).
 bool stop_requested();
 void request_stop();
+
+/// Sleeps until `until` or a stop request, whichever comes first (it wakes every 10 ms to look), so
+/// a long wait never outlasts SIGINT/SIGTERM by more than that. False when a stop ended it.
+bool sleep_unless_stopped(std::chrono::steady_clock::time_point until);
 
 /// Calls `tick` until it returns false or a stop is requested.
 /// `tick` is expected to block briefly (e.g. on a DDS waitset) so this does not spin.

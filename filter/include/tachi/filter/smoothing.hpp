@@ -46,16 +46,18 @@ class LowPass {
   double value_ = 0.0;
 };
 
-/// Defaults: chosen on recordings/jitter (docs/benchmarks.md, "Filter and voice").
+/// Defaults: the paper's filter (no lag compensation), tuned on recordings/jitter by the paper's
+/// procedure and a sweep (docs/filter.md, docs/benchmarks.md "Filter and voice"): 2.5 Hz and beta 5
+/// halve the tremor error (0.49x raw once the lag is removed) at under 1 frame of lag.
 struct OneEuroParams {
-  double min_cutoff_hz = 1.0;
-  double beta = 3.0;
+  double min_cutoff_hz = 2.5;
+  double beta = 5.0;
   double d_cutoff_hz = 1.0;
   /// Lag compensation in [0, 1] (an extension, not in Casiez et al.): adds lag_compensation * tau * v_hat,
   /// where tau = 1 / (2 pi fc) is the low-pass's steady-state lag behind a constant-velocity hand and v_hat
   /// the filtered output's velocity low-passed at the same cutoff. 1 removes the lag on ramps (transfer
-  /// (1 + 2 tau s) / (1 + tau s)^2); 0 is the paper's filter.
-  double lag_compensation = 1.0;
+  /// (1 + 2 tau s) / (1 + tau s)^2); 0 (the default) is the paper's filter.
+  double lag_compensation = 0.0;
 };
 
 /// The One Euro filter for one scalar, Algorithm 1 of Casiez, Roussel, Vogel, CHI 2012:

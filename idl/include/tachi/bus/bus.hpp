@@ -35,11 +35,16 @@ class DdsError : public std::runtime_error {
 /// Returns `rc` when it is not an error; throws DdsError(context) when it is.
 dds_return_t check(dds_return_t rc, std::string_view context);
 
+/// A random, non-zero id for one run of a publishing process (the IDL's `session_id`): a restarted
+/// process starts a new session, so its readers tell its stroke 1 from the previous run's stroke 1.
+std::uint64_t new_session_id();
+
 /// Named QoS profiles. A topic's writers and readers use the same profile, so offered and
 /// requested QoS always match (a mismatch in Cyclone is silent: nothing arrives).
 enum class QosProfile {
   SensorData,  ///< best effort, keep last 8: a late hand sample is worth less than the next one
-  Commands,    ///< reliable, keep last 1024: strokes, voice commands, cut events must all arrive
+  Commands,    ///< reliable, keep last 1024: voice commands, cut events must all arrive
+  Strokes,     ///< Commands, and transient-local: a restarted tachi-sim gets the samples it missed (issue 13)
   Topology,    ///< reliable, transient-local, keep last 1 per key: late joiners get the current mesh
   State,       ///< reliable, keep last 2: the newest cloth positions, never a queue of stale ones
   Status,      ///< reliable, transient-local, keep last 1 per node, 3 s liveliness lease
@@ -56,11 +61,22 @@ struct TopicSpec {
 template <class T>
 struct Descriptor;
 
+/// DDS Security for one participant (OMG DDS Security 1.1 with Cyclone's bundled plugins):
+/// authenticated by `identity`'s certificate, allowed only the topics its grant names, encrypted.
+/// `dir` is what scripts/make_test_pki.sh makes: identity_ca.pem, permissions_ca.pem, governance.p7s,
+/// permissions.p7s and <identity>.cert.pem / <identity>.key.pem. An empty `dir` means no security.
+struct Security {
+  std::string dir;
+  std::string identity;
+  [[nodiscard]] bool enabled() const noexcept { return !dir.empty(); }
+};
+
 /// A DDS domain participant. The domain is created with the embedded loopback config unless a
-/// config file is given. Several participants of one domain may live in one process.
+/// config file is given. Several participants of one domain may live in one process, each with its
+/// own identity (security rides on the participant's QoS, not on the domain's config).
 class Participant {
  public:
-  explicit Participant(std::uint32_t domain, const std::string& config_file = {});
+  explicit Participant(std::uint32_t domain, const std::string& config_file = {}, const Security& security = {});
   ~Participant();
   Participant(const Participant&) = delete;
   Participant& operator=(const Participant&) = delete;

@@ -24,7 +24,7 @@ TACHI_BUS_DESCRIPTOR(tachi_msg_SceneObject);
 namespace topics {
 inline constexpr TopicSpec<tachi_msg_RawHandSample> raw_hand{"tachi/hand/raw", QosProfile::SensorData};
 inline constexpr TopicSpec<tachi_msg_VoiceCommand> voice_command{"tachi/voice/command", QosProfile::Commands};
-inline constexpr TopicSpec<tachi_msg_StrokeSample> stroke{"tachi/hand/stroke", QosProfile::Commands};
+inline constexpr TopicSpec<tachi_msg_StrokeSample> stroke{"tachi/hand/stroke", QosProfile::Strokes};
 inline constexpr TopicSpec<tachi_msg_ClothTopology> cloth_topology{"tachi/cloth/topology", QosProfile::Topology};
 inline constexpr TopicSpec<tachi_msg_ClothState> cloth_state{"tachi/cloth/state", QosProfile::State};
 inline constexpr TopicSpec<tachi_msg_CutEvent> cut_event{"tachi/cloth/cut", QosProfile::Commands};

@@ -43,8 +43,12 @@ struct IndexEntry {
 /// not a fakenect file name.
 std::optional<IndexEntry> parse_index_line(std::string_view line, std::string* why = nullptr);
 
+/// freenect_raw_tilt_state as fakenect-record dumps it.
+inline constexpr std::uintmax_t kAccelDumpBytes = 12;
+
 /// Reads <dir>/INDEX.txt. Throws RecordingError on a missing index, a garbage line (naming its
-/// number), a listed file that does not exist, or an index without depth frames.
+/// number), a listed file that does not exist or is not a file, host times going back, an
+/// accelerometer dump of the wrong size, or an index without depth frames.
 std::vector<IndexEntry> read_index(const std::filesystem::path& dir);
 
 /// Why a depth file could not be decoded.

@@ -30,6 +30,8 @@ namespace tachi::sensor {
 struct HandFinderParams {
   double foreground_m = 0.08;       ///< nearer than the background by this = foreground (> sway, < arm)
   double hand_depth_band_m = 0.07;  ///< the hand: component pixels within this of its nearest point
+  double narrow_band_above_m = 0.055; ///< a circle larger than this is measured again in a band ...
+  double narrow_band_m = 0.035;     ///< ... this deep (a hand against the chest: the torso 5-8 cm behind)
   double palm_radius_m = 0.042;     ///< expected palm radius: the palm circle must fit in the image
   double min_palm_radius_m = 0.032; ///< a smaller inscribed circle is a forearm (~2.8 cm) or fingers, not a palm
   double max_palm_radius_m = 0.075; ///< a larger one is a body, not a palm
@@ -38,6 +40,20 @@ struct HandFinderParams {
   int invalid_left_columns = 8;     ///< Kinect's band without readings at the left edge
   double max_jump_m = 0.2;          ///< a hand lost this many frames ago does not reappear farther away...
   int reacquire_frames = 15;        ///< ... within this many frames (0.5 s at 30 Hz)
+  /// A new track starts only on an arm's end: the surface must continue without a depth jump to
+  /// this far behind the hand (a hand at 1 m reaches 35-45 cm out of the body; a head, a torso or a
+  /// person walking behind span ~10 cm).
+  double arm_protrusion_m = 0.15;
+  /// A hand that crosses the image border this wide within a palm diameter of its circle, with a
+  /// circle smaller than whole_palm_radius_m, is a palm cut by the border: not reported (its circle
+  /// sits 3-5 cm inward of the real centre). A forearm crossing below a whole palm is narrower.
+  double border_cut_width_m = 0.045;
+  /// The circle a whole palm holds: >= 3.95 cm in every visible frame of the bundled recordings;
+  /// the remains of a cut palm 1.1-3.8 cm.
+  double whole_palm_radius_m = 0.039;
+  /// A new track starts only on a hand nearer than this: the user cuts at ~1 m in front of a body at
+  /// ~1.45 m; a person walking by behind is not followed.
+  double max_acquire_depth_m = 1.8;
 };
 
 struct HandObservation {
@@ -48,6 +64,12 @@ struct HandObservation {
   float confidence = 0.0f;          ///< 0..1; 0 when not tracked
   float palm_radius_m = 0.0f;       ///< radius of the palm's inscribed circle
 };
+
+/// Runs OpenCV's work in the calling thread. The finder's per-frame calls (a 160x120 grid, a
+/// palm-sized ROI) are too small to split, and OpenCV's idle pool workers spin on sched_yield
+/// against the other pipeline processes (81k calls over 1,330 frames were measured). Call once at
+/// start-up; it is process-wide.
+void use_one_opencv_thread();
 
 class HandFinder {
  public:

@@ -47,6 +47,9 @@ struct ScenarioSpec {
   double edge_dropout = 0.35;     ///< chance that a pixel on a depth edge has no reading
   double dropout_blobs = 6.0;     ///< mean number of small no-reading blobs per frame
   int invalid_left_columns = 8;   ///< the band without readings at the left edge
+  bool fingers_together = false;  ///< fingers side by side, touching (default: spread)
+  bool second_person = false;     ///< a second person walks behind the user, left to right
+  double second_person_z = 2.2;   ///< their torso's depth, metres
 };
 
 /// Reads a scenario spec (JSON, see recordings/README.md). Throws std::runtime_error naming the

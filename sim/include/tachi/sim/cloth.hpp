@@ -123,7 +123,10 @@ class Cloth {
   std::vector<Eigen::Vector3f> velocity;
   std::vector<float> mass;
   std::vector<float> inverse_mass;  ///< 0 = does not move (pinned or held by the hand)
-  std::vector<GridCoord> grid;      ///< original grid coordinate
+  std::vector<GridCoord> grid;      ///< original grid coordinate (a particle made by an exact cut: the nearest one)
+  /// Rest (material) coordinate in grid cells, u right and v down like GridCoord: (u, v) for a grid particle,
+  /// anywhere on the cloth for a particle an exact cut made on an edge. Rest lengths come from it.
+  std::vector<Eigen::Vector2f> rest_uv;
   std::vector<std::uint8_t> pinned;
   int columns = 0;
   int rows = 0;
@@ -165,7 +168,14 @@ class Cloth {
   /// in half between i and the copy, so total mass is conserved. Returns the copy's index.
   std::size_t duplicate_particle(std::size_t i);
 
-  /// Appends a live spring a-b of `kind` with rest length from the grid coordinates of a and b and
+  /// Appends a particle on the segment from a to b at fraction t (position, velocity and rest coordinate
+  /// interpolated) with mass `new_mass`, fixed only when both ends are. The caller takes that mass from
+  /// the neighbours (mass is conserved by the caller). Returns its index.
+  std::size_t add_particle_between(std::size_t a, std::size_t b, float t, float new_mass);
+  /// Sets particle i's mass, keeping its inverse mass 0 when it is fixed (pinned or held).
+  void set_mass(std::size_t i, float new_mass);
+
+  /// Appends a live spring a-b of `kind` with rest length from the rest coordinates of a and b and
   /// the grid spacing. Returns its index.
   std::uint32_t add_spring(std::uint32_t a, std::uint32_t b, SpringKind spring_kind);
   /// Marks spring k dead and drops it from its endpoints' incidence lists. Idempotent.
@@ -195,6 +205,12 @@ class Cloth {
 
   /// Rest length that a spring between grid coordinates a and b has on this cloth.
   [[nodiscard]] float grid_rest_length(GridCoord a, GridCoord b) const;
+  /// Rest distance between particles i and j (from their rest coordinates), metres.
+  [[nodiscard]] float rest_distance(std::size_t i, std::size_t j) const;
+
+  /// Spring indices in the order they were added, removed or rewired (a spring may appear more than
+  /// once). Never cleared: a solver keeps how far it has read and updates only those springs.
+  std::vector<std::uint32_t> spring_edits;
 
   /// Largest (length / rest length - 1) over live structural springs; 0 for a cloth without any.
   [[nodiscard]] float max_structural_strain() const;

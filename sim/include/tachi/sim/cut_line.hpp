@@ -13,7 +13,11 @@
 
 #include "tachi/sim/cloth.hpp"
 
+#include <Eigen/Core>
+
+#include <optional>
 #include <span>
+#include <utility>
 #include <vector>
 
 namespace tachi::sim {
@@ -68,6 +72,12 @@ class CutLineBuilder {
 
 /// Whole-line convenience: every point appended to a CutLineBuilder in order, then finish().
 [[nodiscard]] std::vector<GridCoord> build_cut_line(std::span<const GridCoord> points, int columns, int rows);
+
+/// Liang-Barsky: the part [t0, t1] of the segment a + t (b - a), t in [0, 1], inside the rectangle
+/// [0, max_u] x [0, max_v]; nothing when the segment misses it.
+[[nodiscard]] std::optional<std::pair<double, double>> clip_to_rectangle(const Eigen::Vector2d& a,
+                                                                         const Eigen::Vector2d& b, double max_u,
+                                                                         double max_v);
 
 /// Length of a cut line in rest metres (sum of the structural rest lengths it runs along).
 [[nodiscard]] float cut_line_length(std::span<const GridCoord> line, float spacing_x, float spacing_y);

@@ -69,6 +69,9 @@ class ClothCutter {
   [[nodiscard]] bool edge_cut(GridCoord a, GridCoord b) const;
   /// Particles sharing the grid coordinate g (the original first).
   [[nodiscard]] std::vector<std::uint32_t> copies(GridCoord g) const;
+  /// Takes note of particles someone else appended (the exact cutter), so copies() lists them under the
+  /// grid coordinate nearest to them.
+  void refresh_copies() { sync_particles(); }
   /// Appends the particles sharing g to `out` (no allocation once `out` has grown).
   void append_copies(GridCoord g, std::vector<std::uint32_t>& out) const;
   [[nodiscard]] const Cloth& cloth() const { return *cloth_; }

@@ -29,6 +29,7 @@ struct HandInput {
   bool tracked = false;
   bool cutting = false;
   bool holding = false;  ///< stroke open, hand beyond reach: the sample must not cut (GATE_HOLDING)
+  std::uint64_t session_id = 0;  ///< the filter run that numbered the stroke: stroke 1 of a restarted filter is a new stroke
   bool grabbing = false;  ///< the hand holds the cloth (GATE_GRABBING): take, move, and on the next other sample release
 };
 
@@ -127,6 +128,7 @@ class Session {
   float hand_radius_m_;
   std::optional<Eigen::Vector3f> hand_;  ///< last tracked hand position while not cutting
   std::uint32_t stroke_id_ = 0;
+  std::uint64_t stroke_session_ = 0;
   std::optional<TopologyChange> pending_;
   std::vector<CutReport> reports_;
   std::uint64_t steps_ = 0;

@@ -39,10 +39,12 @@ struct SolverParams {
 /// Returns a message naming the bad field, or nothing.
 [[nodiscard]] std::optional<const char*> validate(const SolverParams& params);
 
-/// Steps a Cloth. Keeps caches derived from the cloth's topology (spring order, attachments),
-/// rebuilt when topology_version, the array sizes or the set of fixed particles (pinned, or held by
-/// the hand: inverse mass 0) change, so a cut between steps (appended particles, rewired or dead
-/// springs) is picked up automatically. A rebuild costs ~5 ms at 128 x 128.
+/// Steps a Cloth. Keeps caches derived from the cloth's topology (spring batches, strain-limit order,
+/// long-range attachments). A full build happens on the first step and when the set of fixed particles
+/// (pinned, or held by the hand: inverse mass 0) changes; a cut is picked up INCREMENTALLY from
+/// cloth.spring_edits: the lanes of the springs it changed are blanked, its new springs are batched at
+/// the end of their family, and only the attachments whose shortest path crossed the cut are searched
+/// again (decremental Dijkstra), so the step after a cut costs about what the cut touched.
 class Solver {
  public:
   explicit Solver(SolverParams params = {});
@@ -52,7 +54,10 @@ class Solver {
 
   [[nodiscard]] const SolverParams& params() const { return params_; }
   /// Number of long-range attachments in use (0 when disabled or nothing is pinned).
-  [[nodiscard]] std::size_t attachment_count() const { return attachments_.size(); }
+  [[nodiscard]] std::size_t attachment_count() const;
+  /// Full cache builds so far (the first step's included), and incremental updates after cuts.
+  [[nodiscard]] std::size_t full_builds() const { return full_builds_; }
+  [[nodiscard]] std::size_t incremental_updates() const { return incremental_updates_; }
 
   /// A live spring copied out of the Cloth arrays, in the solver's sweep order.
   struct PackedSpring {
@@ -60,7 +65,8 @@ class Solver {
     std::uint32_t b;
     float rest;
   };
-  /// Four springs that share no particle, projected together (SSE lanes).
+  /// Four springs that share no particle, projected together (SSE lanes). Particle indices are stored
+  /// plus one: index 0 is a particle that never moves, used by padding lanes and blanked (cut) springs.
   struct Group {
     std::array<std::uint32_t, 4> a;
     std::array<std::uint32_t, 4> b;
@@ -68,11 +74,31 @@ class Solver {
   };
 
  private:
+  /// Where a spring sits in the batches.
+  struct Slot {
+    std::uint32_t group = 0xFFFFFFFFU;
+    std::uint8_t lane = 0;
+    std::uint8_t family = 0;
+  };
+  /// One shortest-path search of the attachments: from one pin (few pins) or from all of them.
+  struct Search {
+    std::vector<std::uint32_t> sources;
+    std::vector<float> dist;
+    std::vector<std::uint32_t> parent;     ///< previous particle on the shortest path (none at a source)
+    std::vector<std::uint32_t> owner;      ///< the pin the path starts at
+    std::vector<std::uint32_t> attachment; ///< per particle: its attachment in attachments_, or none
+  };
 
   void refresh_caches(const Cloth& cloth);
+  void full_build(const Cloth& cloth, std::vector<std::uint32_t> pins);
+  void update_incrementally(const Cloth& cloth);
+  void append_springs(const Cloth& cloth, const std::vector<std::uint32_t>& springs);
   void build_attachments(const Cloth& cloth);
+  void run_search(const Cloth& cloth, Search& search, const std::vector<std::uint8_t>* only);
+  void attach(const Cloth& cloth, Search& search, std::uint32_t i);
+  void update_attachments(const Cloth& cloth, const std::vector<std::uint32_t>& touched);
   static void build_groups(const std::vector<PackedSpring>& springs, const std::vector<std::uint32_t>& keys,
-                           std::uint32_t dummy, std::vector<Group>& groups);
+                           std::vector<Group>& groups);
   void substep(Cloth& cloth, const Colliders& colliders, float h, bool first);
 
   SolverParams params_;
@@ -80,23 +106,31 @@ class Solver {
   std::uint32_t cached_version_ = 0;
   std::size_t cached_springs_ = 0;
   std::size_t cached_particles_ = 0;
+  std::size_t edits_read_ = 0;
   std::vector<std::uint32_t> cached_pins_;
   bool cache_valid_ = false;
-  // Springs of each family, alive only, in an order where consecutive springs rarely share a particle.
-  std::vector<PackedSpring> structural_;
-  std::vector<PackedSpring> shear_;
-  std::vector<PackedSpring> bend_;
-  std::array<std::vector<Group>, 3> groups_;  ///< the same three families, four at a time
-  // Structural springs again, ordered outwards from the pins, for the strain limit.
+  std::size_t full_builds_ = 0;
+  std::size_t incremental_updates_ = 0;
+  std::array<std::vector<Group>, 3> groups_;  ///< structural, shear, bend, four at a time
+  std::vector<Slot> slot_;                    ///< per spring
+  std::size_t lanes_ = 0;                     ///< lanes in use when last fully built, and blanked since
+  std::size_t blanked_ = 0;
+  // Structural springs again, ordered outwards from the pins, for the strain limit; the end nearer to a
+  // pin is `a`. Per spring its place here (none for other kinds).
   std::vector<PackedSpring> strain_limit_;
+  std::vector<std::uint32_t> limit_slot_;
   // Long-range attachments: particle, pin, maximal distance.
   struct Attachment {
     std::uint32_t particle;
     std::uint32_t pin;
-    float length2;  ///< squared maximal distance
+    float length2;  ///< squared maximal distance (+inf: disabled, the pin no longer reaches it)
   };
   std::vector<Attachment> attachments_;
-  // Positions with the inverse mass in w, during a step.
+  std::vector<Search> searches_;
+  std::vector<float> nearest_;  ///< per particle: rest distance to the nearest pin (+inf: no pin reaches it)
+  std::vector<std::uint8_t> affected_;  ///< scratch of the incremental searches
+  std::vector<std::pair<float, std::uint32_t>> heap_;
+  // Positions with the inverse mass in w, during a step; element 0 is the fixed padding particle.
   std::vector<Eigen::Vector4f> work_;
   std::vector<Eigen::Vector4f> old_work_;
 };

@@ -19,6 +19,7 @@
 #include "tachi/sim/cloth.hpp"
 #include "tachi/sim/cut_line.hpp"
 #include "tachi/sim/cutting.hpp"
+#include "tachi/sim/exact_cut.hpp"
 
 #include <Eigen/Core>
 
@@ -26,6 +27,7 @@
 #include <istream>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace tachi::sim {
@@ -37,10 +39,17 @@ struct StrokeSample {
 
 /// A stroke read from CSV, or why it could not be.
 struct StrokeFile {
+  static constexpr std::size_t kMaxProblems = 20;
   std::vector<StrokeSample> samples;
-  std::size_t skipped_rows = 0;  ///< rows with a wrong field count, a non-number, or time going back
+  std::size_t skipped_rows = 0;  ///< rows with a wrong field count, a non-number, a value out of range, or time going back
+  std::vector<std::string> problems;  ///< "line N: why" of the first kMaxProblems skipped rows, for the log
   std::string error;             ///< set when the file is unusable (no header `t,x,y,z`, no sample)
 };
+
+/// A stroke row beyond these is a corrupt file, not a hand: |t| in seconds, |x|, |y|, |z| in metres
+/// (the same 100 m the live simulator rejects hand samples beyond).
+inline constexpr double kMaxStrokeTime_s = 1e6;
+inline constexpr double kMaxStrokeCoordinate_m = 100.0;
 
 /// Parses `t,x,y,z` CSV (header required; blank lines ignored; bad rows skipped and counted).
 [[nodiscard]] StrokeFile parse_stroke_csv(std::istream& in);
@@ -68,10 +77,24 @@ class ClothLocator {
   std::optional<std::uint32_t> hint_;
 };
 
+/// How a stroke cuts: exact = along the stroke's own path (exact_cut.hpp); grid = seed 000's cut line
+/// along grid lines, eqs. (1)-(4) (cutting.hpp); delete = seed 001 section 4, the triangles the blade
+/// passes through are deleted, then completeCUT.
+enum class CutMode : std::uint8_t { Exact, Grid, Delete };
+/// "exact", "grid", "delete"; nothing for anything else.
+[[nodiscard]] std::optional<CutMode> parse_cut_mode(std::string_view name);
+[[nodiscard]] std::string_view to_string(CutMode mode);
+
 struct StrokeOptions {
+  /// Grid here so that the library reproduces seed 000 unless asked; the product (tachi-sim's
+  /// --cut-mode, offline and live) defaults to exact.
+  CutMode mode = CutMode::Grid;
   Blade blade = Blade::Scalpel;
   BladeDrag drag;
-  double tolerance_cells = 0.75;  ///< simplification: largest deviation from a chord, grid cells
+  double tolerance_cells = 0.75;  ///< simplification: largest deviation from a chord, grid cells (grid mode)
+  /// The same in exact and delete modes: the cut follows the hand, so only samples that add nothing to a
+  /// straight chord are dropped (the cut stays within this + the snap distance of the stroke).
+  double exact_tolerance_cells = 0.02;
   double max_lag_cells = 2.0;     ///< simplification: longest chord before it joins the cut
   double inside_margin_cells = 0.5;
 };
@@ -103,6 +126,10 @@ class StrokeCutter {
   /// Totals over every stroke.
   [[nodiscard]] const StrokeReport& total() const { return total_; }
   [[nodiscard]] const ClothCutter& cutter() const { return cutter_; }
+  /// The exact cutter (exact and delete modes), or nullptr in grid mode.
+  [[nodiscard]] const ExactCutter* exact() const { return exact_ ? &*exact_ : nullptr; }
+  /// Every point the exact/delete cut went through, per line (rest coordinates, cells), for pattern.svg.
+  [[nodiscard]] const std::vector<std::vector<Eigen::Vector2f>>& paths() const { return paths_; }
   [[nodiscard]] const StrokeOptions& options() const { return options_; }
 
  private:
@@ -112,15 +139,20 @@ class StrokeCutter {
     Eigen::Vector3f world;
     bool inside;
   };
-  void commit(GridCoord g, const Eigen::Vector3f& direction, TopologyChange& change);
-  void start_line(GridCoord g, const Eigen::Vector3f& direction, TopologyChange& change);
+  void commit(GridCoord g, const Eigen::Vector2d& uv, const Eigen::Vector3f& direction, TopologyChange& change);
+  void start_line(GridCoord g, const Eigen::Vector2d& uv, const Eigen::Vector3f& direction, TopologyChange& change);
   void close_line();
   void add_line_to_report(const std::vector<GridCoord>& line);
   [[nodiscard]] GridCoord boundary_point(const Eigen::Vector2d& uv) const;
+  [[nodiscard]] Eigen::Vector2d clamp_uv(const Eigen::Vector2d& uv) const;
+  [[nodiscard]] bool follows_path() const { return options_.mode != CutMode::Grid; }
 
   Cloth* cloth_;
   StrokeOptions options_;
   ClothCutter cutter_;
+  std::optional<ExactCutter> exact_;
+  std::optional<Eigen::Vector2d> path_end_;  // exact/delete: where the open line's cut ends
+  std::vector<std::vector<Eigen::Vector2f>> paths_;
   ClothLocator locator_;
   bool open_ = false;
   std::optional<CutLineBuilder> line_;      // while the stroke is inside the cloth

@@ -12,6 +12,7 @@ struct TopologyUpdate {
   std::uint32_t version = 0;
   std::vector<std::array<std::uint32_t, 3>> triangles;
   std::vector<std::uint8_t> pinned;
+  std::uint64_t session_id = 0;  ///< the simulator run: a restarted simulator's versions start again
 };
 
 struct StateUpdate {
@@ -46,6 +47,7 @@ class SceneState {
 
   Scene scene_;
   std::uint32_t positions_version_ = 0;
+  std::uint64_t session_id_ = 0;
   std::uint64_t frame_ = 0;
   std::uint64_t states_received_ = 0;
   std::uint32_t stroke_id_ = 0;

@@ -26,7 +26,7 @@ packages=(
   # DDS Security test PKI (scripts/make_test_pki.sh); libFuzzer targets and sanitizer builds (-DTACHI_FUZZ=ON)
   openssl clang
   # viewer under a virtual display
-  xvfb
+  xvfb xdotool imagemagick libx11-dev libxfixes-dev
 )
 
 missing=()

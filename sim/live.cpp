@@ -22,6 +22,7 @@ tachi_msg_CutEvent cut_msg(std::uint32_t cloth_id, std::uint32_t version, const 
   tachi_msg_CutEvent msg{};
   msg.cloth_id = cloth_id;
   msg.stroke_id = report.stroke_id;
+  msg.sensor_id = report.sensor_id;  // which hand source cut (camera hand, mouse blade)
   msg.topology_version = version;
   msg.cut_line._buffer = line.data();
   msg.cut_line._length = msg.cut_line._maximum = static_cast<std::uint32_t>(line.size());
@@ -75,10 +76,9 @@ int run_live(const OfflineOptions& shared, std::optional<int> max_steps, const L
     replayed = replay(journal->recovered(), session);
     (void)session.take_cut_reports();  // the previous run reported them
     (void)session.take_topology_change();  // published whole below
-    if (!journal->recovered().empty())
-      spdlog::info("tachi-sim: replayed {} journal records ({} steps, {} cut particles) from {} in {:.0f} ms",
-                   journal->recovered().size(), session.steps(), session.cutter().total().particles_duplicated,
-                   live.journal, std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
+    spdlog::info("tachi-sim: replayed {} journal records ({} steps, {} cut particles) from {} in {:.0f} ms",
+                 journal->recovered().size(), session.steps(), session.cutter().total().particles_duplicated,
+                 live.journal, std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
   }
 
   bus::Participant dds{live.bus.domain, live.bus.dds_config, {live.bus.secure_dir, live.bus.identity}};
@@ -99,6 +99,15 @@ int run_live(const OfflineOptions& shared, std::optional<int> max_steps, const L
   TopologyMessage topology;
   topology.fill(live.cloth_id, session.cloth(), nullptr, session_id);
   topology_writer.write(topology.msg());
+  constexpr auto kTopologyPeriod = std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(1.0 / 30.0));
+  constexpr auto kKeyframePeriod = std::chrono::seconds(1);
+  bus::Writer<tachi_msg_ClothTopologyDelta> delta_writer{dds, bus::topics::cloth_topology_delta};
+  TopologyDeltaMessage delta{session.cloth()};
+  auto last_topology = Clock::now();
+  auto last_keyframe = Clock::now();
+  bool keyframe_due = false;
+  std::uint64_t topology_updates = 0;
+  std::size_t topology_bytes = 0;
   std::vector<tachi_msg_GridCoord> cut_line;
 
   ObjectMessage object;
@@ -116,6 +125,7 @@ int run_live(const OfflineOptions& shared, std::optional<int> max_steps, const L
   std::uint64_t samples_in = 0, messages_out = 1, overruns = 0, grabs_refused = 0;
   bool had_filter = false;
   std::vector<double> step_ms;
+  heartbeat.set_metric("blade", static_cast<double>(shared.blade));  // index of Blade: the viewer's HUD names it
 
   common::run_until_stopped([&] {
     strokes.wait_for_data(std::max(next_step - Clock::now(), Clock::duration::zero()));
@@ -130,9 +140,13 @@ int run_live(const OfflineOptions& shared, std::optional<int> max_steps, const L
           it != replayed.end() && sample->time_ns <= it->second)
         continue;
       // A stroke is (sensor, filter session, stroke id): its samples' times never go back.
-      if (!guard.time(input->session_id ^ input->sensor_id, sample->time_ns)) continue;
-      const HandInput hand{input->stroke_id, input->time_s,  input->position_m,  input->tracked,
-                           input->cutting,   input->holding, input->session_id, input->grabbing};
+      // ... and its stroke ids never go back: a lower id names a stroke that already ended.
+      if (!guard.time(input->session_id ^ input->sensor_id, sample->time_ns) ||
+          !guard.id(input->session_id ^ input->sensor_id, input->stroke_id))
+        continue;
+      const HandInput hand{input->stroke_id, input->time_s,  input->position_m, input->tracked,
+                           input->cutting,   input->holding, input->session_id, input->sensor_id,
+                           input->grabbing};
       session.on_hand(hand);
       if (const auto why = session.take_grab_refusal()) {
         spdlog::warn("tachi-sim: {}", *why);
@@ -162,10 +176,26 @@ int run_live(const OfflineOptions& shared, std::optional<int> max_steps, const L
         next_step = Clock::now() + period;
         ++overruns;
       }
-      if (const auto change = session.take_topology_change()) {
-        topology.fill(live.cloth_id, session.cloth(), &*change, session_id);
+      // Topology changes are merged in the session and published as deltas at most 30 times a second (a
+      // stroke cuts on most steps at 60 Hz); the whole topology goes out as a keyframe for late joiners and
+      // readers that missed a delta at most once a second while cuts go on (issue 11).
+      if (Clock::now() - last_topology >= kTopologyPeriod) {
+        if (const auto change = session.take_topology_change()) {
+          delta.fill(live.cloth_id, session.cloth(), *change, session_id);
+          delta_writer.write(delta.msg());
+          ++messages_out;
+          ++topology_updates;
+          topology_bytes += delta.payload_bytes();
+          last_topology = Clock::now();
+          keyframe_due = true;
+        }
+      }
+      if (keyframe_due && Clock::now() - last_keyframe >= kKeyframePeriod) {
+        topology.fill(live.cloth_id, session.cloth(), nullptr, session_id);
         topology_writer.write(topology.msg());
         ++messages_out;
+        keyframe_due = false;
+        last_keyframe = Clock::now();
       }
       for (const auto& report : session.take_cut_reports()) {
         cut_writer.write(cut_msg(live.cloth_id, session.cloth().topology_version, report, cut_line, session_id));
@@ -195,7 +225,12 @@ int run_live(const OfflineOptions& shared, std::optional<int> max_steps, const L
     journal->flush();
   }
   if (const auto change = session.take_topology_change()) {
-    topology.fill(live.cloth_id, session.cloth(), &*change, session_id);
+    delta.fill(live.cloth_id, session.cloth(), *change, session_id);
+    delta_writer.write(delta.msg());
+    keyframe_due = true;
+  }
+  if (keyframe_due) {
+    topology.fill(live.cloth_id, session.cloth(), nullptr, session_id);
     topology_writer.write(topology.msg());
   }
   for (const auto& report : session.take_cut_reports())
@@ -204,6 +239,7 @@ int run_live(const OfflineOptions& shared, std::optional<int> max_steps, const L
       state_msg(live.cloth_id, session.steps(), session.time_s(), session.cloth(), session_id, session.held_particle()));
   // Let late readers (viewer, tests) receive the final topology and cuts before the process goes.
   topology_writer.wait_for_acks(std::chrono::seconds(1));
+  delta_writer.wait_for_acks(std::chrono::seconds(1));
   cut_writer.wait_for_acks(std::chrono::seconds(1));
 
   Summary summary = summarize(session.cloth());
@@ -214,6 +250,9 @@ int run_live(const OfflineOptions& shared, std::optional<int> max_steps, const L
   summary.extra["hand_samples"] = samples_in;
   summary.extra["hand_samples_rejected"] = rejected;
   summary.extra["step_overruns"] = overruns;
+  summary.extra["topology_updates"] = topology_updates;
+  summary.extra["topology_bytes_per_update"] = topology_updates > 0 ? topology_bytes / topology_updates : 0;
+  summary.extra["topology_keyframe_bytes"] = topology.payload_bytes();
   summary.extra["grabs_refused"] = grabs_refused;
   spdlog::info("tachi-sim: stopped after {} steps ({} hand samples, {} pieces)", summary.steps, samples_in, summary.pieces);
   if (!shared.export_dir.empty()) export_run(summary, session.cloth(), shared.export_dir, &session.cutter());

@@ -63,9 +63,9 @@ struct Result {
 
 Result ping(const Options& o, const std::string& self) {
   const std::string domain = std::to_string(o.domain);
-  std::vector<std::string> args{self, "--role", "echo", "--domain", domain, "--count", std::to_string(o.count), "--floats",
-                                std::to_string(o.floats)};
-  if (o.secure) args.insert(args.end(), {"--pki", o.pki, "--secure"});
+  std::vector<std::string> args{self,  "--role", "echo", "--domain", domain, "--count", std::to_string(o.count),
+                                "--floats", std::to_string(o.floats), "--pki", o.pki};
+  if (o.secure) args.emplace_back("--secure");
   std::vector<char*> argv;
   for (auto& a : args) argv.push_back(a.data());
   argv.push_back(nullptr);

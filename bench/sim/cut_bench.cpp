@@ -6,6 +6,7 @@
 #include "tachi/sim/cut_line.hpp"
 #include "tachi/sim/cutting.hpp"
 #include "tachi/sim/pieces.hpp"
+#include "tachi/sim/solver.hpp"
 #include "tachi/sim/stroke.hpp"
 
 #include <BulletSoftBody/btSoftBody.h>
@@ -17,6 +18,7 @@
 #include <cstdlib>
 #include <ctime>
 #include <memory>
+#include <string>
 #include <vector>
 
 namespace {
@@ -92,6 +94,117 @@ StrokeRun time_stroke(const Cloth& prototype, const std::vector<tachi::sim::Stro
   return run;
 }
 
+/// Exact mode (issue 11): the stroke cut at once on a cloth whose solver is warm, then the steps after it.
+struct ExactRun {
+  double stroke_ms = 0.0;      ///< median: locate, simplify, split triangles, separate, springs
+  double update_ms = 0.0;      ///< median: the solver's update after the cut (Solver::update_topology)
+  double step_ms = 0.0;        ///< median step (no cut)
+  double after_cut_ms = 0.0;   ///< median: the step right after the cut, its update included
+  std::size_t particles = 0;
+  std::size_t pieces = 0;
+  double deviation = 0.0;
+  std::size_t full_builds = 0;
+};
+
+ExactRun time_exact(const Cloth& prototype, const tachi::sim::Solver& warm,
+                    const std::vector<tachi::sim::StrokeSample>& stroke, tachi::sim::CutMode mode, int reps) {
+  ExactRun run;
+  std::vector<double> stroke_ms;
+  std::vector<double> after_ms;
+  std::vector<double> update_ms;
+  std::vector<double> step_ms;
+  for (int r = 0; r < reps; ++r) {
+    Cloth cloth = prototype;
+    tachi::sim::Solver solver = warm;
+    tachi::sim::StrokeOptions options;
+    options.mode = mode;
+    tachi::sim::StrokeCutter cutter{cloth, options};
+    for (int s = 0; s < 3; ++s) {  // plain steps, for the median
+      const auto t0 = cpu_ms();
+      solver.step(cloth);
+      step_ms.push_back(ms_since(t0));
+    }
+    const auto t0 = cpu_ms();
+    for (const auto& s : stroke) cutter.add_sample(s);
+    cutter.end_stroke();
+    stroke_ms.push_back(ms_since(t0));
+    const auto t2 = cpu_ms();
+    solver.update_topology(cloth);
+    update_ms.push_back(ms_since(t2));
+    const auto t1 = cpu_ms();
+    solver.step(cloth);
+    after_ms.push_back(ms_since(t1) + update_ms.back());
+    run.particles = cloth.particle_count();
+    run.pieces = tachi::sim::find_pieces(cloth).count();
+    run.deviation = cutter.exact() != nullptr ? cutter.exact()->max_deviation_cells() : 0.0;
+    run.full_builds = solver.full_builds();
+  }
+  run.stroke_ms = median(stroke_ms);
+  run.step_ms = median(step_ms);
+  run.after_cut_ms = median(after_ms);
+  run.update_ms = median(update_ms);
+  return run;
+}
+
+/// A long stroke (2 s, 120 samples, across and down) cut progressively on an N x N cloth while it steps:
+/// the worst frame (samples of the frame + the step), the first (full build) excepted, and the median.
+struct LiveRun {
+  double worst_cut_ms = 0.0;   ///< the samples of one frame (locate, cut)
+  double worst_step_ms = 0.0;  ///< one step (with the solver's update after a cut)
+  double worst_ms = 0.0;
+  double median_ms = 0.0;
+  double first_ms = 0.0;
+  std::size_t pieces = 0;
+  std::size_t full_builds = 0;
+  int worst_step_at = 0;
+};
+
+LiveRun time_long_stroke(int n, tachi::sim::CutMode mode) {
+  tachi::sim::ClothConfig config;
+  config.columns = n;
+  config.rows = n;
+  config.pin = tachi::sim::PinMode::TopEdge;
+  Cloth cloth{config};
+  tachi::sim::Solver solver;
+  tachi::sim::StrokeOptions options;
+  options.mode = mode;
+  tachi::sim::StrokeCutter cutter{cloth, options};
+  LiveRun run;
+  std::vector<double> frame_ms;
+  constexpr int kSteps = 240;
+  for (int s = 0; s < kSteps; ++s) {
+    const auto t0 = cpu_ms();
+    if (s >= 30 && s <= 150) {
+      const double u = (s - 30) / 120.0;
+      const float x = static_cast<float>(-0.55 + 1.1 * u);
+      const float y = static_cast<float>(0.3 - 0.5 * u + 0.1 * std::sin(6.0 * u));
+      cutter.add_sample({s / 60.0, Eigen::Vector3f{x, y, 0.0F}});
+      if (s == 150) cutter.end_stroke();
+    }
+    const double cut_ms = ms_since(t0);
+    const auto t1 = cpu_ms();
+    solver.step(cloth);
+    const double ms = ms_since(t0);
+    if (s > 0) {
+      run.worst_cut_ms = std::max(run.worst_cut_ms, cut_ms);
+      if (ms_since(t1) > run.worst_step_ms) {
+        run.worst_step_ms = ms_since(t1);
+        run.worst_step_at = s;
+      }
+    }
+    if (s == 0) {
+      run.first_ms = ms;
+    } else {
+      frame_ms.push_back(ms);
+    }
+  }
+  run.worst_ms = *std::max_element(frame_ms.begin(), frame_ms.end());
+  run.median_ms = median(frame_ms);
+  run.pieces = tachi::sim::find_pieces(cloth).count();
+  run.full_builds = solver.full_builds();
+  return run;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -159,5 +272,27 @@ int main(int argc, char** argv) {
   std::printf("  ratio per cut edge, Bullet / ours: %.0fx; whole stroke (%zu edges) vs Bullet at %zu links: %.0fx\n",
               bullet_median / (cut_median / static_cast<double>(std::max<std::size_t>(edges, 1))), edges, edges,
               bullet_median * static_cast<double>(edges) / stroke_median);
+
+  // Issue 11: exact mode, with the solver's incremental update, against the grid mode in the same process.
+  tachi::sim::Solver warm;
+  Cloth warm_cloth = prototype;
+  warm.step(warm_cloth);  // the full build happens here, before any cut
+  std::printf("exact cut (issue 11), %dx%d, wavy 64-segment stroke cut at once on a warm solver, %d reps:\n", n, n, reps);
+  for (const auto mode : {tachi::sim::CutMode::Exact, tachi::sim::CutMode::Grid, tachi::sim::CutMode::Delete}) {
+    const ExactRun e = time_exact(warm_cloth, warm, wavy_stroke(), mode, reps);
+    std::printf("  %-6s stroke %.3f ms + solver update %.3f ms = %.3f ms (target <= 0.5 ms); step after cut %.3f ms / "
+                "median step %.3f ms = %.2fx (target <= 1.5x); %zu particles, %zu pieces, deviation %.3f cells, full builds %zu\n",
+                std::string{tachi::sim::to_string(mode)}.c_str(), e.stroke_ms, e.update_ms, e.stroke_ms + e.update_ms,
+                e.after_cut_ms, e.step_ms, e.after_cut_ms / e.step_ms, e.particles, e.pieces, e.deviation, e.full_builds);
+  }
+  for (const int size : {128, 256}) {
+    for (const auto mode : {tachi::sim::CutMode::Exact, tachi::sim::CutMode::Grid}) {
+      const LiveRun l = time_long_stroke(size, mode);
+      std::printf("  %dx%d %-6s long stroke cut while stepping: worst frame %.2f ms (target <= 16 ms; worst cut %.2f ms, "
+                  "worst step %.2f ms at step %d), median %.2f ms, first step (full build) %.2f ms, %zu pieces, %zu full builds\n",
+                  size, size, std::string{tachi::sim::to_string(mode)}.c_str(), l.worst_ms, l.worst_cut_ms,
+                  l.worst_step_ms, l.worst_step_at, l.median_ms, l.first_ms, l.pieces, l.full_builds);
+    }
+  }
   return 0;
 }

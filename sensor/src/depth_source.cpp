@@ -11,11 +11,18 @@ RecordingSource::RecordingSource(const std::filesystem::path& dir, Playback play
   if (playback_.rate < 0.0) throw RecordingError("recording " + dir.string() + ": playback rate must be >= 0");
   for (auto& e : read_index(dir))
     if (e.kind == EntryKind::Depth) depth_entries_.push_back(std::move(e));
+  for (const auto& e : depth_entries_) depth_files_.push_back(dir_ / e.file);
 }
 
 std::optional<DepthFrame> RecordingSource::next() {
+  DepthFrame frame;
+  if (!next_into(frame)) return std::nullopt;
+  return frame;
+}
+
+bool RecordingSource::next_into(DepthFrame& frame) {
   if (position_ == depth_entries_.size()) {
-    if (!playback_.loop) return std::nullopt;
+    if (!playback_.loop) return false;
     // Keep the timeline monotonic across loops: the next pass starts one frame period later.
     const auto& first = depth_entries_.front();
     const auto& last = depth_entries_.back();
@@ -26,11 +33,11 @@ std::optional<DepthFrame> RecordingSource::next() {
     position_ = 0;
   }
   const IndexEntry& e = depth_entries_[position_];
-  DepthFrame frame;
   frame.frame = frames_out_;
   frame.stamp_ns = e.host_time_ns + loop_offset_ns_;
   frame.device_timestamp = e.device_timestamp;
-  read_depth_file(dir_ / e.file, frame.raw);
+  frame.accel.reset();
+  read_depth_file(depth_files_[position_], frame.raw, file_bytes_);
 
   if (playback_.rate > 0.0) {
     const auto now = std::chrono::steady_clock::now();
@@ -43,12 +50,12 @@ std::optional<DepthFrame> RecordingSource::next() {
       const double wait_s = static_cast<double>(frame.stamp_ns - start_host_ns_) * 1e-9 / playback_.rate;
       const auto due = *start_wall_ + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
                                           std::chrono::duration<double>(std::min(wait_s, 1e9)));
-      if (due > now && !common::sleep_unless_stopped(due)) return std::nullopt;
+      if (due > now && !common::sleep_unless_stopped(due)) return false;
     }
   }
   ++position_;
   ++frames_out_;
-  return frame;
+  return true;
 }
 
 }  // namespace tachi::sensor

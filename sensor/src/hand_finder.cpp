@@ -24,7 +24,6 @@ struct HandFinder::Impl {
   HandFinderParams params;
   std::array<std::uint16_t, 2048> foreground_below{};  // raw < this[bg] means foreground
   std::array<std::uint16_t, 2048> band_limit{};        // hand band: raw <= this[nearest raw]
-  std::array<std::uint16_t, 2048> narrow_band_limit{}; // the same, narrow_band_m deep
   // Per cell: the nearest depth that has stayed put for a while (what "static" means here: the
   // scene at start, furniture, a resting arm), the farthest depth seen (fallback where nothing was
   // stable yet), and the current run of steady readings.
@@ -45,6 +44,9 @@ struct HandFinder::Impl {
   std::vector<cv::Point> queue;
   cv::Mat kernel3 = cv::getStructuringElement(cv::MORPH_RECT, {3, 3});
   cv::Mat roi_mask, roi_closed, roi_dist;
+  cv::Mat roi_mask_buffer = cv::Mat(kDepthHeight + 2, kDepthWidth + 2, CV_8U);
+  cv::Mat roi_closed_buffer = cv::Mat(kDepthHeight + 2, kDepthWidth + 2, CV_8U);
+  cv::Mat roi_dist_buffer = cv::Mat(kDepthHeight + 2, kDepthWidth + 2, CV_32F);
   std::vector<std::uint16_t> palm_raw;
   bool tracking = false;
   cv::Point previous_cell{-1, -1};
@@ -56,7 +58,6 @@ struct HandFinder::Impl {
       const double z = model.metres(static_cast<std::uint16_t>(raw));
       foreground_below[raw] = raw_limit(z > 0 ? z - params.foreground_m : 0.0, false);
       band_limit[raw] = raw_limit(z > 0 ? z + params.hand_depth_band_m : 0.0, true);
-      narrow_band_limit[raw] = raw_limit(z > 0 ? z + params.narrow_band_m : 0.0, true);
     }
   }
 
@@ -86,7 +87,7 @@ struct HandFinder::Impl {
   bool turned_palm_stretch(std::span<const std::uint16_t> raw, int rx0, int ry0, int rx1, int ry1);
   cv::Matx23d stretch, unstretch;  // turned_palm_stretch's ROI -> stretched image, and back
   cv::Size stretched_size;
-  cv::Mat roi_stretched;
+  cv::Mat roi_stretched, stretched_dist;
   bool find_arm_end(std::span<const std::uint16_t> raw, Palm& palm, cv::Point& seed);
   bool palm_accepted(const Palm& palm) const;
   bool jumped(const Palm& palm) const;
@@ -175,10 +176,13 @@ bool HandFinder::Impl::measure(std::span<const std::uint16_t> raw, const cv::Rec
   if (!measure_in_band(raw, cells, near_raw, band_limit[near_raw], seed_cell, palm)) return false;
   // A circle much larger than a palm: the band reached something just behind the hand (a hand
   // against the chest, the torso 5-8 cm behind). A flat palm and its fingers lie within a few cm.
-  if (palm.radius_m <= params.narrow_band_above_m) return true;
-  Palm narrow;
-  if (!measure_in_band(raw, cells, near_raw, narrow_band_limit[near_raw], seed_cell, narrow)) return true;
-  palm = narrow;
+  // Halved again (1.75 cm) where the torso is nearer still.
+  const double z_near = model.metres(near_raw);
+  for (double band = params.narrow_band_m; palm.radius_m > params.narrow_band_above_m && band >= 0.015; band /= 2) {
+    Palm narrow;
+    if (!measure_in_band(raw, cells, near_raw, raw_limit(z_near + band, true), seed_cell, narrow)) break;
+    palm = narrow;
+  }
   return true;
 }
 
@@ -195,7 +199,11 @@ bool HandFinder::Impl::measure_in_band(std::span<const std::uint16_t> raw, const
   const int rw = rx1 - rx0, rh = ry1 - ry0;
 
   // Full-resolution hand mask in the ROI, with a zero border so the image edge bounds the palm.
-  roi_mask.create(rh + 2, rw + 2, CV_8U);
+  // Views of full-frame buffers made once: a ROI of a new size allocates nothing.
+  const cv::Rect roi_rect(0, 0, rw + 2, rh + 2);
+  roi_mask = roi_mask_buffer(roi_rect);
+  roi_closed = roi_closed_buffer(roi_rect);
+  roi_dist = roi_dist_buffer(roi_rect);
   roi_mask.setTo(0);
   const std::uint16_t slack_raw = near_raw > 20 ? static_cast<std::uint16_t>(near_raw - 20) : 0;
   for (int y = ry0; y < ry1; ++y) {
@@ -250,11 +258,11 @@ bool HandFinder::Impl::measure_in_band(std::span<const std::uint16_t> raw, const
   const float z_near = model.metres(near_raw);
   if (max_dist * z_near / k.fx < params.min_palm_radius_m && turned_palm_stretch(raw, rx0, ry0, rx1, ry1)) {
     cv::warpAffine(roi_closed, roi_stretched, stretch, stretched_size, cv::INTER_NEAREST, cv::BORDER_CONSTANT, cv::Scalar(0));
-    cv::distanceTransform(roi_stretched, roi_dist, cv::DIST_L2, cv::DIST_MASK_5);
+    cv::distanceTransform(roi_stretched, stretched_dist, cv::DIST_L2, cv::DIST_MASK_5);
     double stretched_max = 0;
-    cv::minMaxLoc(roi_dist, nullptr, &stretched_max, nullptr, &max_at);
+    cv::minMaxLoc(stretched_dist, nullptr, &stretched_max, nullptr, &max_at);
     if (stretched_max >= 2.0) {
-      const cv::Point2d c = plateau_centre(roi_dist, stretched_max, max_at);
+      const cv::Point2d c = plateau_centre(stretched_dist, stretched_max, max_at);
       centre = {unstretch(0, 0) * c.x + unstretch(0, 1) * c.y + unstretch(0, 2),
                 unstretch(1, 0) * c.x + unstretch(1, 1) * c.y + unstretch(1, 2)};
       size_px = stretched_max;
@@ -422,8 +430,9 @@ bool HandFinder::Impl::find_arm_end(std::span<const std::uint16_t> raw, Palm& pa
     const double z = model.metres(near_raw);
     const double w_m = box.width * kStep * z / k.fx, h_m = box.height * kStep * z / k.fy;
     if (std::max(w_m, h_m) < 0.05 || std::min(w_m, h_m) > 0.35) continue;
-    if (!measure(raw, box, near_raw, seed, palm)) continue;
-      if (!palm_accepted(palm) || !reaches_back(seed, near_raw)) continue;
+    if (z > params.max_acquire_depth_m) continue;  // nor here: a person walking by behind the user
+    // The grid test first: it is cheap, the full-resolution measure is not.
+    if (!reaches_back(seed, near_raw) || !measure(raw, box, near_raw, seed, palm) || !palm_accepted(palm)) continue;
     band_region.copyTo(arm);
     cv::dilate(arm, arm, kernel3);
     seed_out = seed;

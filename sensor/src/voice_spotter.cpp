@@ -4,6 +4,7 @@
 
 #include <pocketsphinx.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -19,6 +20,10 @@ struct KeywordSpotter::Impl {
   cmd_ln_t* cmdln = nullptr;
   ps_decoder_t* decoder = nullptr;
   long samples = 0;
+  long utterance_start = 0;         // sample at which the current utterance began
+  std::vector<std::int16_t> audio;  // the latest audio, from sample audio_start on
+  long audio_start = 0;
+  long last_hit_end = -1L << 30;  // sample at which the last reported hit ended (none yet)
 
   ~Impl() {
     if (decoder != nullptr) {
@@ -30,6 +35,10 @@ struct KeywordSpotter::Impl {
 };
 
 namespace {
+constexpr long kSamplesPerFrame = kVoiceSampleRate / 100;     // pocketsphinx's 10 ms frames
+constexpr std::size_t kKeepSamples = 4 * kVoiceSampleRate;   // replayable audio: longer than a phrase
+constexpr long kRedetectSamples = kVoiceSampleRate / 2;      // a hit ending < 0.5 s after the last one is it again
+
 // pocketsphinx reads keyword lists from a file only.
 std::string write_kws_file(const std::string& text) {
   std::string path = (std::filesystem::temp_directory_path() / "tachi-voice-XXXXXX").string();
@@ -79,12 +88,41 @@ std::vector<VoiceDetection> KeywordSpotter::process(std::span<const std::int16_t
   if (ps_process_raw(impl_->decoder, samples.data(), samples.size(), FALSE, FALSE) < 0)
     throw std::runtime_error("pocketsphinx failed to process audio");
   impl_->samples += static_cast<long>(samples.size());
-  const char* hyp = ps_get_hyp(impl_->decoder, nullptr);
-  if (hyp != nullptr && hyp[0] != '\0') {
-    for (const auto& p : phrases_in_hypothesis(hyp, impl_->config.phrases)) found.push_back({time_s(), p.command, p.phrase});
-    // Restart, or the same hit is reported with every later block.
+  // The utterance's audio (the last kKeepSamples of it), for the replay below.
+  impl_->audio.insert(impl_->audio.end(), samples.begin(), samples.end());
+  if (impl_->audio.size() > kKeepSamples) {
+    const std::size_t drop = impl_->audio.size() - kKeepSamples;
+    impl_->audio.erase(impl_->audio.begin(), impl_->audio.begin() + static_cast<std::ptrdiff_t>(drop));
+    impl_->audio_start += static_cast<long>(drop);
+  }
+  for (int round = 0; round < 4; ++round) {  // a replay may hold another hit; a few at most
+    const char* hyp = ps_get_hyp(impl_->decoder, nullptr);
+    if (hyp == nullptr || hyp[0] == '\0') break;
+    // Restart, or the same hit is reported with every later block; then replay the audio after the
+    // hit's end, which the decoder held and a restart alone drops: in "go forward ten meters" the
+    // second phrase follows the first at once and was never found that way (issue 14).
+    int last_end = -1;
+    for (ps_seg_t* seg = ps_seg_iter(impl_->decoder); seg != nullptr; seg = ps_seg_next(seg)) {
+      int start_frame = 0, end_frame = 0;
+      ps_seg_frames(seg, &start_frame, &end_frame);
+      last_end = std::max(last_end, end_frame);
+    }
+    // The replay can hold the tail of the phrase just reported ("... cutting"), found again ending
+    // just after it; a real next phrase ends at least a phrase's length later.
+    const long hit_end = impl_->utterance_start + (last_end + 1) * kSamplesPerFrame;
+    if (hit_end - impl_->last_hit_end >= kRedetectSamples) {
+      for (const auto& p : phrases_in_hypothesis(hyp, impl_->config.phrases)) found.push_back({time_s(), p.command, p.phrase});
+      impl_->last_hit_end = hit_end;
+    }
     ps_end_utt(impl_->decoder);
     ps_start_utt(impl_->decoder);
+    const long resume = std::max(impl_->utterance_start + (last_end + 1) * kSamplesPerFrame, impl_->audio_start);
+    impl_->utterance_start = resume;
+    const long from = resume - impl_->audio_start;
+    if (from >= static_cast<long>(impl_->audio.size())) break;
+    if (ps_process_raw(impl_->decoder, impl_->audio.data() + from, impl_->audio.size() - static_cast<std::size_t>(from), FALSE,
+                       FALSE) < 0)
+      throw std::runtime_error("pocketsphinx failed to process audio");
   }
   return found;
 }

@@ -7,6 +7,7 @@
 #include "tachi/sim/cloth.hpp"
 #include "tachi/sim/cutting.hpp"
 
+#include <array>
 #include <cstdint>
 #include <vector>
 
@@ -36,6 +37,8 @@ class TopologyMessage {
   /// filled version (the change may merge several cuts).
   void fill(std::uint32_t cloth_id, const Cloth& cloth, const TopologyChange* change, std::uint64_t session_id = 0);
   const tachi_msg_ClothTopology& msg() const { return msg_; }
+  /// Bytes of sequence payload the last filled message carries (what a cut costs on the wire, headers aside).
+  [[nodiscard]] std::size_t payload_bytes() const;
 
  private:
   tachi_msg_ClothTopology msg_{};
@@ -45,6 +48,30 @@ class TopologyMessage {
   std::vector<std::uint8_t> pinned_;
   std::vector<std::uint32_t> duplicated_from_;
   std::vector<std::uint32_t> changed_triangles_;
+};
+
+/// Owns the arrays a ClothTopologyDelta message points into, and the triangles as last published, so that a
+/// change (which names triangle slots) becomes the removed and added vertex triples a reader can apply.
+class TopologyDeltaMessage {
+ public:
+  /// Remembers the cloth as published (the keyframe).
+  explicit TopologyDeltaMessage(const Cloth& cloth);
+  /// What changed since the last fill (or the construction), as a delta from base to cloth.topology_version.
+  void fill(std::uint32_t cloth_id, const Cloth& cloth, const TopologyChange& change, std::uint64_t session_id);
+  const tachi_msg_ClothTopologyDelta& msg() const { return msg_; }
+  [[nodiscard]] std::size_t payload_bytes() const;
+
+ private:
+  tachi_msg_ClothTopologyDelta msg_{};
+  std::uint32_t version_;
+  std::size_t particles_;
+  std::vector<std::array<std::uint32_t, 3>> published_;  // per triangle slot
+  std::vector<std::uint8_t> published_alive_;
+  std::vector<tachi_msg_GridCoord> grid_;
+  std::vector<std::uint8_t> pinned_;
+  std::vector<std::uint32_t> removed_;
+  std::vector<std::uint32_t> added_;
+  std::vector<std::uint32_t> duplicated_from_;
 };
 
 /// A ClothState message whose positions point straight at the cloth's position array

@@ -123,7 +123,10 @@ void reserve_touched(std::vector<T>& v, std::size_t n) {
 
 }  // namespace
 
-void Cloth::reserve(std::size_t particles, std::size_t springs) {
+void Cloth::reserve(std::size_t particles, std::size_t springs, std::size_t triangle_slots) {
+  reserve_touched(triangles, triangle_slots);
+  reserve_touched(triangle_alive, triangle_slots);
+  reserve_touched(spring_edits, springs);
   reserve_touched(position, particles);
   reserve_touched(velocity, particles);
   reserve_touched(mass, particles);

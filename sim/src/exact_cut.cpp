@@ -85,7 +85,14 @@ ExactCutter::ExactCutter(Cloth& cloth, double snap_cells)
       snap_(snap_cells),
       cell_columns_(std::max(cloth.columns - 1, 1)),
       cell_rows_(std::max(cloth.rows - 1, 1)) {
-  cell_triangles_.resize(static_cast<std::size_t>(cell_columns_) * static_cast<std::size_t>(cell_rows_));
+  // Room for the cuts to come, reserved (pages touched) now rather than reallocated mid-stroke: a cut
+  // crossing a cell adds ~2 particles, ~6 springs and ~5 triangle slots there.
+  const std::size_t cells = static_cast<std::size_t>(cell_columns_) * static_cast<std::size_t>(cell_rows_);
+  cloth.reserve(cloth.particle_count() + cells / 2, cloth.spring_count() + 2 * cells,
+                cloth.triangle_count() + 2 * cells);
+  triangle_stamp_.reserve(cloth.triangle_count() + 2 * cells);
+  triangle_cell_.reserve(cloth.triangle_count() + 2 * cells);
+  cell_triangles_.resize(cells);
   for (std::uint32_t t = 0; t < cloth.triangle_count(); ++t) {
     if (cloth.triangle_alive[t] != 0) register_triangle(t);
   }

@@ -12,7 +12,8 @@ std::string journal_fingerprint(const SessionOptions& o) {
   std::ostringstream f;
   f << "grid=" << o.cloth.columns << 'x' << o.cloth.rows << " size=" << std::hexfloat << o.cloth.width_m << 'x'
     << o.cloth.height_m << " mass=" << o.cloth.total_mass_kg << std::defaultfloat
-    << " pin=" << static_cast<int>(o.cloth.pin) << " blade=" << to_string(o.stroke.blade) << " dt=" << std::hexfloat
+    << " pin=" << static_cast<int>(o.cloth.pin) << " blade=" << to_string(o.stroke.blade)
+    << " cut=" << to_string(o.stroke.mode) << " dt=" << std::hexfloat
     << o.solver.dt << std::defaultfloat << " substeps=" << o.solver.substeps << " iterations=" << o.solver.iterations
     << " hand=" << std::hexfloat << o.hand_radius_m << " solver=" << to_string(o.solver_kind)
     << " blade_force=" << o.blade_force_n.value_or(0.0F) << " material=" << o.material.mass_per_area_kg_m2 << ','
@@ -58,6 +59,7 @@ std::optional<JournalRecord> parse_record(const std::string& line) {
   h.cutting = (flags & 2) != 0;
   h.holding = (flags & 4) != 0;
   h.grabbing = (flags & 8) != 0;
+  h.sensor_id = r.sensor_id;  // the Session tells hand sources apart by it (mouse blade vs camera hand)
   return r;
 }
 

@@ -61,7 +61,8 @@ void Session::close_stroke() {
   approach_.reset();
   absorb(cutter_.end_stroke());
   const Pieces pieces = find_pieces(cloth_);
-  reports_.push_back({stroke_id_, cutter_.report(), pieces.count(), pieces.fallen(), blade_.max_force_n(), blade_.drag_m()});
+  reports_.push_back(
+      {stroke_id_, cutter_.report(), pieces.count(), pieces.fallen(), stroke_sensor_, blade_.max_force_n(), blade_.drag_m()});
   max_drag_m_ = std::max(max_drag_m_, blade_.drag_m());
   max_contact_force_n_ = std::max(max_contact_force_n_, blade_.max_force_n());
   blade_.end_stroke(cloth_);
@@ -95,6 +96,11 @@ void Session::on_grab(const HandInput& hand, bool seen) {
 }
 
 void Session::on_hand(const HandInput& hand) {
+  const bool same_source = hand.sensor_id == stroke_sensor_ && hand.session_id == stroke_session_;
+  if (stroke_active_) {
+    if (!same_source && time_s() - stroke_heard_s_ < kSilentSource_s) return;
+    if (same_source) stroke_heard_s_ = time_s();
+  }
   const bool seen = hand.tracked && hand.position_m.allFinite();
   if (hand.grabbing) {
     on_grab(hand, seen);
@@ -120,6 +126,7 @@ void Session::on_hand(const HandInput& hand) {
   if (stroke_active_ && (hand.stroke_id != stroke_id_ || hand.session_id != stroke_session_)) close_stroke();
   if (!stroke_active_) {
     stroke_id_ = hand.stroke_id;
+    stroke_sensor_ = hand.sensor_id;
     stroke_session_ = hand.session_id;
     stroke_active_ = true;
     absorb(cutter_.begin_stroke());

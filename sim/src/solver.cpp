@@ -56,6 +56,9 @@ namespace {
 
 constexpr std::uint32_t kNone = 0xFFFFFFFFU;
 constexpr float kInf = std::numeric_limits<float>::infinity();
+/// Particles a repair of the attachments settles per step at most (~0.3 ms here): a cut that re-routes
+/// the shortest paths of a whole piece (the last cuts before it comes off) is spread over a few steps.
+constexpr std::size_t kSettledPerStep = 2048;
 
 /// Octile distance between two rest coordinates (cells): the length of the shortest path along a
 /// grid's structural and shear springs, which Dijkstra over an uncut grid measures.
@@ -117,7 +120,10 @@ void Solver::refresh_caches(const Cloth& cloth) {
   const bool topology_same = cache_valid_ && cached_version_ == cloth.topology_version &&
                              cached_springs_ == cloth.spring_count() &&
                              cached_particles_ == cloth.particle_count();
-  if (topology_same && pins == cached_pins_) return;
+  if (topology_same && pins == cached_pins_) {
+    continue_searches(cloth);
+    return;
+  }
   // Incremental only when the change is one the cloth logged: springs edited through its functions and
   // particles appended. Anything else (new pins, a grab, arrays edited directly) is rebuilt in full.
   const bool logged = cache_valid_ && pins == cached_pins_ && cloth.spring_edits.size() > edits_read_ &&
@@ -149,9 +155,8 @@ void Solver::full_build(const Cloth& cloth, std::vector<std::uint32_t> pins) {
   }
   cached_pins_ = std::move(pins);
   build_attachments(cloth);
-  strain_limit_.clear();
-  limit_slot_.assign(cloth.spring_count(), kNone);
   append_springs(cloth, all);
+  order_strain_limit(cloth);
   lanes_ = 0;
   for (const auto& g : groups_) lanes_ += 4 * g.size();
 }
@@ -191,42 +196,48 @@ void Solver::append_springs(const Cloth& cloth, const std::vector<std::uint32_t>
       }
     }
     groups_[f].insert(groups_[f].end(), fresh.begin(), fresh.end());
-    if (f != static_cast<std::size_t>(SpringKind::Structural)) continue;
-    // The strain limit sweeps outwards from the pins (by the rest distance of the spring's nearer end);
-    // a cut's new springs go last. Pieces no pin holds (+inf) come after the rest.
-    const std::size_t first = strain_limit_.size();
-    for (const std::uint64_t e : order[f]) {
-      const auto k = static_cast<std::uint32_t>(e & 0xFFFFFFFFU);
-      std::uint32_t a = cloth.spring_a[k];
-      std::uint32_t b = cloth.spring_b[k];
-      if (nearest_[b] < nearest_[a]) std::swap(a, b);
-      strain_limit_.push_back({a, b, cloth.rest_length[k]});
-    }
-    std::vector<std::pair<float, std::uint32_t>> by_level;
-    by_level.reserve(order[f].size());
-    for (std::size_t i = 0; i < order[f].size(); ++i) {
-      by_level.emplace_back(nearest_[strain_limit_[first + i].a], static_cast<std::uint32_t>(i));
-    }
-    // Quantised to half a spacing, then stable: ties keep the grid order (measured in docs/sim.md).
-    const float unit = 0.5F * std::min(cloth.spacing_x(), cloth.spacing_y());
-    for (auto& [level, i] : by_level) level = std::isfinite(level) ? std::floor(level / unit) : kInf;
-    std::stable_sort(by_level.begin(), by_level.end(),
-                     [](const auto& x, const auto& y) { return x.first < y.first; });
-    std::vector<PackedSpring> sorted;
-    sorted.reserve(by_level.size());
-    for (const auto& [level, i] : by_level) {
-      const auto k = static_cast<std::uint32_t>(order[f][i] & 0xFFFFFFFFU);
-      limit_slot_[k] = static_cast<std::uint32_t>(first + sorted.size());
-      sorted.push_back(strain_limit_[first + i]);
-    }
-    std::copy(sorted.begin(), sorted.end(), strain_limit_.begin() + static_cast<std::ptrdiff_t>(first));
+  }
+}
+
+void Solver::order_strain_limit(const Cloth& cloth) {
+  // Outwards from the pins, by the rest distance of the spring's nearer end quantised to half a spacing,
+  // ties in spring order (measured in docs/sim.md); pieces no pin holds (+inf) last. Redone after every
+  // cut because a cut lengthens the distances behind it: a counting sort, linear in the springs.
+  const float unit = 0.5F * std::min(cloth.spacing_x(), cloth.spacing_y());
+  const auto grid_particles = static_cast<std::uint32_t>(cloth.columns * cloth.rows);
+  auto& level = limit_level_;
+  level.clear();
+  std::uint32_t top = 0;
+  for (std::uint32_t k = 0; k < cloth.spring_count(); ++k) {
+    if (cloth.alive[k] == 0 || cloth.kind[k] != SpringKind::Structural) continue;
+    const float d = std::min(nearest_[cloth.spring_a[k]], nearest_[cloth.spring_b[k]]);
+    const std::uint32_t l = std::isfinite(d) ? static_cast<std::uint32_t>(d / unit) : kNone;
+    if (l != kNone) top = std::max(top, l);
+    level.emplace_back(l, k);
+  }
+  auto& start = limit_start_;
+  start.assign(static_cast<std::size_t>(top) + 3, 0);
+  for (auto& [l, k] : level) {
+    if (l == kNone) l = top + 1;
+    ++start[l + 1];
+  }
+  for (std::size_t l = 1; l < start.size(); ++l) start[l] += start[l - 1];
+  strain_limit_.resize(level.size());
+  for (const auto& [l, k] : level) {
+    std::uint32_t na = cloth.spring_a[k];
+    std::uint32_t nb = cloth.spring_b[k];
+    if (nearest_[nb] < nearest_[na]) std::swap(na, nb);
+    // Strictly nearer by a tenth of the spring: along the way out from the pins, not across it.
+    const bool leads = std::isfinite(nearest_[nb]) && nearest_[na] + 0.1F * cloth.rest_length[k] < nearest_[nb];
+    const bool by_cut = na >= grid_particles || nb >= grid_particles;
+    const LimitFollow follow = !leads ? LimitFollow::Never : by_cut ? LimitFollow::Always : LimitFollow::LastSweep;
+    strain_limit_[start[l]++] = {na, nb, cloth.rest_length[k], follow};
   }
 }
 
 void Solver::update_incrementally(const Cloth& cloth) {
   ++incremental_updates_;
   slot_.resize(cloth.spring_count(), Slot{});
-  limit_slot_.resize(cloth.spring_count(), kNone);
   // The springs the cut edited, once each; the particles they touched before and after.
   std::vector<std::uint32_t> edited(cloth.spring_edits.begin() + static_cast<std::ptrdiff_t>(edits_read_),
                                     cloth.spring_edits.end());
@@ -245,10 +256,6 @@ void Solver::update_incrementally(const Cloth& cloth) {
       s = Slot{};
       ++blanked_;
     }
-    if (limit_slot_[k] != kNone) {
-      strain_limit_[limit_slot_[k]].rest = kInf;  // never over the limit: skipped
-      limit_slot_[k] = kNone;
-    }
     if (cloth.alive[k] != 0) {
       touched.push_back(cloth.spring_a[k]);
       touched.push_back(cloth.spring_b[k]);
@@ -259,24 +266,32 @@ void Solver::update_incrementally(const Cloth& cloth) {
   touched.erase(std::unique(touched.begin(), touched.end()), touched.end());
   update_attachments(cloth, touched);
   append_springs(cloth, edited);
+  order_strain_limit(cloth);
 }
 
-void Solver::run_search(const Cloth& cloth, Search& search, const std::vector<std::uint8_t>* only) {
-  // Dijkstra over live structural and shear springs (rest lengths). With `only`, the distances of the
-  // other particles are final and only the marked ones are relaxed (the decremental case: a cut only
-  // lengthens paths, so a particle whose shortest path the cut did not touch keeps it).
-  auto& heap = heap_;
+bool Solver::run_search(const Cloth& cloth, Search& search, bool repair, std::size_t budget) {
+  // Dijkstra over live structural and shear springs (rest lengths), at most `budget` particles settled per
+  // call. A repair (after a cut) relaxes only the open particles: the others' distances are final (a cut
+  // only lengthens paths, so a particle whose shortest path the cut did not touch keeps it); each particle
+  // it settles gets its tether back. Returns true when the search is complete.
+  auto& heap = search.heap;
   const auto greater = [](const auto& x, const auto& y) { return x.first > y.first; };
-  std::make_heap(heap.begin(), heap.end(), greater);
-  while (!heap.empty()) {
+  while (!heap.empty() && budget > 0) {
     std::pop_heap(heap.begin(), heap.end(), greater);
     const auto [d, i] = heap.back();
     heap.pop_back();
-    if (d > search.dist[i]) continue;
+    if (d != search.dist[i]) continue;  // superseded: a shorter path came, or a later cut reset it
+    if (repair) {
+      if (search.open[i] == 0) continue;
+      search.open[i] = 0;
+      if (params_.long_range_attachments) attach(cloth, search, i);
+      refresh_nearest(i);
+    }
+    --budget;
     for (const std::uint32_t k : cloth.springs_of(i)) {
       if (cloth.kind[k] == SpringKind::Bend) continue;
       const std::uint32_t j = cloth.spring_a[k] == i ? cloth.spring_b[k] : cloth.spring_a[k];
-      if (only != nullptr && (*only)[j] == 0) continue;
+      if (repair && search.open[j] == 0) continue;
       const float dj = d + cloth.rest_length[k];
       if (dj < search.dist[j]) {
         search.dist[j] = dj;
@@ -287,6 +302,31 @@ void Solver::run_search(const Cloth& cloth, Search& search, const std::vector<st
       }
     }
   }
+  if (!heap.empty()) return false;
+  // What the repair never reached is cut off from this pin: no tether (set when it was opened).
+  for (const std::uint32_t i : search.open_list) search.open[i] = 0;
+  search.open_list.clear();
+  return true;
+}
+
+void Solver::refresh_nearest(std::uint32_t i) {
+  float d = kInf;
+  for (const Search& search : searches_) {
+    if (i < search.dist.size()) d = std::min(d, search.dist[i]);
+  }
+  nearest_[i] = d;
+}
+
+void Solver::continue_searches(const Cloth& cloth) {
+  bool pending = false;
+  bool progressed = false;
+  for (Search& search : searches_) {
+    if (search.heap.empty() && search.open_list.empty()) continue;
+    progressed = true;
+    pending = !run_search(cloth, search, true, kSettledPerStep) || pending;
+  }
+  // Settled particles change the strain limit's order (their distance to the pins): redo it once done.
+  if (progressed && !pending) order_strain_limit(cloth);
 }
 
 void Solver::attach(const Cloth& cloth, Search& search, std::uint32_t i) {
@@ -332,13 +372,15 @@ void Solver::build_attachments(const Cloth& cloth) {
     search.parent.assign(n, kNone);
     search.owner.assign(n, kNone);
     search.attachment.assign(n, kNone);
-    heap_.clear();
+    search.open.assign(n, 0);
+    search.open_list.clear();
+    search.heap.clear();
     for (const std::uint32_t s : search.sources) {
       search.dist[s] = 0.0F;
       search.owner[s] = s;
-      heap_.emplace_back(0.0F, s);
+      search.heap.emplace_back(0.0F, s);
     }
-    run_search(cloth, search, nullptr);
+    run_search(cloth, search, false, std::numeric_limits<std::size_t>::max());
     for (std::uint32_t i = 0; i < n; ++i) {
       if (params_.long_range_attachments) attach(cloth, search, i);
       nearest_[i] = std::min(nearest_[i], search.dist[i]);
@@ -369,6 +411,7 @@ void Solver::update_attachments(const Cloth& cloth, const std::vector<std::uint3
     search.parent.resize(n, kNone);
     search.owner.resize(n, kNone);
     search.attachment.resize(n, kNone);
+    search.open.resize(n, 0);
     affected_.assign(n, 0);
     stack.clear();
     for (const std::uint32_t i : touched) {
@@ -406,17 +449,20 @@ void Solver::update_attachments(const Cloth& cloth, const std::vector<std::uint3
         }
       }
     }
+    // Opened: no tether until the repair settles them (a particle cut off from the pin never gets one).
     for (const std::uint32_t i : affected_list) {
       search.dist[i] = kInf;
       search.parent[i] = kNone;
       search.owner[i] = kNone;
+      if (search.open[i] == 0) search.open_list.push_back(i);
+      search.open[i] = 1;
+      if (params_.long_range_attachments) attach(cloth, search, i);
     }
-    heap_.clear();
     for (const std::uint32_t i : affected_list) {
       for (const std::uint32_t k : cloth.springs_of(i)) {
         if (cloth.kind[k] == SpringKind::Bend) continue;
         const std::uint32_t j = cloth.spring_a[k] == i ? cloth.spring_b[k] : cloth.spring_a[k];
-        if (affected_[j] != 0 || !std::isfinite(search.dist[j])) continue;
+        if (search.open[j] != 0 || !std::isfinite(search.dist[j])) continue;
         const float d = search.dist[j] + cloth.rest_length[k];
         if (d < search.dist[i]) {
           search.dist[i] = d;
@@ -424,19 +470,18 @@ void Solver::update_attachments(const Cloth& cloth, const std::vector<std::uint3
           search.owner[i] = search.owner[j];
         }
       }
-      if (std::isfinite(search.dist[i])) heap_.emplace_back(search.dist[i], i);
-    }
-    run_search(cloth, search, &affected_);
-    for (const std::uint32_t i : affected_list) {
-      if (params_.long_range_attachments) attach(cloth, search, i);
+      if (std::isfinite(search.dist[i])) {
+        search.heap.emplace_back(search.dist[i], i);
+        std::push_heap(search.heap.begin(), search.heap.end(),
+                       [](const auto& x, const auto& y) { return x.first > y.first; });
+      }
     }
     all_affected.insert(all_affected.end(), affected_list.begin(), affected_list.end());
   }
-  // Nearest pin, for the strain limit's order of the new springs.
-  for (const std::uint32_t i : all_affected) {
-    float d = kInf;
-    for (const Search& search : searches_) d = std::min(d, search.dist[i]);
-    nearest_[i] = d;
+  for (const std::uint32_t i : all_affected) refresh_nearest(i);
+  // The repair itself, within this step's budget; continue_searches goes on with it in the next steps.
+  for (Search& search : searches_) {
+    if (!search.open_list.empty()) run_search(cloth, search, true, kSettledPerStep);
   }
 }
 
@@ -578,7 +623,11 @@ void Solver::substep(Cloth& cloth, const Colliders& colliders, float h, bool fir
   }
 
   // 5. Provot's deformation constraint: a structural spring longer than (1 + max_strain) L is brought
-  // back (Provot 1995, section 4), sweeping outwards from the pins.
+  // back (Provot 1995, section 4), sweeping outwards from the pins. Provot moves both ends unless one is
+  // fixed; here the end nearer to a pin counts as fixed (follow the leader, Mueller et al. 2012, "Fast
+  // simulation of inextensible hair and fur"): the correction then travels outwards with the sweep instead
+  // of being undone by the next spring, which a cut's tip (all the weight below hanging on a few short
+  // springs) otherwise needs dozens of sweeps for.
   // A violating spring is brought to 95 % of the allowed stretch, not exactly to it: the corrections of
   // its neighbours then push it back towards, not over, the limit (a 256^2 cloth otherwise rests with a
   // few springs at 10.08 %).
@@ -587,14 +636,29 @@ void Solver::substep(Cloth& cloth, const Colliders& colliders, float h, bool fir
   // A correction can stretch a spring swept earlier, so sweeps repeat until one finds nothing to
   // correct (usually the first: the scan without a square root is cheap) or the budget is spent.
   for (int pass = 0; pass < params_.strain_limit_passes; ++pass) {
+    // Everywhere in the last sweep; from the second sweep on next to a cut (a spring touching a particle
+    // a cut made), where the weight below a tip hangs on a few short springs.
+    const bool follow_all = params_.strain_limit_follow && pass > 0 && pass + 1 == params_.strain_limit_passes;
+    const bool follow_cut = params_.strain_limit_follow && pass > 0;
     std::size_t corrections = 0;
-    for (const PackedSpring& s : strain_limit_) {
-      const Vec4 d = (x[s.b] - x[s.a]).cwiseProduct(kXyz);
+    for (const LimitSpring& s : strain_limit_) {
+      Vec4& pa = x[s.a];
+      Vec4& pb = x[s.b];
+      const Vec4 d = (pb - pa).cwiseProduct(kXyz);
       const float target = limit * s.rest;
-      if (d.squaredNorm() > target * target) {
-        project_distance<Length::Exact>(x[s.a], x[s.b], corrected * s.rest, 0.0F);
-        ++corrections;
-      }
+      const float len2 = d.squaredNorm();
+      if (!(len2 > target * target)) continue;
+      const float wb = pb.w();
+      const bool follow = s.follow == LimitFollow::Always ? follow_all || follow_cut
+                          : s.follow == LimitFollow::LastSweep ? follow_all
+                                                               : false;
+      const float wa = follow && wb > 0.0F ? 0.0F : pa.w();
+      if (wa + wb == 0.0F) continue;
+      const float len = std::sqrt(len2);
+      const float c = (len - corrected * s.rest) / (len * (wa + wb));
+      pa += (wa * c) * d;
+      pb -= (wb * c) * d;
+      ++corrections;
     }
     if (corrections == 0) break;
   }

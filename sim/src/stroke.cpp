@@ -231,6 +231,11 @@ void StrokeCutter::commit(GridCoord g, const Eigen::Vector2d& uv, const Eigen::V
       ++report_.lines;
       ++total_.lines;
     }
+    // The grid points nearest the path, for readers of cut_line (CutEvent, summary) in every mode.
+    const GridCoord nearest = boundary_point(to);
+    for (StrokeReport* r : {&report_, &total_}) {
+      if (!from || r->cut_line.empty() || !(r->cut_line.back() == nearest)) r->cut_line.push_back(nearest);
+    }
     if (!from || !moved) return;
     // The cut goes straight from where it ended to this point of the stroke, on the stroke's own path.
     const TopologyChange cut =

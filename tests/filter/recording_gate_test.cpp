@@ -5,6 +5,8 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -74,16 +76,17 @@ class RecordingGate : public ::testing::Test {
  protected:
 
   /// Plays a recording through the sensor and the filter; returns (ground truth, filter output).
-  std::pair<Table, Table> run(const std::string& scenario) {
+  std::pair<Table, Table> run(const std::string& scenario, const std::vector<std::string>& filter_flags = {}) {
     const fs::path recording = fs::path(TACHI_RECORDINGS_DIR) / scenario;
     EXPECT_TRUE(fs::exists(recording / "INDEX.txt")) << recording;
     auto r = tachi::test::run({TACHI_SENSOR_EXE, "--recording", recording.string(), "--rate", "max", "--no-dds", "--csv",
                                (dir_ / "hands.csv").string()},
                               120s);
     EXPECT_EQ(r.exit_code, 0) << r.err;
-    r = tachi::test::run({TACHI_FILTER_EXE, "--offline", "--hands", (dir_ / "hands.csv").string(), "--out",
-                          (dir_ / "strokes.csv").string()},
-                         60s);
+    std::vector<std::string> filter{TACHI_FILTER_EXE, "--offline", "--hands", (dir_ / "hands.csv").string(), "--out",
+                                    (dir_ / "strokes.csv").string()};
+    filter.insert(filter.end(), filter_flags.begin(), filter_flags.end());
+    r = tachi::test::run(filter, 60s);
     EXPECT_EQ(r.exit_code, 0) << r.err;
     return {read_csv(recording / "ground_truth.csv"), read_csv(dir_ / "strokes.csv")};
   }
@@ -117,6 +120,56 @@ TEST_F(RecordingGate, EachPushTowardTheClothAndBackIsOneStroke) {
 TEST_F(RecordingGate, AJitteryCutIsOneStroke) {
   const auto [truth, out] = run("jitter");
   EXPECT_EQ(strokes(out).size(), 1U);
+}
+
+// recordings/jitter through tachi-sensor and tachi-filter's default smoother (One Euro as published):
+// against the path without tremor, on the stroke itself (intended speed < 0.5 m/s), it halves the raw
+// error once its lag is removed, and that lag is at most one frame (docs/filter.md, issue 14).
+TEST_F(RecordingGate, TheDefaultSmootherHalvesTheTremorWithinAFrameOfLag) {
+  const auto [truth, out] = run("jitter", {"--camera-frame"});
+  const auto hands = read_csv(dir_ / "hands.csv");
+  std::map<long, std::array<double, 3>> intended;
+  for (const auto& row : truth)
+    intended[std::stol(row.at("frame"))] = {std::stod(row.at("intended_x")), std::stod(row.at("intended_y")),
+                                            std::stod(row.at("intended_z"))};
+  const auto stroke_frame = [&](long f) {
+    const auto a = intended.find(f), b = intended.find(f + 1);
+    if (a == intended.end() || b == intended.end() || truth.at(static_cast<std::size_t>(f)).at("visible") != "1") return false;
+    double d2 = 0;
+    for (int i = 0; i < 3; ++i) d2 += (b->second[i] - a->second[i]) * (b->second[i] - a->second[i]);
+    return std::sqrt(d2) * 30.0 < 0.5;
+  };
+  // RMS distance to the intended path shifted by `shift` frames (linear between frames).
+  const auto rms_at = [&](const Table& rows, double shift) {
+    double sum = 0;
+    int n = 0;
+    for (const auto& row : rows) {
+      const long f = std::stol(row.at("frame"));
+      if (row.at("x") == "nan" || (row.count("tracked") && row.at("tracked") != "1") || !stroke_frame(f)) continue;
+      const double t = static_cast<double>(f) - shift;
+      const auto a = intended.find(static_cast<long>(std::floor(t))), b = intended.find(static_cast<long>(std::floor(t)) + 1);
+      if (a == intended.end() || b == intended.end()) continue;
+      const double w = t - std::floor(t);
+      const std::array<double, 3> p{std::stod(row.at("x")), std::stod(row.at("y")), std::stod(row.at("z"))};
+      for (int i = 0; i < 3; ++i) {
+        const double q = (1 - w) * a->second[i] + w * b->second[i];
+        sum += (p[i] - q) * (p[i] - q);
+      }
+      ++n;
+    }
+    return n > 50 ? std::sqrt(sum / n) : 1e9;
+  };
+  const auto best = [&](const Table& rows) {
+    std::pair<double, double> b{1e9, 0};  // (rms, shift)
+    for (double shift = -3.0; shift <= 6.0; shift += 0.05) b = std::min(b, std::pair{rms_at(rows, shift), shift});
+    return b;
+  };
+  const auto [raw_rms, raw_lag] = best(hands);
+  const auto [smooth_rms, smooth_lag] = best(out);
+  EXPECT_LT(raw_rms, 0.02);  // the sensor's samples: tremor (6 mm per axis) plus sensor error
+  EXPECT_LE(smooth_rms, 0.5 * raw_rms) << "raw " << raw_rms << " m, smoothed " << smooth_rms << " m";
+  EXPECT_LE(smooth_lag, 1.0);
+  EXPECT_GE(smooth_lag, 0.0);
 }
 
 }  // namespace

@@ -71,10 +71,14 @@ TEST_F(VoiceCli, WavModePrintsOneLinePerCommand) {
 
 TEST_F(VoiceCli, OtherPhrasesAreConfigurableFromTheCommandLine) {
   const auto r = tachi::test::run({TACHI_VOICE_EXE, "--raw", tachi::sensor::testing::kTestData + "/goforward.raw",
-                                   "--start-phrase", "go forward", "--no-dds"},
+                                   "--start-phrase", "go forward", "--stop-phrase", "ten meters", "--no-dds"},
                                   60s);
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_NE(r.out.find(",start,go forward\n"), std::string::npos) << r.out;
+  // "go forward ten meters": both, in order (the stop phrase follows the start phrase at once).
+  const auto start = r.out.find(",start,go forward\n"), stop = r.out.find(",stop,ten meters\n");
+  EXPECT_NE(start, std::string::npos) << r.out;
+  EXPECT_NE(stop, std::string::npos) << r.out;
+  EXPECT_LT(start, stop) << r.out;
 }
 
 TEST_F(VoiceCli, MissingDevicesExitWithTheNoDeviceCode) {

@@ -28,6 +28,20 @@ TEST(VoiceSpotter, RealSpeechGoForwardIsSpotted) {
   EXPECT_LT(found[0].time_s, 2.0);
 }
 
+TEST(VoiceSpotter, RealSpeechAPhraseRightAfterAnotherIsSpottedToo) {
+  // "go forward ten meters": the stop phrase starts as the start phrase ends. Restarting the
+  // decoder after the first hit without replaying the audio it held lost the second (issue 14).
+  VoiceConfig c;
+  set_phrase(c, VoiceCommand::Start, "go forward");
+  set_phrase(c, VoiceCommand::Stop, "ten meters");
+  const auto found = spot_commands(c, read_raw_file(kTestData + "/goforward.raw").samples);
+  EXPECT_EQ(phrases_of(found), (std::vector<std::string>{"go forward", "ten meters"}));
+  ASSERT_EQ(found.size(), 2U);
+  EXPECT_EQ(found[1].command, VoiceCommand::Stop);
+  EXPECT_GT(found[1].time_s, found[0].time_s);
+  EXPECT_LT(found[1].time_s, 3.0);
+}
+
 TEST(VoiceSpotter, RealSpeechTwoWordPhrasesAreSpottedInOrder) {
   // cards/005.wav says "eight of spades four of clubs seven of hearts".
   VoiceConfig c;

@@ -43,7 +43,7 @@ Summary cut_with(Blade blade, const std::filesystem::path& stroke, int steps) {
   o.cloth.pin = PinMode::TopEdge;
   o.blade = blade;
   // Seed 000's grid-line cut: its cut length is the rest length of grid lines, which does not grow when a
-  // dragged cloth makes the stroke's path on it wander (the exact cut's does: docs/cutting.md section 8).
+  // dragged cloth makes the stroke's path on it wander (the exact cut's does: docs/cutting.md section 9).
   o.cut_mode = CutMode::Grid;
   o.stroke_file = stroke;
   o.steps = steps;

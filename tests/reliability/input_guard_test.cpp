@@ -40,6 +40,16 @@ TEST(InputGuard, RefusesTimeGoingBackPerSourceButNotARestartedSource) {
   EXPECT_TRUE(c.guard.time(1, 200, 500));
 }
 
+TEST(InputGuard, RefusesAStrokeIdThatGoesBack) {
+  Counted c;
+  EXPECT_TRUE(c.guard.id(1, 3));
+  EXPECT_TRUE(c.guard.id(1, 3));
+  EXPECT_TRUE(c.guard.id(1, 4));
+  EXPECT_FALSE(c.guard.id(1, 2));
+  EXPECT_TRUE(c.guard.id(2, 1));  // another session numbers its own strokes
+  EXPECT_EQ(c.reasons["stale_id"], 1);
+}
+
 TEST(InputGuard, AFloodOfMadeUpSourcesStaysBounded) {
   Counted c;
   for (std::uint64_t s = 0; s < 10'000; ++s) c.guard.time(s, 1);

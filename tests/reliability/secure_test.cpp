@@ -116,14 +116,18 @@ TEST(SecureBus, AMissingCredentialFileIsAnErrorNamingIt) {
   EXPECT_NE(r.err.find("nobody.cert.pem does not exist"), std::string::npos) << r.err;
 }
 
-// The recorded straight cut through the whole pipeline, every node authenticated, access-controlled
-// and encrypted: the same cut as the plain pipeline's test (tests/e2e/pipeline_test.cpp).
+// The recorded straight cut through the whole pipeline (sensor, filter, sim, viewer), every node
+// authenticated, access-controlled and encrypted: the same cut as the plain pipeline's test
+// (tests/e2e/pipeline_test.cpp).
 TEST(SecurePipeline, CutsTheRecordingLikeThePlainOne) {
   tachi::test::ScratchDir out{"secure_pipeline"};
   const std::string d = "177";
   const std::string& pki = Pki::ours();
-  ChildProcess sim({kBin + "/tachi-sim", "--grid", "32", "--pin", "top-edge", "--domain", d, "--exit-when-idle", "2",
-                    "--export", out.path().string(), "--secure", pki});
+  // Grid cuts, as the plain pipeline test was written for: this test is about security, not cut modes.
+  ChildProcess sim({kBin + "/tachi-sim", "--grid", "32", "--pin", "top-edge", "--cut-mode", "grid", "--domain", d,
+                    "--exit-when-idle", "2", "--export", out.path().string(), "--secure", pki});
+  ChildProcess viewer({kBin + "/tachi-viewer", "--headless", "--domain", d, "--snapshot", (out / "final.png").string(),
+                       "--fps", "10", "--exit-when-idle", "3", "--secure", pki});
   ChildProcess filter({kBin + "/tachi-filter", "--domain", d, "--gate", "threshold", "--secure", pki});
   // An intruder without credentials listens to the strokes the whole time.
   ChildProcess intruder(peer("strokes-sub", 177, "", "", {"--count", "1", "--timeout", "15"}));
@@ -131,13 +135,20 @@ TEST(SecurePipeline, CutsTheRecordingLikeThePlainOne) {
                        "--wait-readers", "1", "--secure", pki});
   const int sensor_exit = sensor.wait(120s);
   const int sim_exit = sim.wait(60s);
+  const int viewer_exit = viewer.wait(30s);
   filter.signal(SIGINT);
   const int filter_exit = filter.wait(20s);
   intruder.wait(30s);
-  const std::string logs = "sensor: " + sensor.err() + "\nfilter: " + filter.err() + "\nsim: " + sim.err();
+  const std::string logs =
+      "sensor: " + sensor.err() + "\nfilter: " + filter.err() + "\nsim: " + sim.err() + "\nviewer: " + viewer.err();
   EXPECT_EQ(sensor_exit, 0) << logs;
   EXPECT_EQ(filter_exit, 0) << logs;
   EXPECT_EQ(sim_exit, 0) << logs;
+  EXPECT_EQ(viewer_exit, 0) << logs;
+  // The viewer (read-only grant) received the secure cloth and drew it.
+  EXPECT_TRUE(std::filesystem::exists(out / "final.png")) << logs;
+  EXPECT_NE(viewer.err().find("cloth states received"), std::string::npos) << logs;
+  EXPECT_EQ(viewer.err().find(" 0 cloth states received"), std::string::npos) << logs;
   std::ifstream in(out / "summary.json");
   const auto summary = nlohmann::json::parse(in, nullptr, false);
   ASSERT_TRUE(summary.is_object()) << logs;

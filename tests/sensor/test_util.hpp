@@ -38,6 +38,7 @@ inline std::vector<std::uint16_t> ramp_frame(std::uint16_t offset) {
 
 inline std::string recordings_dir() { return TACHI_RECORDINGS_DIR; }
 
+#ifdef TACHI_SCENARIO_DIR
 /// Every bundled scenario (a spec in recordings/scenarios, rendered at build time), sorted, so a
 /// new spec is tested without being listed again here.
 inline std::vector<std::string> scenario_names() {
@@ -47,5 +48,6 @@ inline std::vector<std::string> scenario_names() {
   std::sort(names.begin(), names.end());
   return names;
 }
+#endif
 
 }  // namespace tachi::sensor::test

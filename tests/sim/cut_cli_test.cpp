@@ -7,6 +7,7 @@
 #include <chrono>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <string>
 #include <unistd.h>
 
@@ -44,9 +45,10 @@ class CutCli : public ::testing::Test {
 };
 
 TEST_F(CutCli, FullWidthStrokeCutsOffTheLowerPieceWhichFalls) {
+  // Seed 000's cut along the grid line (--cut-mode grid reproduces it).
   const fs::path stroke = write_stroke(-0.1);
   const fs::path out = dir_ / "out";
-  const auto r = sim({"--offline", "--grid", "64", "--pin", "top-edge", "--stroke", stroke.string(), "--blade",
+  const auto r = sim({"--offline", "--cut-mode", "grid", "--grid", "64", "--pin", "top-edge", "--stroke", stroke.string(), "--blade",
                       "scalpel", "--steps", "300", "--export", out.string()});
   ASSERT_EQ(r.exit_code, 0) << r.err;
   std::ifstream in{out / "summary.json"};
@@ -80,6 +82,55 @@ TEST_F(CutCli, FullWidthStrokeCutsOffTheLowerPieceWhichFalls) {
   }
   EXPECT_EQ(vertices, 64 * 64 + 64);
   EXPECT_LT(lowest, -5.0);  // ~4 s of free fall
+}
+
+TEST_F(CutCli, ExactModeFollowsTheStrokeAndExportsPiecesAndThePattern) {
+  // Between two rows (y = 0 on an even grid is half-way between rows 31 and 32): the grid mode
+  // zig-zags there; the exact mode (the default) cuts straight along the stroke.
+  const fs::path stroke = write_stroke(0.0);
+  const fs::path out = dir_ / "out";
+  const auto r = sim({"--offline", "--cut-mode", "exact", "--grid", "64", "--pin", "top-edge", "--stroke",
+                      stroke.string(), "--steps", "600", "--export", out.string()});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  std::ifstream in{out / "summary.json"};
+  const auto j = nlohmann::json::parse(in);
+  EXPECT_EQ(j.at("cut_mode").get<std::string>(), "exact");
+  EXPECT_EQ(j.at("pieces").get<int>(), 2);
+  EXPECT_EQ(j.at("fallen_pieces").get<int>(), 1);
+  EXPECT_LE(j.at("cut_deviation_cells_max").get<double>(), 0.1);
+  EXPECT_NEAR(j.at("cut_length_m").get<double>(), 1.0, 0.02);
+  EXPECT_LE(j.at("max_strain").get<double>(), 0.10);
+  EXPECT_GE(j.at("step_ms_max").get<double>(), j.at("step_ms_median").get<double>());
+  // cloth.obj: one group per piece that has faces, and a normal per vertex.
+  std::ifstream obj{out / "cloth.obj"};
+  std::string text;
+  int groups = 0;
+  int normals = 0;
+  int vertices = 0;
+  while (std::getline(obj, text)) {
+    groups += text.rfind("g piece_", 0) == 0 ? 1 : 0;
+    normals += text.rfind("vn ", 0) == 0 ? 1 : 0;
+    vertices += text.rfind("v ", 0) == 0 ? 1 : 0;
+  }
+  EXPECT_EQ(groups, 2);
+  EXPECT_EQ(normals, vertices);
+  // pattern.svg: the two pieces' outlines and the cut path, in millimetres (the cloth is 1000 mm wide).
+  std::ifstream svg{out / "pattern.svg"};
+  ASSERT_TRUE(svg.good());
+  const std::string pattern{std::istreambuf_iterator<char>{svg}, std::istreambuf_iterator<char>{}};
+  std::size_t pieces = 0;
+  for (std::size_t at = pattern.find("id=\"piece_"); at != std::string::npos; at = pattern.find("id=\"piece_", at + 1)) {
+    ++pieces;
+  }
+  EXPECT_EQ(pieces, 2U);
+  EXPECT_NE(pattern.find("class=\"cut\""), std::string::npos);
+  EXPECT_NE(pattern.find("1000.00 "), std::string::npos);
+}
+
+TEST_F(CutCli, BadCutModeIsAUsageError) {
+  const auto r = sim({"--offline", "--grid", "8", "--cut-mode", "laser", "--steps", "1"});
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("--cut-mode"), std::string::npos) << r.err;
 }
 
 TEST_F(CutCli, NoStrokeMeansNoCut) {

@@ -104,3 +104,33 @@ TEST(Session, TheIdleHandPushesTheClothAsAColliderSphere) {
   for (const auto& p : session.cloth().position)
     EXPECT_GE((p - Eigen::Vector3f(0.0f, -0.2f, 0.0f)).norm(), 0.1f - 1e-3f);
 }
+
+TEST(Session, StrokesOfTwoHandSourcesAreToldApartBySensorAndSession) {
+  Session session{small_cloth()};
+  const auto from = [](HandInput h, std::uint32_t sensor, std::uint64_t run) {
+    h.sensor_id = sensor;
+    h.session_id = run;
+    return h;
+  };
+  // The mouse blade (sensor 1000) cuts its stroke 1 while the camera hand (sensor 1) idles in front of
+  // the cloth: the camera's idle samples must not close the mouse's stroke.
+  for (int i = 0; i <= 40; ++i) {
+    session.on_hand(from(hand(1, i * 0.01, -0.7f + 1.4f * static_cast<float>(i) / 40.0f, -0.1f, true), 1000, 5));
+    session.on_hand(from(hand(0, i * 0.01, 0.2f, 0.3f, false), 1, 9));
+  }
+  EXPECT_TRUE(session.take_cut_reports().empty()) << "the mouse's stroke is still open";
+  session.on_hand(from(hand(1, 0.5, 0.7f, -0.1f, false), 1000, 5));
+  auto reports = session.take_cut_reports();
+  ASSERT_EQ(reports.size(), 1u);
+  EXPECT_EQ(reports[0].sensor_id, 1000u);
+  EXPECT_EQ(reports[0].pieces, 2u);
+
+  // The camera's own stroke 1 is another stroke than the mouse's stroke 1.
+  for (int i = 0; i <= 40; ++i)
+    session.on_hand(from(hand(1, 1.0 + i * 0.01, -0.7f + 1.4f * static_cast<float>(i) / 40.0f, 0.2f, true), 1, 9));
+  session.on_hand(from(hand(1, 1.5, 0.7f, 0.2f, false), 1, 9));
+  reports = session.take_cut_reports();
+  ASSERT_EQ(reports.size(), 1u);
+  EXPECT_EQ(reports[0].sensor_id, 1u);
+  EXPECT_GT(reports[0].stroke.particles_duplicated, 0u);
+}

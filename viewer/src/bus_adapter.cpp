@@ -1,16 +1,40 @@
 #include "bus_adapter.hpp"
 
 namespace tachi::viewer {
+namespace {
+std::uint32_t packed(const tachi_msg_GridCoord& g) { return std::uint32_t{g.u} | std::uint32_t{g.v} << 16; }
+}  // namespace
 
 TopologyUpdate from_msg(const tachi_msg_ClothTopology& msg) {
   TopologyUpdate update;
   update.version = msg.version;
   update.session_id = msg.session_id;
+  update.columns = msg.columns;
+  update.rows = msg.rows;
+  update.malformed = msg.triangles._length % 3 != 0 ||
+                     (msg.pinned._length != 0 && msg.particle_grid._length != 0 && msg.pinned._length != msg.particle_grid._length);
   const std::size_t count = msg.triangles._length / 3;
   update.triangles.resize(count);
   for (std::size_t t = 0; t < count; ++t)
     update.triangles[t] = {msg.triangles._buffer[3 * t], msg.triangles._buffer[3 * t + 1], msg.triangles._buffer[3 * t + 2]};
   update.pinned.assign(msg.pinned._buffer, msg.pinned._buffer + msg.pinned._length);
+  update.duplicated_from.assign(msg.duplicated_from._buffer, msg.duplicated_from._buffer + msg.duplicated_from._length);
+  update.grid.resize(msg.particle_grid._length);
+  for (std::size_t i = 0; i < update.grid.size(); ++i) update.grid[i] = packed(msg.particle_grid._buffer[i]);
+  return update;
+}
+
+TopologyUpdate from_assembler(bus::TopologyAssembler& topology) {
+  TopologyUpdate update;
+  update.version = topology.version();
+  update.session_id = topology.session_id();
+  update.columns = topology.columns();
+  update.rows = topology.rows();
+  update.triangles = topology.triangles();
+  update.pinned = topology.pinned();
+  update.grid.reserve(topology.particle_grid().size());
+  for (const tachi_msg_GridCoord& g : topology.particle_grid()) update.grid.push_back(packed(g));
+  update.duplicated_from = topology.take_duplicated_from();
   return update;
 }
 
@@ -18,6 +42,10 @@ StateUpdate from_msg(const tachi_msg_ClothState& msg) {
   StateUpdate update;
   update.frame = msg.frame;
   update.topology_version = msg.topology_version;
+  update.session_id = msg.session_id;
+  update.acquired_ns = msg.acquired_ns;
+  update.held_particle = msg.held_particle;
+  update.malformed = msg.positions._length % 3 != 0;
   const std::size_t count = msg.positions._length / 3;
   update.positions.resize(count);
   for (std::size_t i = 0; i < count; ++i)
@@ -25,9 +53,68 @@ StateUpdate from_msg(const tachi_msg_ClothState& msg) {
   return update;
 }
 
+std::string gate_label(tachi_msg_GateState gate, tachi_msg_GateSource opened_by) {
+  std::string label;
+  switch (gate) {
+    case tachi_msg_GATE_IDLE: label = "idle"; break;
+    case tachi_msg_GATE_CUTTING: label = "cutting"; break;
+    case tachi_msg_GATE_HOLDING: label = "holding"; break;
+    case tachi_msg_GATE_GRABBING: label = "grabbing"; break;
+  }
+  switch (opened_by) {
+    case tachi_msg_GATE_SOURCE_NONE: break;
+    case tachi_msg_GATE_SOURCE_THRESHOLD: label += " (threshold)"; break;
+    case tachi_msg_GATE_SOURCE_VOICE: label += " (voice)"; break;
+    case tachi_msg_GATE_SOURCE_MOUSE: label += " (mouse)"; break;
+  }
+  return label;
+}
+
 HandUpdate from_msg(const tachi_msg_StrokeSample& msg) {
-  return {msg.stroke_id, {msg.position_m.x, msg.position_m.y, msg.position_m.z}, msg.tracked,
-          msg.gate == tachi_msg_GATE_CUTTING, msg.hand_outside_cloth};
+  HandUpdate update;
+  update.stroke_id = msg.stroke_id;
+  update.position_m = {msg.position_m.x, msg.position_m.y, msg.position_m.z};
+  update.tracked = msg.tracked;
+  update.cutting = msg.gate == tachi_msg_GATE_CUTTING;
+  update.outside_cloth = msg.hand_outside_cloth;
+  update.sensor_id = msg.sensor_id;
+  update.session_id = msg.session_id;
+  update.gate = gate_label(msg.gate, msg.opened_by);
+  return update;
+}
+
+CutUpdate from_msg(const tachi_msg_CutEvent& msg) {
+  CutUpdate update;
+  update.stroke_id = msg.stroke_id;
+  update.topology_version = msg.topology_version;
+  update.cut_line.resize(msg.cut_line._length);
+  for (std::size_t i = 0; i < update.cut_line.size(); ++i) update.cut_line[i] = packed(msg.cut_line._buffer[i]);
+  update.pieces = msg.pieces;
+  update.fallen_pieces = msg.fallen_pieces;
+  update.session_id = msg.session_id;
+  update.sensor_id = msg.sensor_id;
+  return update;
+}
+
+tachi_msg_StrokeSample to_msg(const BladeSample& sample, const MouseSource& source, std::uint64_t frame,
+                              std::int64_t event_ns) {
+  tachi_msg_StrokeSample msg{};
+  msg.sensor_id = source.sensor_id;
+  msg.session_id = source.session_id;
+  msg.stroke_id = sample.stroke_id;
+  msg.frame = frame;
+  msg.time_ns = event_ns;
+  msg.acquired_ns = event_ns;
+  msg.position_m = {sample.position_m.x(), sample.position_m.y(), sample.position_m.z()};
+  // The closing sample is untracked: the stroke ends, and the simulator does not keep the released
+  // cursor as a hand pushing the cloth (tachi-sim --hand-radius).
+  msg.tracked = sample.cutting;
+  msg.gate = sample.cutting ? tachi_msg_GATE_CUTTING : tachi_msg_GATE_IDLE;
+  msg.opened_by = tachi_msg_GATE_SOURCE_MOUSE;
+  msg.closed_by = sample.cutting ? tachi_msg_GATE_SOURCE_NONE : tachi_msg_GATE_SOURCE_MOUSE;
+  msg.hand_outside_cloth = sample.outside_cloth;
+  msg.distance_to_cloth_m = sample.outside_cloth ? -1.0f : 0.0f;
+  return msg;
 }
 
 namespace {

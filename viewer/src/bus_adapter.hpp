@@ -1,14 +1,33 @@
-// DDS messages -> the viewer's own update types (the one place the viewer sees generated C types).
+// DDS messages <-> the viewer's own update types (the one place the viewer sees generated C types).
 #pragma once
 
 #include "tachi/bus/input_guard.hpp"
 #include "tachi/bus/topics.hpp"
+#include "tachi/bus/topology_assembler.hpp"
+#include "tachi/viewer/controls.hpp"
 #include "tachi/viewer/scene_state.hpp"
 
 namespace tachi::viewer {
 TopologyUpdate from_msg(const tachi_msg_ClothTopology& msg);
+/// The topology a TopologyAssembler built from keyframes and deltas (issue 11); takes its split-off list.
+TopologyUpdate from_assembler(bus::TopologyAssembler& topology);
 StateUpdate from_msg(const tachi_msg_ClothState& msg);
 HandUpdate from_msg(const tachi_msg_StrokeSample& msg);
+CutUpdate from_msg(const tachi_msg_CutEvent& msg);
+
+/// "cutting (mouse)", "idle (voice)": the gate and what opened the current/last stroke, for the HUD.
+std::string gate_label(tachi_msg_GateState gate, tachi_msg_GateSource opened_by);
+
+/// Who publishes the mouse blade's samples: its own hand source on tachi/hand/stroke.
+struct MouseSource {
+  std::uint32_t sensor_id = 0;
+  std::uint64_t session_id = 0;
+};
+/// A mouse blade sample as a StrokeSample: gate CUTTING (tracked) while the button is held, IDLE
+/// (untracked) on release, opened by GATE_SOURCE_MOUSE, acquired_ns = time_ns = the mouse event's
+/// wall-clock time.
+tachi_msg_StrokeSample to_msg(const BladeSample& sample, const MouseSource& source, std::uint64_t frame,
+                              std::int64_t event_ns);
 
 /// A topology whose arrays disagree (a triangle naming a particle that does not exist, pinned flags
 /// for another particle count, more particles than any cloth tachi-sim builds) is refused before it

@@ -1,7 +1,7 @@
 // Validation at a node's DDS boundary (docs/reliability.md): a peer may be faulty or hostile, so
 // every sample is checked before the node's logic sees it, and each refusal is counted by reason
 // in the node's heartbeat ("rejected.<reason>", Heartbeat::count_rejected) and logged, rate-limited.
-// Reasons: nonfinite, out_of_range, time_backwards, stale_stroke, oversized, too_many_sources.
+// Reasons: nonfinite, out_of_range, time_backwards, stale_id, oversized, too_many_sources.
 // Pure logic: the sink is any callable, so it is tested without DDS.
 #pragma once
 
@@ -40,6 +40,18 @@ class InputGuard {
     *last = {true, time_ns};
     return true;
   }
+  /// `source`'s ids (e.g. stroke ids) never go back: a lower one names a stroke that already ended.
+  bool id(std::uint64_t source, std::uint64_t value) {
+    const auto it = last_id_.find(source);
+    if (it == last_id_.end()) {
+      if (last_id_.size() >= kMaxSources) return reject("too_many_sources");
+      last_id_[source] = value;
+      return true;
+    }
+    if (value < it->second) return reject("stale_id");
+    it->second = value;
+    return true;
+  }
   /// A sequence's length is at most `max` (and, with `multiple_of`, a multiple of it).
   bool size(std::size_t n, std::size_t max, std::size_t multiple_of = 1) {
     if (n > max || n % multiple_of != 0) return reject("oversized");
@@ -52,7 +64,10 @@ class InputGuard {
     return false;
   }
   /// Forgets a source (e.g. its session ended), so its next time starts afresh.
-  void forget(std::uint64_t source) { last_time_.erase(source); }
+  void forget(std::uint64_t source) {
+    last_time_.erase(source);
+    last_id_.erase(source);
+  }
   [[nodiscard]] std::uint64_t rejected() const noexcept { return rejected_; }
 
  private:
@@ -67,6 +82,7 @@ class InputGuard {
   }
   Sink sink_;
   std::map<std::uint64_t, std::pair<bool, std::int64_t>> last_time_;
+  std::map<std::uint64_t, std::uint64_t> last_id_;
   std::uint64_t rejected_ = 0;
 };
 

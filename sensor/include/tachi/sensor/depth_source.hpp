@@ -19,6 +19,14 @@ class DepthSource {
   virtual ~DepthSource() = default;
   /// The next depth frame; nullopt at the end of the stream. Throws on a device or file error.
   virtual std::optional<DepthFrame> next() = 0;
+  /// The next depth frame into `frame`, reusing its buffer where the source can (a recording
+  /// allocates nothing per frame then); false at the end of the stream.
+  virtual bool next_into(DepthFrame& frame) {
+    auto f = next();
+    if (!f) return false;
+    frame = std::move(*f);
+    return true;
+  }
   /// Depth conversion and intrinsics for this source's frames.
   virtual const DepthModel& model() const = 0;
 };
@@ -36,6 +44,7 @@ class RecordingSource final : public DepthSource {
   explicit RecordingSource(const std::filesystem::path& dir, Playback playback = {});
 
   std::optional<DepthFrame> next() override;
+  bool next_into(DepthFrame& frame) override;
   const DepthModel& model() const override { return model_; }
   std::size_t depth_frame_count() const noexcept { return depth_entries_.size(); }
 
@@ -44,6 +53,8 @@ class RecordingSource final : public DepthSource {
   Playback playback_;
   DepthModel model_;
   std::vector<IndexEntry> depth_entries_;
+  std::vector<std::filesystem::path> depth_files_;  // dir_ / entry, made once
+  std::vector<char> file_bytes_;                    // read_depth_file's scratch, reused
   std::size_t position_ = 0;
   std::uint64_t frames_out_ = 0;
   std::int64_t loop_offset_ns_ = 0;

@@ -61,8 +61,13 @@ struct DepthFileError {
 std::variant<std::monostate, DepthFileError> decode_depth_pgm(std::span<const char> bytes,
                                                               std::vector<std::uint16_t>& raw);
 
-/// Reads and decodes one depth file; throws RecordingError naming the file.
-void read_depth_file(const std::filesystem::path& file, std::vector<std::uint16_t>& raw);
+/// Reads and decodes one depth file; throws RecordingError naming the file. `scratch` holds the
+/// file's bytes: passing the same one (and the same `raw`) every frame allocates nothing per frame.
+void read_depth_file(const std::filesystem::path& file, std::vector<std::uint16_t>& raw, std::vector<char>& scratch);
+inline void read_depth_file(const std::filesystem::path& file, std::vector<std::uint16_t>& raw) {
+  std::vector<char> scratch;
+  read_depth_file(file, raw, scratch);
+}
 
 /// Host time as fakenect prints it ("%f": seconds with six decimals).
 std::string format_host_time(std::int64_t host_time_ns);

@@ -31,7 +31,7 @@ struct HandFinderParams {
   double foreground_m = 0.08;       ///< nearer than the background by this = foreground (> sway, < arm)
   double hand_depth_band_m = 0.07;  ///< the hand: component pixels within this of its nearest point
   double narrow_band_above_m = 0.055; ///< a circle larger than this is measured again in a band ...
-  double narrow_band_m = 0.035;     ///< ... this deep (a hand against the chest: the torso 5-8 cm behind)
+  double narrow_band_m = 0.035;     ///< ... this deep, then half that (a hand against the chest: the torso 4-8 cm behind)
   double palm_radius_m = 0.042;     ///< expected palm radius: the palm circle must fit in the image
   double min_palm_radius_m = 0.032; ///< a smaller inscribed circle is a forearm (~2.8 cm) or fingers, not a palm
   double max_palm_radius_m = 0.075; ///< a larger one is a body, not a palm

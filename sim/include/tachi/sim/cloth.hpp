@@ -162,7 +162,7 @@ class Cloth {
   /// springs do not reallocate every array mid-frame (a first reallocation of a 128 x 128 cloth costs ~20 ms
   /// here, mostly page faults). The room is touched now, so later appends do not fault pages in either.
   /// Never shrinks.
-  void reserve(std::size_t particles, std::size_t springs);
+  void reserve(std::size_t particles, std::size_t springs, std::size_t triangle_slots = 0);
 
   /// Appends a copy of particle i (position, velocity, grid coordinate, pinned) and splits i's mass
   /// in half between i and the copy, so total mass is conserved. Returns the copy's index.

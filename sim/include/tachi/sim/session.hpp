@@ -30,6 +30,7 @@ struct HandInput {
   bool cutting = false;
   bool holding = false;  ///< stroke open, hand beyond reach: the sample must not cut (GATE_HOLDING)
   std::uint64_t session_id = 0;  ///< the filter run that numbered the stroke: stroke 1 of a restarted filter is a new stroke
+  std::uint32_t sensor_id = 0;   ///< the hand source (camera hand, mouse blade): with session and stroke id, names a stroke
   bool grabbing = false;  ///< the hand holds the cloth (GATE_GRABBING): take, move, and on the next other sample release
 };
 
@@ -39,6 +40,7 @@ struct CutReport {
   StrokeReport stroke;
   std::size_t pieces = 0;
   std::size_t fallen_pieces = 0;
+  std::uint32_t sensor_id = 0;  ///< the hand source that made the stroke
   float max_contact_force_n = 0.0F;  ///< largest blade contact force of the stroke (blade_contact.hpp)
   float drag_m = 0.0F;               ///< farthest the blade dragged the cloth before it cut (or without cutting)
 };
@@ -68,11 +70,14 @@ class Session {
   /// changes) and extends it; a HOLDING sample keeps the stroke open without cutting (the hand is
   /// leaving or briefly out of reach); an IDLE sample closes the open stroke, tracked or not (the
   /// filter's gate decides when a lost hand ends a stroke). Untracked or non-finite samples never cut.
+  /// Several sources may publish: while one source's stroke is open, the others' samples are ignored
+  /// (one blade cuts at a time), unless that source fell silent for kSilentSource_s.
   /// A CUTTING sample cuts only once the blade is through the cloth (BladeContact): until its contact
   /// force reaches the sharpness force the blade holds and drags the particle it met. A GRABBING sample
   /// takes the nearest particle within grab reach and moves it to the hand; any other sample releases
   /// it. A grab while a stroke is open is refused (one hand, one tool): take_grab_refusal() says why.
   void on_hand(const HandInput& hand);
+  static constexpr double kSilentSource_s = 1.0;
   /// Closes the open stroke, if any (e.g. when the filter vanished mid-stroke).
   void end_stroke();
   /// Advances the cloth by one solver step.
@@ -129,6 +134,8 @@ class Session {
   std::optional<Eigen::Vector3f> hand_;  ///< last tracked hand position while not cutting
   std::uint32_t stroke_id_ = 0;
   std::uint64_t stroke_session_ = 0;
+  std::uint32_t stroke_sensor_ = 0;     ///< source of the open stroke
+  double stroke_heard_s_ = 0.0;         ///< time_s() of that source's last sample
   std::optional<TopologyChange> pending_;
   std::vector<CutReport> reports_;
   std::uint64_t steps_ = 0;

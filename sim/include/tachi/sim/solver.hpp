@@ -32,6 +32,9 @@ struct SolverParams {
   float structural_compliance = 0.0F;  ///< XPBD compliance of the structural springs, m/N (0: hard; materials set 1/k)
   float max_strain = 0.10F;        ///< Provot's critical deformation rate (10%)
   int strain_limit_passes = 4;     ///< at most this many strain-limit sweeps per sub-step (stops when clean)
+  /// The last strain-limit sweep (and every sweep after the first next to a cut) moves only the end
+  /// farther from the pins (follow the leader).
+  bool strain_limit_follow = true;
   bool long_range_attachments = true;
   bool soft_every_substep = true;  ///< shear/bend in every sub-step (false: cheaper, but never fully at rest)
 };
@@ -51,6 +54,8 @@ class Solver {
 
   /// Advances the cloth by params().dt.
   void step(Cloth& cloth, const Colliders& colliders = {});
+  /// Picks up the cloth's topology changes now (step() does it first anyway): for timing the update apart.
+  void update_topology(const Cloth& cloth) { refresh_caches(cloth); }
 
   [[nodiscard]] const SolverParams& params() const { return params_; }
   /// Number of long-range attachments in use (0 when disabled or nothing is pinned).
@@ -87,14 +92,22 @@ class Solver {
     std::vector<std::uint32_t> parent;     ///< previous particle on the shortest path (none at a source)
     std::vector<std::uint32_t> owner;      ///< the pin the path starts at
     std::vector<std::uint32_t> attachment; ///< per particle: its attachment in attachments_, or none
+    // A repair after a cut, possibly spread over several steps: its heap, the particles whose distance is
+    // not final yet (their tethers are off meanwhile), and the same as a list.
+    std::vector<std::pair<float, std::uint32_t>> heap;
+    std::vector<std::uint8_t> open;
+    std::vector<std::uint32_t> open_list;
   };
 
   void refresh_caches(const Cloth& cloth);
   void full_build(const Cloth& cloth, std::vector<std::uint32_t> pins);
   void update_incrementally(const Cloth& cloth);
   void append_springs(const Cloth& cloth, const std::vector<std::uint32_t>& springs);
+  void order_strain_limit(const Cloth& cloth);
   void build_attachments(const Cloth& cloth);
-  void run_search(const Cloth& cloth, Search& search, const std::vector<std::uint8_t>* only);
+  bool run_search(const Cloth& cloth, Search& search, bool repair, std::size_t budget);
+  void continue_searches(const Cloth& cloth);
+  void refresh_nearest(std::uint32_t i);
   void attach(const Cloth& cloth, Search& search, std::uint32_t i);
   void update_attachments(const Cloth& cloth, const std::vector<std::uint32_t>& touched);
   static void build_groups(const std::vector<PackedSpring>& springs, const std::vector<std::uint32_t>& keys,
@@ -116,9 +129,17 @@ class Solver {
   std::size_t lanes_ = 0;                     ///< lanes in use when last fully built, and blanked since
   std::size_t blanked_ = 0;
   // Structural springs again, ordered outwards from the pins, for the strain limit; the end nearer to a
-  // pin is `a`. Per spring its place here (none for other kinds).
-  std::vector<PackedSpring> strain_limit_;
-  std::vector<std::uint32_t> limit_slot_;
+  // pin is `a`, and when it is strictly nearer only `b` moves (follow the leader).
+  enum class LimitFollow : std::uint8_t { Never, LastSweep, Always };
+  struct LimitSpring {
+    std::uint32_t a;
+    std::uint32_t b;
+    float rest;
+    LimitFollow follow;
+  };
+  std::vector<LimitSpring> strain_limit_;
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> limit_level_;  // scratch: (level, spring)
+  std::vector<std::uint32_t> limit_start_;
   // Long-range attachments: particle, pin, maximal distance.
   struct Attachment {
     std::uint32_t particle;
@@ -129,7 +150,6 @@ class Solver {
   std::vector<Search> searches_;
   std::vector<float> nearest_;  ///< per particle: rest distance to the nearest pin (+inf: no pin reaches it)
   std::vector<std::uint8_t> affected_;  ///< scratch of the incremental searches
-  std::vector<std::pair<float, std::uint32_t>> heap_;
   // Positions with the inverse mass in w, during a step; element 0 is the fixed padding particle.
   std::vector<Eigen::Vector4f> work_;
   std::vector<Eigen::Vector4f> old_work_;

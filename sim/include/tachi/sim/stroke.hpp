@@ -101,7 +101,8 @@ struct StrokeOptions {
 
 /// What a stroke did so far.
 struct StrokeReport {
-  std::vector<GridCoord> cut_line;   ///< every cut line of the stroke, concatenated (an exit and re-entry starts a new one)
+  std::vector<GridCoord> cut_line;   ///< every cut line of the stroke, concatenated (an exit and re-entry starts a new one);
+                                     ///< exact/delete modes: the grid points nearest the points of the path
   std::size_t lines = 0;             ///< how many separate cut lines
   std::size_t particles_duplicated = 0;
   float cut_length_m = 0.0F;         ///< rest length of the cut lines

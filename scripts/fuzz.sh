@@ -1,0 +1,23 @@
+#!/usr/bin/env bash
+# Builds the libFuzzer targets (fuzz/, Debian's clang, ASan + UBSan) in build-fuzz and runs each for
+# SECONDS (default 20: the short run CI does; docs/reliability.md gives the long run's command).
+# New inputs that found coverage go to build-fuzz/corpus/<target>; crashes to build-fuzz/crashes.
+# Usage: scripts/fuzz.sh [SECONDS] [TARGET...]   (targets: recording stroke_csv config cut_engine)
+set -euo pipefail
+cd "$(dirname "$0")/.."
+seconds=${1:-20}
+shift || true
+targets=("$@")
+[ ${#targets[@]} -gt 0 ] || targets=(recording stroke_csv config cut_engine)
+cmake -S . -B build-fuzz -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_C_COMPILER=clang \
+  -DCMAKE_CXX_COMPILER=clang++ -DTACHI_FUZZ=ON -DBUILD_TESTING=OFF >/dev/null
+cmake --build build-fuzz -j"$(nproc)" --target "${targets[@]/%/_fuzz}"
+mkdir -p build-fuzz/crashes
+for t in "${targets[@]}"; do
+  mkdir -p "build-fuzz/corpus/$t"
+  echo "fuzz: $t for ${seconds} s" >&2
+  # -max_len: a depth frame's header and a few rows are what the parsers branch on.
+  "build-fuzz/bin/${t}_fuzz" -max_total_time="$seconds" -max_len=4096 -timeout=10 -rss_limit_mb=2048 \
+    -artifact_prefix="build-fuzz/crashes/${t}-" -print_final_stats=1 \
+    "build-fuzz/corpus/$t" "fuzz/corpus/$t" 2>&1 | tail -n 12
+done

@@ -1,0 +1,20 @@
+#!/usr/bin/env bash
+# Builds the unit tests with AddressSanitizer + UndefinedBehaviorSanitizer (-DTACHI_SANITIZE=ON) in
+# build-asan and runs them; any sanitizer report fails the run. The unit tests only (docs/reliability.md):
+# the multi-process tests run in the normal build. Exit status 0 when all passed clean.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+tests=(common_test bus_test sim_test sim_cut_test filter_test viewer_test tachi_sensor_tests reliability_unit_test
+       bad_files_test)
+cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DTACHI_SANITIZE=ON >/dev/null
+cmake --build build-asan -j"$(nproc)" --target "${tests[@]}" tachi_recordings
+export ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
+failed=()
+for t in "${tests[@]}"; do
+  echo "sanitized: $t" >&2
+  "build-asan/bin/$t" --gtest_brief=1 || failed+=("$t")
+done
+if [ ${#failed[@]} -gt 0 ]; then
+  echo "run_sanitized_tests.sh: failed: ${failed[*]}" >&2
+  exit 1
+fi

@@ -1,0 +1,232 @@
+// tachi-viewer as a process, headless: flags refused by name, the offline mesh view, the warnings of a
+// viewer that writes nothing or sees no cloth, a video of a live simulator, and bad inputs replayed
+// over DDS while the real cloth stays on screen. Domain ids 150-154 (docs/testing.md).
+#include "viewer_process.hpp"
+#include "process.hpp"
+#include "scratch_dir.hpp"
+#include "tachi/bus/topics.hpp"
+
+#include <gtest/gtest.h>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/videoio.hpp>
+
+#include <algorithm>
+#include <csignal>
+#include <fstream>
+#include <limits>
+#include <thread>
+
+using namespace std::chrono_literals;
+namespace bus = tachi::bus;
+using tachi::test::ChildProcess;
+
+namespace {
+const cv::Vec3b kBackground = background_pixel();
+
+}  // namespace
+
+TEST(ViewerCli, NonFiniteAndBadFlagsAreRefusedNamingTheFlag) {
+  for (const auto& [flag, value] : std::vector<std::pair<std::string, std::string>>{
+           {"--fps", "nan"}, {"--fps", "inf"}, {"--duration", "nan"}, {"--exit-when-idle", "-1"}, {"--video", "out.mkv"}}) {
+    const auto r = tachi::test::run({kViewer, "--headless", flag, value}, 10s);
+    EXPECT_EQ(r.exit_code, 2) << flag << ' ' << value;
+    EXPECT_NE(r.err.find(flag), std::string::npos) << r.err;
+  }
+  const auto r = tachi::test::run({kViewer, "--headless", "--mouse"}, 10s);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("--mouse"), std::string::npos) << r.err;
+}
+
+TEST(ViewerCli, MeshViewRendersAnObjWithItsPiecesInDifferentShades) {
+  const tachi::test::ScratchDir dir{"viewer_mesh"};
+  {
+    // Two pieces: the upper half of the 1 m cloth hanging, the lower one fallen 0.2 m.
+    std::ofstream obj(dir / "cloth.obj");
+    obj << "v -0.5 0.5 0\nv 0.5 0.5 0\nv -0.5 0 0\nv 0.5 0 0\n"
+           "v -0.5 -0.2 0\nv 0.5 -0.2 0\nv -0.5 -0.7 0\nv 0.5 -0.7 0\n"
+           "g piece_0\nf 1 3 2\nf 2 3 4\ng piece_1\nf 5 7 6\nf 6 7 8\n";
+  }
+  const auto png = (dir / "view.png").string();
+  const auto r = tachi::test::run({kViewer, "--mesh", (dir / "cloth.obj").string(), "--headless", "--snapshot", png,
+                                   "--size", "400"}, 20s);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const cv::Mat image = cv::imread(png);
+  ASSERT_EQ(image.size(), cv::Size(400, 400));
+  // The view frames the mesh: its centre (0, -0.1) is mid-image; 1.2 m tall fills 1/1.2 of it.
+  const cv::Vec3b upper = image.at<cv::Vec3b>(100, 200), lower = image.at<cv::Vec3b>(300, 200);
+  EXPECT_NE(upper, kBackground);
+  EXPECT_NE(lower, kBackground);
+  EXPECT_NE(upper, lower) << "each piece has its own shade";
+  EXPECT_EQ(image.at<cv::Vec3b>(200, 200), kBackground) << "the gap between the pieces";
+
+  const auto bad = tachi::test::run({kViewer, "--mesh", (dir / "missing.obj").string(), "--headless"}, 10s);
+  EXPECT_NE(bad.exit_code, 0);
+  EXPECT_NE(bad.err.find("--mesh"), std::string::npos) << bad.err;
+}
+
+TEST(ViewerCli, MeshViewReadsWhatTachiSimExports) {
+  const tachi::test::ScratchDir dir{"viewer_sim_mesh"};
+  {
+    // A full-width stroke at y = -0.1 m cuts off the lower piece, which falls for 120 steps (2 s).
+    std::ofstream stroke(dir / "stroke.csv");
+    stroke << "t,x,y,z\n";
+    for (int i = 0; i <= 60; ++i) stroke << 0.2 + i / 60.0 << ',' << -0.6 + 1.2 * i / 60.0 << ",-0.1,0.01\n";
+  }
+  const auto sim = tachi::test::run({kSim, "--offline", "--grid", "32", "--pin", "top-edge", "--stroke",
+                                     (dir / "stroke.csv").string(), "--steps", "120", "--export", (dir / "out").string()}, 60s);
+  ASSERT_EQ(sim.exit_code, 0) << sim.err;
+  const auto png = (dir / "view.png").string();
+  const auto r = tachi::test::run({kViewer, "--mesh", (dir / "out" / "cloth.obj").string(), "--headless", "--snapshot", png,
+                                   "--size", "400"}, 20s);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const cv::Mat image = cv::imread(png);
+  ASSERT_EQ(image.size(), cv::Size(400, 400));
+  // Framed on what hangs (the upper piece, y from 0.5 down to about -0.1): cloth in the middle, the
+  // background at the image's corners.
+  EXPECT_NE(image.at<cv::Vec3b>(200, 200), kBackground);
+  EXPECT_EQ(image.at<cv::Vec3b>(5, 5), kBackground);
+}
+
+TEST(ViewerCli, HeadlessSaysWhenItWritesNothingAndWhileNoClothArrives) {
+  const auto r = tachi::test::run({kViewer, "--headless", "--domain", "150", "--duration", "4"}, 20s);
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("nothing will be written"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("no cloth state for 3 s"), std::string::npos) << r.err;
+}
+
+TEST(ViewerCli, BadInputsAreRejectedAndTheVideoKeepsShowingTheRealCloth) {
+  constexpr unsigned kDomain = 151;
+  const tachi::test::ScratchDir dir{"viewer_bad_inputs"};
+  const auto video = (dir / "view.avi").string();
+  const auto png = (dir / "last.png").string();
+  ChildProcess sim({kSim, "--grid", "16", "--pin", "top-edge", "--domain", std::to_string(kDomain), "--duration", "12"});
+  ChildProcess viewer({kViewer, "--headless", "--domain", std::to_string(kDomain), "--video", video, "--snapshot", png,
+                       "--size", "320", "--fps", "20", "--duration", "60"});
+  bus::Participant dds{kDomain};
+  bus::Reader<tachi_msg_ClothTopology> topologies{dds, bus::topics::cloth_topology};
+  bus::Reader<tachi_msg_NodeStatus> status{dds, bus::topics::node_status};
+  bus::Writer<tachi_msg_ClothTopology> bad_topology{dds, bus::topics::cloth_topology};
+  bus::Writer<tachi_msg_ClothState> bad_state{dds, bus::topics::cloth_state};
+  ASSERT_TRUE(topologies.wait_for_data(20s)) << sim.err();
+  const auto real = topologies.take();
+  ASSERT_FALSE(real.empty());
+  const tachi_msg_ClothTopology& t = *real.back();
+  ASSERT_TRUE(bad_state.wait_for_readers(1, 20s)) << viewer.err();
+  std::this_thread::sleep_for(1s);  // the viewer has the real cloth
+
+  // A topology whose version jumps by 1000, one indexing particles that do not exist, one with triangles
+  // not in threes; states with NaN positions and with the wrong number of them. The topic keeps the last
+  // topology per cloth: each bad one is given time to be read before the next replaces it.
+  std::vector<std::uint32_t> triangles(t.triangles._buffer, t.triangles._buffer + t.triangles._length);
+  tachi_msg_ClothTopology jump = t;
+  jump.version = t.version + 1000;
+  bad_topology.write(jump);
+  std::this_thread::sleep_for(300ms);
+  std::vector<std::uint32_t> far = triangles;
+  far[4] = 1u << 30;
+  tachi_msg_ClothTopology out_of_range = t;
+  out_of_range.version = t.version + 1;
+  out_of_range.triangles._buffer = far.data();
+  bad_topology.write(out_of_range);
+  std::this_thread::sleep_for(300ms);
+  tachi_msg_ClothTopology ragged = t;
+  ragged.version = t.version + 1;
+  ragged.triangles._length = t.triangles._length - 1;
+  bad_topology.write(ragged);
+  std::vector<float> positions(3 * t.particle_grid._length, 0.0f);
+  positions[7] = std::numeric_limits<float>::quiet_NaN();
+  tachi_msg_ClothState nan{};
+  nan.cloth_id = t.cloth_id;
+  nan.topology_version = t.version;
+  nan.session_id = t.session_id;
+  nan.held_particle = -1;
+  nan.positions._buffer = positions.data();
+  nan.positions._length = nan.positions._maximum = static_cast<std::uint32_t>(positions.size());
+  bad_state.write(nan);
+  tachi_msg_ClothState short_state = nan;
+  positions[7] = 0.0f;
+  short_state.positions._length = 30;
+  bad_state.write(short_state);
+
+  std::this_thread::sleep_for(1500ms);
+  viewer.signal(SIGINT);
+  EXPECT_EQ(viewer.wait(2s), 0) << "stops within a second of SIGINT\n" << viewer.err();
+  // The viewer's heartbeat counted every bad input.
+  std::uint64_t rejected = 0;
+  for (const auto& s : status.take(256))
+    if (std::string(s->node) == "tachi-viewer") rejected = std::max(rejected, s->rejected);
+  EXPECT_GE(rejected, 5u) << viewer.err();
+
+  // The last 20 frames of the video (the second after the bad inputs) show the cloth at its centre.
+  cv::VideoCapture capture(video);
+  ASSERT_TRUE(capture.isOpened()) << video;
+  std::vector<bool> cloth_shown;
+  const cv::Point centre(pixel_of(0.0f, 0.0f, 320));
+  for (cv::Mat frame; capture.read(frame);) {
+    const cv::Vec3b p = frame.at<cv::Vec3b>(centre);
+    cloth_shown.push_back(p[0] > 100 && p[1] > 100);  // MJPG is lossy: the background is dark, the cloth light
+  }
+  ASSERT_GT(cloth_shown.size(), 30u);
+  EXPECT_EQ(std::count(cloth_shown.end() - 20, cloth_shown.end(), true), 20);
+  const cv::Mat last = cv::imread(png);
+  ASSERT_FALSE(last.empty());
+  EXPECT_NE(last.at<cv::Vec3b>(centre), kBackground);
+  sim.signal(SIGINT);
+  EXPECT_EQ(sim.wait(10s), 0);
+}
+
+TEST(ViewerCli, StopsWithinASecondOfSigintEvenAtOneFramePerSecond) {
+  ChildProcess viewer({kViewer, "--headless", "--domain", "152", "--fps", "1", "--duration", "60"});
+  std::this_thread::sleep_for(1500ms);
+  const auto sent = std::chrono::steady_clock::now();
+  viewer.signal(SIGINT);
+  EXPECT_EQ(viewer.wait(3s), 0) << viewer.err();
+  EXPECT_LT(std::chrono::steady_clock::now() - sent, 1s);
+}
+
+TEST(ViewerCli, FollowsASimulatorRestart) {
+  constexpr unsigned kDomain = 153;
+  const tachi::test::ScratchDir dir{"viewer_restart"};
+  const auto png = (dir / "last.png").string();
+  const std::vector<std::string> sim_args{kSim, "--grid", "16", "--pin", "top-edge", "--domain", std::to_string(kDomain),
+                                          "--duration", "30"};
+  auto first = std::make_unique<ChildProcess>(sim_args);
+  ChildProcess viewer({kViewer, "--headless", "--domain", std::to_string(kDomain), "--snapshot", png, "--size", "320",
+                       "--duration", "60"});
+  bus::Participant dds{kDomain};
+  bus::Writer<tachi_msg_StrokeSample> strokes{dds, bus::topics::stroke};
+  bus::Reader<tachi_msg_CutEvent> cuts{dds, bus::topics::cut_event};
+  ASSERT_TRUE(strokes.wait_for_readers(2, 20s)) << first->err() << viewer.err();
+  // The first simulator cuts off the lower half (y = -0.1 m), which falls out of view.
+  const auto sample = [](std::uint64_t frame, float x, bool cutting) {
+    tachi_msg_StrokeSample s{};
+    s.sensor_id = 1;
+    s.stroke_id = 1;
+    s.frame = frame;
+    s.time_ns = static_cast<std::int64_t>(frame) * 16'666'667;
+    s.position_m = {x, -0.1f, 0.0f};
+    s.tracked = true;
+    s.gate = cutting ? tachi_msg_GATE_CUTTING : tachi_msg_GATE_IDLE;
+    return s;
+  };
+  for (int i = 0; i <= 40; ++i) {
+    strokes.write(sample(static_cast<std::uint64_t>(i), -0.7f + 1.4f * static_cast<float>(i) / 40.0f, true));
+    std::this_thread::sleep_for(5ms);
+  }
+  strokes.write(sample(41, 0.7f, false));
+  ASSERT_TRUE(cuts.wait_for_data(10s)) << first->err();
+  std::this_thread::sleep_for(2s);  // the piece falls away
+  first->signal(SIGINT);
+  EXPECT_EQ(first->wait(10s), 0);
+
+  // A new simulator: uncut cloth, topology version back to 0. The viewer shows it whole again.
+  ChildProcess second(sim_args);
+  std::this_thread::sleep_for(3s);
+  viewer.signal(SIGINT);
+  ASSERT_EQ(viewer.wait(3s), 0) << viewer.err();
+  const cv::Mat last = cv::imread(png);
+  ASSERT_FALSE(last.empty());
+  EXPECT_NE(last.at<cv::Vec3b>(cv::Point(pixel_of(0.0f, -0.3f, 320))), kBackground) << "the lower half is back";
+  second.signal(SIGINT);
+  EXPECT_EQ(second.wait(10s), 0);
+}

@@ -1,0 +1,256 @@
+// tachi-viewer's real window under Xvfb: it fits a small screen and shows the cloth (checked on a
+// screenshot taken with imagemagick's `import`), its keys work, and a real mouse drag driven by
+// xdotool with --mouse makes the real tachi-sim cut the cloth along the dragged line (seed 001 sec. 3).
+// Domain ids 155-159 (docs/testing.md).
+#include "viewer_process.hpp"
+#include "process.hpp"
+#include "scratch_dir.hpp"
+#include "tachi/bus/topics.hpp"
+
+#include <gtest/gtest.h>
+#include <opencv2/imgcodecs.hpp>
+
+#include <cmath>
+#include <csignal>
+#include <filesystem>
+#include <regex>
+#include <thread>
+
+// Last: Xlib's macros (None, Bool, Status) would break the headers above.
+#include <X11/Xlib.h>
+#include <X11/extensions/Xfixes.h>
+
+using namespace std::chrono_literals;
+namespace bus = tachi::bus;
+using tachi::test::ChildProcess;
+
+namespace {
+// Found by CMake (empty when missing: the tests skip, scripts/setup.sh installs them).
+const std::string kXvfb = TACHI_XVFB_EXE;
+const std::string kXdotool = TACHI_XDOTOOL_EXE;
+const std::string kImport = TACHI_IMPORT_EXE;
+
+// An X server of its own for each test, on a display number no other one holds.
+class VirtualDisplay {
+ public:
+  VirtualDisplay(int width, int height) {
+    for (int n = 150 + ::getpid() % 400;; ++n) {
+      const std::string number = std::to_string(n);
+      if (std::filesystem::exists(std::filesystem::path("/tmp") / (".X" + number + "-lock"))) continue;
+      name_ = ":" + number;
+      char screen[32];
+      std::snprintf(screen, sizeof screen, "%dx%dx24", width, height);
+      server_ = std::make_unique<ChildProcess>(
+          std::vector<std::string>{kXvfb, name_, "-screen", "0", screen, "-nolisten", "tcp"});
+      const auto socket = std::filesystem::path("/tmp/.X11-unix") / ("X" + number);
+      for (int i = 0; i < 100 && !std::filesystem::exists(socket); ++i)
+        std::this_thread::sleep_for(50ms);
+      return;
+    }
+  }
+  ~VirtualDisplay() {
+    if (server_) server_->signal(SIGTERM);
+  }
+  const std::string& name() const { return name_; }
+  std::map<std::string, std::string> env() const { return {{"DISPLAY", name_}}; }
+  /// Runs an X client (xdotool, import) on this display; returns its stdout.
+  std::string run(std::vector<std::string> argv) const {
+    const auto r = tachi::test::run(std::move(argv), 20s, env());
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    return r.out;
+  }
+  cv::Mat screenshot(const std::filesystem::path& file) const {
+    run({kImport, "-window", "root", file.string()});
+    return cv::imread(file.string());
+  }
+  /// The id of the viewer's window, waiting until it is mapped.
+  std::string viewer_window() const {
+    for (int i = 0; i < 200; ++i) {
+      const auto r = tachi::test::run({kXdotool, "search", "--onlyvisible", "--name", "^tachi$"}, 10s, env());
+      if (r.exit_code == 0 && !r.out.empty()) return r.out.substr(0, r.out.find('\n'));
+      std::this_thread::sleep_for(100ms);
+    }
+    return {};
+  }
+  /// Whether the pointer, where it is, shows any pixel (its image as XFixes reports it).
+  bool pointer_visible() const {
+    Display* display = XOpenDisplay(name_.c_str());
+    if (display == nullptr) return false;
+    bool visible = false;
+    if (XFixesCursorImage* image = XFixesGetCursorImage(display)) {
+      for (int i = 0; i < image->width * image->height && !visible; ++i) visible = (image->pixels[i] >> 24) != 0;
+      XFree(image);
+    }
+    XCloseDisplay(display);
+    return visible;
+  }
+  cv::Rect geometry(const std::string& window) const {
+    const std::string out = run({kXdotool, "getwindowgeometry", window});
+    std::smatch m;
+    if (!std::regex_search(out, m, std::regex(R"(Position: (-?\d+),(-?\d+).*\n.*Geometry: (\d+)x(\d+))"))) return {};
+    return {std::stoi(m[1]), std::stoi(m[2]), std::stoi(m[3]), std::stoi(m[4])};
+  }
+
+ private:
+  std::string name_;
+  std::unique_ptr<ChildProcess> server_;
+};
+
+bool tools_present() {
+  for (const auto& tool : {kXvfb, kXdotool, kImport})
+    if (tool.empty() || !std::filesystem::exists(tool)) return false;
+  return true;
+}
+
+// Light cloth pixels (front shade) vs the dark background.
+bool is_cloth(const cv::Vec3b& p) { return p[0] > 120 && p[1] > 110 && p[2] > 90; }
+
+}  // namespace
+
+TEST(ViewerWindow, FitsASmallScreenShowsTheClothAndSavesASnapshotOnAKey) {
+  if (!tools_present()) GTEST_SKIP() << "Xvfb, xdotool or imagemagick missing (scripts/setup.sh installs them)";
+  const tachi::test::ScratchDir dir{"viewer_window"};
+  const VirtualDisplay display(1024, 700);
+  const std::string domain = "155";
+  ChildProcess sim({kSim, "--grid", "16", "--pin", "top-edge", "--domain", domain, "--duration", "30"});
+  ChildProcess viewer({kViewer, "--domain", domain, "--size", "1000", "--snapshot-dir", dir.path().string()}, display.env());
+  const std::string window = display.viewer_window();
+  ASSERT_FALSE(window.empty()) << viewer.err();
+  std::this_thread::sleep_for(2s);  // the cloth arrives and is drawn
+
+  const cv::Rect where = display.geometry(window);
+  EXPECT_LE(where.height, 700) << "a 1000 px window is shrunk to the 700 px screen";
+  EXPECT_GT(where.height, 400);
+  EXPECT_LE(where.br().y, 700);
+  EXPECT_LE(where.br().x, 1024);
+  const cv::Mat shot = display.screenshot(dir / "screen.png");
+  ASSERT_FALSE(shot.empty());
+  const int side = std::min(where.width, where.height);
+  const cv::Point centre = cv::Point(where.tl()) + cv::Point(pixel_of(0.0f, 0.0f, side));
+  EXPECT_TRUE(is_cloth(shot.at<cv::Vec3b>(centre))) << "cloth at the window's centre " << centre;
+  const cv::Point beside = cv::Point(where.tl()) + cv::Point(pixel_of(0.75f, 0.0f, side));
+  EXPECT_FALSE(is_cloth(shot.at<cv::Vec3b>(beside))) << "background beside the cloth";
+
+  // Resized, the window draws at its new size: the cloth is again at the centre of the smaller side.
+  display.run({kXdotool, "windowsize", "--sync", window, "500", "400"});
+  std::this_thread::sleep_for(1s);
+  const cv::Rect resized = display.geometry(window);
+  const cv::Mat small_shot = display.screenshot(dir / "resized.png");
+  ASSERT_FALSE(small_shot.empty());
+  const int small_side = std::min(resized.width, resized.height);
+  EXPECT_LT(small_side, side);
+  const cv::Point2f offset((static_cast<float>(resized.width - small_side)) / 2, (static_cast<float>(resized.height - small_side)) / 2);
+  EXPECT_TRUE(is_cloth(small_shot.at<cv::Vec3b>(cv::Point(resized.tl()) + cv::Point(offset + pixel_of(0.0f, 0.2f, small_side)))));
+  EXPECT_FALSE(is_cloth(small_shot.at<cv::Vec3b>(cv::Point(resized.tl()) + cv::Point(offset + pixel_of(0.0f, 0.65f, small_side)))));
+  // Beside the cloth's right edge: a stretched copy of the old square image would still show cloth here.
+  EXPECT_FALSE(is_cloth(small_shot.at<cv::Vec3b>(cv::Point(resized.tl()) + cv::Point(offset + pixel_of(0.56f, 0.2f, small_side)))));
+
+  // `h` lists the keys over the picture (white text below the HUD, where there was none).
+  const auto white_text = [&](const cv::Mat& image) {
+    const cv::Rect below_hud = cv::Rect(resized.x + 60, resized.y + 100, 380, 150) & cv::Rect(0, 0, image.cols, image.rows);
+    cv::Mat white;
+    cv::inRange(image(below_hud), cv::Scalar(225, 225, 225), cv::Scalar(255, 255, 255), white);
+    return cv::countNonZero(white);
+  };
+  EXPECT_LT(white_text(small_shot), 20);
+  display.run({kXdotool, "windowfocus", "--sync", window, "key", "h"});
+  std::this_thread::sleep_for(500ms);
+  EXPECT_GT(white_text(display.screenshot(dir / "help.png")), 60) << "the key list is shown";
+
+  display.run({kXdotool, "mousemove", "--window", window, "100", "100"});
+  EXPECT_TRUE(display.pointer_visible()) << "without --mouse the system pointer stays";
+
+  display.run({kXdotool, "windowfocus", "--sync", window, "key", "p"});
+  for (int i = 0; i < 40 && !std::filesystem::exists(dir / "tachi_snapshot_1.png"); ++i) std::this_thread::sleep_for(50ms);
+  EXPECT_TRUE(std::filesystem::exists(dir / "tachi_snapshot_1.png")) << viewer.err();
+  display.run({kXdotool, "windowfocus", "--sync", window, "key", "q"});
+  EXPECT_EQ(viewer.wait(5s), 0) << viewer.err();
+  sim.signal(SIGINT);
+  EXPECT_EQ(sim.wait(5s), 0);
+}
+
+TEST(ViewerWindow, AMouseDragCutsTheClothAlongTheDraggedLine) {
+  if (!tools_present()) GTEST_SKIP() << "Xvfb, xdotool or imagemagick missing (scripts/setup.sh installs them)";
+  const VirtualDisplay display(1024, 900);
+  constexpr unsigned kDomain = 156;
+  ChildProcess sim({kSim, "--grid", "16", "--pin", "top-edge", "--domain", std::to_string(kDomain), "--duration", "40"});
+  ChildProcess viewer({kViewer, "--domain", std::to_string(kDomain), "--size", "600", "--mouse"}, display.env());
+  bus::Participant dds{kDomain};
+  bus::Reader<tachi_msg_CutEvent> cuts{dds, bus::topics::cut_event};
+  bus::Reader<tachi_msg_StrokeSample> strokes{dds, bus::topics::stroke};
+  bus::Reader<tachi_msg_ClothState> states{dds, bus::topics::cloth_state};
+  bus::Reader<tachi_msg_ClothTopology> topologies{dds, bus::topics::cloth_topology};
+  const std::string window = display.viewer_window();
+  ASSERT_FALSE(window.empty()) << viewer.err();
+  ASSERT_TRUE(states.wait_for_data(20s)) << sim.err();
+  std::this_thread::sleep_for(1500ms);  // the viewer has the cloth to cast the cursor onto
+
+  // Seed 001: the blade image drawn at the cursor replaces the system pointer.
+  display.run({kXdotool, "mousemove", "--window", window, "100", "100"});
+  std::this_thread::sleep_for(300ms);
+  EXPECT_FALSE(display.pointer_visible());
+
+  // Drag from left of the cloth to right of it at y = -0.1 m: grid row (0.5 + 0.1) * 15 = 9.
+  const cv::Rect where = display.geometry(window);
+  const int side = std::min(where.width, where.height);
+  const cv::Point from(pixel_of(-0.75f, -0.1f, side)), to(pixel_of(0.75f, -0.1f, side));
+  display.run({kXdotool, "mousemove", "--window", window, std::to_string(from.x), std::to_string(from.y), "mousedown", "1"});
+  for (int i = 1; i <= 30; ++i) {
+    const int x = from.x + (to.x - from.x) * i / 30;
+    display.run({kXdotool, "mousemove", "--window", window, std::to_string(x), std::to_string(from.y)});
+  }
+  display.run({kXdotool, "mouseup", "1"});
+
+  bool cut = false;
+  std::uint32_t pieces = 0, sensor = 0;
+  std::vector<std::pair<int, int>> line;  // grid cells of the cut (grid mode; exact cuts report none)
+  for (int i = 0; i < 100 && !cut; ++i) {
+    cuts.wait_for_data(100ms);
+    for (const auto& event : cuts.take()) {
+      cut = true;
+      pieces = event->pieces;
+      sensor = event->sensor_id;
+      for (std::uint32_t k = 0; k < event->cut_line._length; ++k)
+        line.emplace_back(event->cut_line._buffer[k].u, event->cut_line._buffer[k].v);
+    }
+  }
+  ASSERT_TRUE(cut) << "the simulator reported no cut\n" << sim.err() << viewer.err();
+  EXPECT_EQ(pieces, 2u);
+  EXPECT_EQ(sensor, 1000u) << "the cut names the mouse blade as its hand source";
+  for (const auto& [u, v] : line) EXPECT_NEAR(v, 9, 1) << "cell (" << u << ", " << v << ") is off the dragged line";
+
+  // Whatever the cut mode: the cloth parted along row 9 within a cell. A second later every particle of
+  // rows 0-7 still hangs where it was and every particle of rows 11-15 has fallen away.
+  std::this_thread::sleep_for(1s);
+  (void)states.take();
+  ASSERT_TRUE(states.wait_for_data(5s));
+  const auto latest = states.take();
+  const auto shapes = topologies.take();
+  ASSERT_FALSE(latest.empty());
+  ASSERT_FALSE(shapes.empty());
+  const tachi_msg_ClothState& now = *latest.back();
+  const tachi_msg_ClothTopology& shape = *shapes.back();
+  int hanging = 0, fallen = 0, misplaced = 0;
+  for (std::uint32_t i = 0; i < shape.particle_grid._length && 3 * i + 1 < now.positions._length; ++i) {
+    const int v = shape.particle_grid._buffer[i].v;
+    const float rest_y = 0.5f - static_cast<float>(v) / 15.0f;
+    const float y = now.positions._buffer[3 * i + 1];
+    if (v <= 7) (std::abs(y - rest_y) < 0.2f ? hanging : misplaced)++;
+    if (v >= 11) (y < rest_y - 0.5f ? fallen : misplaced)++;
+  }
+  EXPECT_EQ(misplaced, 0);
+  EXPECT_GE(hanging, 8 * 16);
+  EXPECT_GE(fallen, 5 * 16);
+
+  // The samples that made the cut came from the mouse as a hand source of its own.
+  bool from_mouse = false;
+  for (const auto& s : strokes.take(1024))
+    if (s->opened_by == tachi_msg_GATE_SOURCE_MOUSE && s->sensor_id == 1000 && s->gate == tachi_msg_GATE_CUTTING &&
+        s->session_id != 0 && s->acquired_ns > 0)
+      from_mouse = true;
+  EXPECT_TRUE(from_mouse);
+  viewer.signal(SIGINT);
+  EXPECT_EQ(viewer.wait(3s), 0) << viewer.err();
+  sim.signal(SIGINT);
+  EXPECT_EQ(sim.wait(5s), 0);
+}

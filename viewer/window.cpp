@@ -1,0 +1,142 @@
+#include "window.hpp"
+
+#include <X11/Xlib.h>
+#include <opencv2/highgui.hpp>
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+
+namespace tachi::viewer {
+namespace {
+// The X window named `name` under `parent` (the highgui window, or the frame a window manager put
+// it in), or 0.
+::Window find_window(Display* display, ::Window parent, const std::string& name) {
+  char* title = nullptr;
+  if (XFetchName(display, parent, &title) != 0 && title != nullptr) {
+    const bool match = name == title;
+    XFree(title);
+    if (match) return parent;
+  }
+  ::Window root = 0, up = 0, *children = nullptr;
+  unsigned count = 0;
+  if (XQueryTree(display, parent, &root, &up, &children, &count) == 0) return 0;
+  ::Window found = 0;
+  for (unsigned i = 0; i < count && found == 0; ++i) found = find_window(display, children[i], name);
+  if (children != nullptr) XFree(children);
+  return found;
+}
+
+// Room left for the window manager's title bar and borders and for a panel/taskbar.
+constexpr int kScreenMargin_px = 80;
+constexpr int kMinimumSide_px = 64;
+}  // namespace
+
+std::optional<cv::Size> screen_size() {
+  Display* display = XOpenDisplay(nullptr);
+  if (display == nullptr) return std::nullopt;
+  const int screen = DefaultScreen(display);
+  const cv::Size size(DisplayWidth(display, screen), DisplayHeight(display, screen));
+  XCloseDisplay(display);
+  return size;
+}
+
+Window::Window(std::string name, cv::Size requested) : name_(std::move(name)), size_(requested) {
+  if (const auto screen = screen_size()) {
+    // Keep the aspect: a square view stays square on a wide or a tall screen.
+    const double fit = std::min({1.0, static_cast<double>(screen->width - kScreenMargin_px) / requested.width,
+                                 static_cast<double>(screen->height - kScreenMargin_px) / requested.height});
+    size_ = cv::Size(std::max(kMinimumSide_px, static_cast<int>(requested.width * fit)),
+                     std::max(kMinimumSide_px, static_cast<int>(requested.height * fit)));
+    if (size_ != requested)
+      spdlog::info("tachi-viewer: window {}x{} to fit the {}x{} screen", size_.width, size_.height, screen->width,
+                   screen->height);
+  }
+  // GUI_NORMAL: no toolbar (its zoom would fight ours) and a window that can shrink; FREERATIO: the
+  // image follows the window, and every frame is rendered at the window's size.
+  cv::namedWindow(name_, cv::WINDOW_NORMAL | cv::WINDOW_GUI_NORMAL | cv::WINDOW_FREERATIO);
+  cv::resizeWindow(name_, size_.width, size_.height);
+  cv::moveWindow(name_, 0, 0);
+  cv::setMouseCallback(name_, &Window::on_mouse, this);
+}
+
+Window::~Window() {
+  if (display_ != nullptr) XCloseDisplay(static_cast<Display*>(display_));
+  try {
+    cv::destroyWindow(name_);
+    cv::waitKey(1);
+  } catch (const cv::Exception&) {
+    // the user closed it already
+  }
+}
+
+cv::Size Window::image_size() const {
+  try {
+    const cv::Rect area = cv::getWindowImageRect(name_);
+    if (area.width >= kMinimumSide_px && area.height >= kMinimumSide_px) return area.size();
+  } catch (const cv::Exception&) {
+  }
+  return size_;
+}
+
+void Window::show(const cv::Mat& image) { cv::imshow(name_, image); }
+
+int Window::poll(int wait_ms) {
+  const int key = cv::waitKeyEx(std::max(wait_ms, 1));
+  if (hide_pointer_ && !pointer_hidden_) apply_hidden_pointer();
+  return key;
+}
+
+void Window::apply_hidden_pointer() {
+  // The window appears some event loops after it was created: look for it now and then, not forever.
+  if (pointer_attempts_ > 300 || pointer_attempts_++ % 10 != 0) return;
+  if (display_ == nullptr) display_ = XOpenDisplay(nullptr);
+  auto* display = static_cast<Display*>(display_);
+  if (display == nullptr) return;
+  const ::Window window = find_window(display, DefaultRootWindow(display), name_);
+  if (window == 0) return;
+  // A cursor whose 1x1 shape and mask are empty: nothing is drawn.
+  static const char kEmpty[1] = {0};
+  const Pixmap blank = XCreateBitmapFromData(display, window, kEmpty, 1, 1);
+  XColor black{};
+  const Cursor cursor = XCreatePixmapCursor(display, blank, blank, &black, &black, 0, 0);
+  XDefineCursor(display, window, cursor);
+  XFreePixmap(display, blank);
+  XFlush(display);
+  pointer_hidden_ = true;
+}
+
+bool Window::open() const {
+  try {
+    return cv::getWindowProperty(name_, cv::WND_PROP_VISIBLE) > 0.0;
+  } catch (const cv::Exception&) {
+    return false;
+  }
+}
+
+std::vector<MouseEvent> Window::take_mouse_events() {
+  std::vector<MouseEvent> events;
+  events.swap(events_);
+  return events;
+}
+
+void Window::on_mouse(int event, int x, int y, int flags, void* self) {
+  auto& window = *static_cast<Window*>(self);
+  MouseEvent e;
+  e.pixel = cv::Point2f(static_cast<float>(x), static_cast<float>(y));
+  e.shift = (flags & cv::EVENT_FLAG_SHIFTKEY) != 0;
+  switch (event) {
+    case cv::EVENT_MOUSEMOVE: e.kind = MouseEvent::Move; break;
+    case cv::EVENT_LBUTTONDOWN: e.kind = MouseEvent::LeftDown; break;
+    case cv::EVENT_LBUTTONUP: e.kind = MouseEvent::LeftUp; break;
+    case cv::EVENT_RBUTTONDOWN: e.kind = MouseEvent::RightDown; break;
+    case cv::EVENT_RBUTTONUP: e.kind = MouseEvent::RightUp; break;
+    case cv::EVENT_MOUSEWHEEL:
+      e.kind = MouseEvent::Wheel;
+      e.wheel = cv::getMouseWheelDelta(flags);
+      break;
+    default: return;
+  }
+  window.events_.push_back(e);
+}
+
+}  // namespace tachi::viewer

@@ -1,0 +1,58 @@
+// The viewer's window (OpenCV highgui): resizable, sized to fit the screen it opens on, without
+// the Qt toolbar Debian's highgui adds by default (FIELD_NOTES), with its mouse events queued for
+// the main loop. Rendering stays in the pure renderer: the window only shows images.
+#pragma once
+
+#include <opencv2/core.hpp>
+
+#include <optional>
+
+#include <string>
+#include <vector>
+
+namespace tachi::viewer {
+
+struct MouseEvent {
+  enum Kind { Move, LeftDown, LeftUp, RightDown, RightUp, Wheel } kind = Move;
+  cv::Point2f pixel;
+  int wheel = 0;  ///< > 0 away from the user (zoom in)
+  bool shift = false;
+};
+
+/// Width and height of the X screen the window opens on, or nothing without an X display.
+std::optional<cv::Size> screen_size();
+
+class Window {
+ public:
+  /// Opens a window of `requested` pixels, shrunk to fit the screen (with room for the title bar).
+  Window(std::string name, cv::Size requested);
+  ~Window();
+  Window(const Window&) = delete;
+  Window& operator=(const Window&) = delete;
+
+  /// The size to render at: the window's current image area (the user may resize it).
+  cv::Size image_size() const;
+  void show(const cv::Mat& image);
+  /// Pumps the window's events for up to `wait_ms`; returns the key pressed (cv::waitKeyEx code) or -1.
+  int poll(int wait_ms);
+  /// Mouse events since the last call.
+  std::vector<MouseEvent> take_mouse_events();
+  /// False once the user closed the window.
+  bool open() const;
+  /// Hides the system pointer over the window (seed 001: the blade image drawn at the cursor replaces
+  /// it). Applied as soon as the window is mapped.
+  void hide_pointer() { hide_pointer_ = true; }
+
+ private:
+  static void on_mouse(int event, int x, int y, int flags, void* self);
+  void apply_hidden_pointer();
+  std::string name_;
+  void* display_ = nullptr;  ///< Xlib Display*, kept open while the blank cursor is in use
+  bool hide_pointer_ = false;
+  bool pointer_hidden_ = false;
+  int pointer_attempts_ = 0;
+  cv::Size size_;
+  std::vector<MouseEvent> events_;
+};
+
+}  // namespace tachi::viewer

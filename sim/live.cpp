@@ -147,7 +147,12 @@ int run_live(const OfflineOptions& shared, std::optional<int> max_steps, const L
       const HandInput hand{input->stroke_id, input->time_s,  input->position_m, input->tracked,
                            input->cutting,   input->holding, input->session_id, input->sensor_id,
                            input->grabbing};
+      const auto held_before = session.held_particle();
       session.on_hand(hand);
+      if (session.held_particle() != held_before) {
+        if (session.held_particle()) spdlog::info("tachi-sim: the hand took particle {}", *session.held_particle());
+        else spdlog::info("tachi-sim: the hand let go of particle {}", *held_before);
+      }
       if (const auto why = session.take_grab_refusal()) {
         spdlog::warn("tachi-sim: {}", *why);
         ++grabs_refused;

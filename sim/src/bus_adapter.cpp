@@ -120,13 +120,13 @@ std::size_t TopologyDeltaMessage::payload_bytes() const {
 tachi_msg_ClothState state_msg(std::uint32_t cloth_id, std::uint64_t frame, double sim_time_s, const Cloth& cloth,
                                std::uint64_t session_id, std::optional<std::uint32_t> held) {
   tachi_msg_ClothState msg{};
-  msg.held_particle = held ? static_cast<std::int32_t>(*held) : -1;
   msg.cloth_id = cloth_id;
   msg.session_id = session_id;
   msg.frame = frame;
   msg.sim_time_ns = static_cast<std::int64_t>(std::llround(sim_time_s * 1e9));
   msg.topology_version = cloth.topology_version;
-  msg.held_particle = -1;  // nothing held (a zeroed message would say particle 0)
+  // -1: nothing held (a zeroed message would say particle 0).
+  msg.held_particle = held ? static_cast<std::int32_t>(*held) : -1;
   // The message is only read by dds_write; the cast drops const for the C struct's sake.
   msg.positions._buffer = const_cast<float*>(cloth.position.empty() ? nullptr : cloth.position.front().data());
   msg.positions._length = msg.positions._maximum = static_cast<std::uint32_t>(3 * cloth.particle_count());

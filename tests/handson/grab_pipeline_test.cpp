@@ -20,11 +20,12 @@ constexpr unsigned kDomain = 200;  // 200-219 belong to tests/handson (docs/test
 
 struct Bus {
   Bus() : dds(kDomain), hands(dds, tachi::bus::topics::raw_hand), voice(dds, tachi::bus::topics::voice_command),
-          states(dds, tachi::bus::topics::cloth_state) {}
+          states(dds, tachi::bus::topics::cloth_state), strokes(dds, tachi::bus::topics::stroke) {}
   tachi::bus::Participant dds;
   tachi::bus::Writer<tachi_msg_RawHandSample> hands;
   tachi::bus::Writer<tachi_msg_VoiceCommand> voice;
   tachi::bus::Reader<tachi_msg_ClothState> states;
+  tachi::bus::Reader<tachi_msg_StrokeSample> strokes;
 };
 
 struct State {
@@ -82,6 +83,15 @@ TEST(GrabPipeline, VoiceGrabTheHandMovesVoiceReleaseTheClothMovedWithTheHand) {
   for (int i = 0; i < 20; ++i) hand_at(p1);
   ASSERT_FALSE(seen.empty());
   const State before_release = seen.back();
+  int grabbing = 0;
+  for (const auto& st : bus.strokes.take()) grabbing += st->gate == tachi_msg_GATE_GRABBING ? 1 : 0;
+  EXPECT_GT(grabbing, 30) << "the filter publishes GATE_GRABBING samples after the voice grab";
+  if (before_release.held < 0) {  // stop them so that their logs are complete below
+    sim.signal(SIGINT);
+    filter.signal(SIGINT);
+    sim.wait(10s);
+    filter.wait(10s);
+  }
   ASSERT_GE(before_release.held, 0) << "the hand holds a particle\n" << sim.err() << filter.err();
   const auto held = static_cast<std::size_t>(before_release.held);
   ASSERT_LT(3 * held + 2, before_release.xyz.size());

@@ -133,8 +133,16 @@ void Session::on_hand(const HandInput& hand) {
   }
   const StrokeSample sample{hand.time_s, hand.position_m};
   const bool had_cut = blade_.has_cut();
-  if (blade_.press(cloth_, hand.position_m) != BladeContact::Verdict::Cutting) {
-    approach_ = sample;  // pushing or away: the cloth is dragged (or untouched), not cut
+  const BladeContact::Verdict verdict = blade_.press(cloth_, hand.position_m);
+  if (verdict == BladeContact::Verdict::Away) {
+    // Not touching the cloth (beyond the blade's reach): the stroke goes on as the gate says, so the cutter
+    // sees where it came from (a stroke entering across an edge is clipped there); it cuts nothing here.
+    absorb(cutter_.add_sample(sample));
+    approach_.reset();
+    return;
+  }
+  if (verdict == BladeContact::Verdict::Pushing) {
+    approach_ = sample;  // the blade drags the cloth, it does not cut
     return;
   }
   // The stroke's first cut starts where the blade met the cloth (the previous sample); later ones go on

@@ -4,6 +4,8 @@
 #include "tachi/bus/input_guard.hpp"
 #include "tachi/bus/topics.hpp"
 #include "tachi/common/app.hpp"
+#include "tachi/common/latency.hpp"
+#include "tachi/common/peer_wait.hpp"
 #include "tachi/filter/config.hpp"
 #include "tachi/filter/hand_csv.hpp"
 #include "tachi/filter/stroke_filter.hpp"
@@ -125,6 +127,8 @@ int run_bus(const Options& o, const tachi::filter::FilterConfig& config) {
   tachi::filter::StrokeFilter filter{config};
   std::uint64_t in_count = 0;
   std::uint64_t out_count = 0;
+  tachi::common::LatencyWindow latency;
+  tachi::common::PeerWait waiting_for_sensor("tachi-sensor", o.bus.domain);
   spdlog::info("tachi-filter on domain {}: gate {}, smoother {}", o.bus.domain, tachi::filter::to_string(config.gate.mode),
                tachi::filter::to_string(config.smoother.kind));
   tachi::common::install_stop_handlers();
@@ -136,19 +140,30 @@ int run_bus(const Options& o, const tachi::filter::FilterConfig& config) {
       spdlog::info("voice command {} (\"{}\")", kNames[static_cast<int>(tachi::filter::from_msg(*c))], c->phrase);
       if (const auto why = filter.on_voice(tachi::filter::from_msg(*c))) spdlog::warn("{}", *why);
     }
-    auto states = cloth.take();
-    if (!states.empty()) {
-      const auto& newest = *states.back();
-      if (guard.size(newest.positions._length, kMaxClothFloats, 3))
-        filter.on_cloth_state({newest.positions._buffer, newest.positions._length});
-    }
     for (const auto& h : hands.take()) {
       ++in_count;
       if (h->tracked && !guard.position(h->position_m.x, h->position_m.y, h->position_m.z, kMaxHandRange_m)) continue;
       if (!guard.time(h->sensor_id, h->capture_time_ns, kSensorRestartGap_ns)) continue;
       const auto stroke = filter.on_hand(tachi::filter::from_msg(*h));
-      strokes.write(tachi::filter::to_msg(stroke, h->sensor_id, session_id));
+      auto msg = tachi::filter::to_msg(stroke, h->sensor_id, session_id);
+      msg.acquired_ns = h->acquired_ns;  // the depth frame's time rides on to the simulator
+      strokes.write(msg);
+      latency.add_since(h->acquired_ns, tachi::common::wall_clock_ns());
       ++out_count;
+      heartbeat.set_metric("strokes", stroke.stroke_id);
+      heartbeat.set_metric("gate", static_cast<double>(msg.gate));
+      heartbeat.set_metric("gate_opened_by", static_cast<double>(msg.opened_by));
+      heartbeat.set_metric("latency_p50_ms", latency.percentile(50));
+      heartbeat.set_metric("latency_p99_ms", latency.percentile(99));
+    }
+    waiting_for_sensor.warn_if_waiting(hands.matched_writers() > 0);
+    // The cloth after the hands: a 128 x 128 state is 196 KB to copy and scan, and the hand samples
+    // must not wait for it (end-to-end latency); the gate then uses the cloth as of one state earlier.
+    auto states = cloth.take();
+    if (!states.empty()) {
+      const auto& newest = *states.back();
+      if (guard.size(newest.positions._length, kMaxClothFloats, 3))
+        filter.on_cloth_state({newest.positions._buffer, newest.positions._length});
     }
     heartbeat.update(tachi_msg_NODE_RUNNING, in_count, out_count, "gate " + tachi::filter::to_string(config.gate.mode));
     return true;

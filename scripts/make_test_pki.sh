@@ -33,7 +33,7 @@ declare -A publishes=(
   [sensor]="tachi/hand/raw"
   [voice]="tachi/voice/command"
   [filter]="tachi/hand/stroke"
-  [sim]="tachi/cloth/topology tachi/cloth/state tachi/cloth/cut"
+  [sim]="tachi/cloth/topology tachi/cloth/topology_delta tachi/cloth/state tachi/cloth/cut"
   [viewer]=""
   [mouse]="tachi/hand/stroke"
   [monitor]=""
@@ -43,8 +43,8 @@ declare -A reads=(
   [voice]=""
   [filter]="tachi/hand/raw tachi/voice/command tachi/cloth/state"
   [sim]="tachi/hand/stroke tachi/voice/command"
-  [viewer]="tachi/cloth/topology tachi/cloth/state tachi/cloth/cut tachi/hand/stroke tachi/node/status"
-  [mouse]="tachi/cloth/topology tachi/cloth/state tachi/cloth/cut tachi/hand/stroke tachi/node/status"
+  [viewer]="tachi/cloth/topology tachi/cloth/topology_delta tachi/cloth/state tachi/cloth/cut tachi/hand/stroke tachi/node/status"
+  [mouse]="tachi/cloth/topology tachi/cloth/topology_delta tachi/cloth/state tachi/cloth/cut tachi/hand/stroke tachi/node/status"
   [monitor]="*"
 )
 nodes=(sensor voice filter sim viewer mouse monitor)
@@ -59,10 +59,10 @@ make_ca() {  # name common-name
 make_ca identity_ca "tachi identity CA"
 make_ca permissions_ca "tachi permissions CA"
 
-topics_xml() {  # space-separated topic names -> <topic> elements
-  local t
+topics_xml() (  # space-separated topic names -> <topic> elements
+  set -f  # "*" (monitor reads every topic) is a DDS topic expression, not a glob over this folder
   for t in $1; do printf '            <topic>%s</topic>\n' "$t"; done
-}
+)
 
 # A day back, so a clock a little behind the signing host still accepts the grants.
 now=$(date -u -d "-1 day" +%Y-%m-%dT%H:%M:%S)

@@ -27,6 +27,8 @@ packages=(
   openssl clang
   # viewer under a virtual display
   xvfb xdotool imagemagick libx11-dev libxfixes-dev
+  # the run's plots (tachi run: latency.png, trajectory.png via scripts/plot_run.py)
+  python3-matplotlib
 )
 
 missing=()

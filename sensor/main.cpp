@@ -14,6 +14,8 @@
 #include "tachi/bus/heartbeat.hpp"
 #include "tachi/bus/topics.hpp"
 #include "tachi/common/app.hpp"
+#include "tachi/common/latency.hpp"
+#include "tachi/common/peer_wait.hpp"
 #include "tachi/sensor/depth_source.hpp"
 #include "tachi/sensor/hand_csv.hpp"
 #include "tachi/sensor/hand_finder.hpp"
@@ -130,19 +132,34 @@ int main(int argc, char** argv) try {
   tachi::sensor::HandFinder finder(source->model());
   std::uint64_t frames = 0, tracked = 0;
   tachi::sensor::DepthFrame buffer;  // reused: no 614 KB allocation (and its page faults) per frame
+  tachi::common::LatencyWindow latency;
+  tachi::common::PeerWait waiting_for_filter("tachi-filter", o.bus.domain);
+  const auto started = std::chrono::steady_clock::now();
   while (!tachi::common::stop_requested() && (o.max_frames == 0 || frames < o.max_frames)) {
     if (!source->next_into(buffer)) break;
     const tachi::sensor::DepthFrame* frame = &buffer;
+    // End-to-end latency starts when the frame reaches this process (the recording's pacing is before it).
+    const std::int64_t acquired_ns = tachi::common::wall_clock_ns();
     const auto hand = finder.find(*frame);
     if (recorder) {
       recorder->write_depth(*frame);
       if (frame->accel) recorder->write_accel(frame->stamp_ns, frame->device_timestamp, *frame->accel);
     }
     if (csv.is_open()) tachi::sensor::write_hand_row(csv, frame->frame, frame->stamp_ns, hand);
-    if (writer) writer->write(tachi::sensor::to_msg(hand, o.sensor_id, frame->frame, frame->stamp_ns));
+    if (writer) writer->write(tachi::sensor::to_msg(hand, o.sensor_id, frame->frame, frame->stamp_ns, acquired_ns));
     ++frames;
     tracked += hand.tracked ? 1 : 0;
-    if (heartbeat) heartbeat->update(tachi_msg_NODE_RUNNING, frames, frames, hand.tracked ? "hand tracked" : "no hand");
+    latency.add_since(acquired_ns, tachi::common::wall_clock_ns());
+    if (heartbeat) {
+      const double elapsed_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+      heartbeat->set_metric("frames", static_cast<double>(frames));
+      heartbeat->set_metric("tracked_frames", static_cast<double>(tracked));
+      heartbeat->set_metric("fps", elapsed_s > 0 ? static_cast<double>(frames) / elapsed_s : 0.0);
+      heartbeat->set_metric("latency_p50_ms", latency.percentile(50));
+      heartbeat->set_metric("latency_p99_ms", latency.percentile(99));
+      heartbeat->update(tachi_msg_NODE_RUNNING, frames, frames, hand.tracked ? "hand tracked" : "no hand");
+    }
+    if (writer) waiting_for_filter.warn_if_waiting(writer->matched_readers() > 0);
   }
   if (csv.is_open() && !csv.flush()) throw std::runtime_error("cannot write " + o.csv);
   if (recorder) recorder->flush();

@@ -4,6 +4,7 @@
 #include "tachi/bus/heartbeat.hpp"
 #include "tachi/bus/topics.hpp"
 #include "tachi/common/app.hpp"
+#include "tachi/common/peer_wait.hpp"
 #include "tachi/sensor/voice_audio.hpp"
 #include "tachi/sensor/voice_spotter.hpp"
 
@@ -42,7 +43,7 @@ std::int64_t now_ns() {
 /// Publishes commands; nothing when --no-dds.
 class CommandPublisher {
  public:
-  CommandPublisher(const Options& o) : source_id_(o.source_id) {
+  CommandPublisher(const Options& o) : source_id_(o.source_id), waiting_for_filter_("tachi-filter", o.bus.domain) {
     if (o.no_dds) return;
     dds_.emplace(o.bus.domain, o.bus.dds_config, tachi::bus::Security{o.bus.secure_dir, o.bus.identity});
     writer_.emplace(*dds_, tachi::bus::topics::voice_command);
@@ -51,6 +52,7 @@ class CommandPublisher {
   /// Heartbeat on tachi/node/status (no-op without DDS).
   void alive(std::uint64_t samples_in) {
     if (heartbeat_) heartbeat_->update(tachi_msg_NODE_RUNNING, samples_in, published_);
+    if (writer_) waiting_for_filter_.warn_if_waiting(writer_->matched_readers() > 0);
   }
   void wait_for_readers(double seconds) {
     if (writer_ && seconds > 0 && !writer_->wait_for_readers(1, std::chrono::milliseconds(static_cast<long>(seconds * 1000))))
@@ -81,6 +83,7 @@ class CommandPublisher {
   std::optional<tachi::bus::Participant> dds_;
   std::optional<tachi::bus::Writer<tachi_msg_VoiceCommand>> writer_;
   std::optional<tachi::bus::Heartbeat> heartbeat_;
+  tachi::common::PeerWait waiting_for_filter_;
   std::uint64_t published_ = 0;
 };
 

@@ -3,6 +3,8 @@
 #include "src/bus_adapter.hpp"
 #include "tachi/bus/heartbeat.hpp"
 #include "tachi/bus/input_guard.hpp"
+#include "tachi/common/latency.hpp"
+#include "tachi/common/peer_wait.hpp"
 #include "tachi/sim/journal.hpp"
 #include "tachi/sim/session.hpp"
 
@@ -99,11 +101,9 @@ int run_live(const OfflineOptions& shared, std::optional<int> max_steps, const L
   TopologyMessage topology;
   topology.fill(live.cloth_id, session.cloth(), nullptr, session_id);
   topology_writer.write(topology.msg());
-  constexpr auto kTopologyPeriod = std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(1.0 / 30.0));
   constexpr auto kKeyframePeriod = std::chrono::seconds(1);
   bus::Writer<tachi_msg_ClothTopologyDelta> delta_writer{dds, bus::topics::cloth_topology_delta};
   TopologyDeltaMessage delta{session.cloth()};
-  auto last_topology = Clock::now();
   auto last_keyframe = Clock::now();
   bool keyframe_due = false;
   std::uint64_t topology_updates = 0;
@@ -122,13 +122,73 @@ int run_live(const OfflineOptions& shared, std::optional<int> max_steps, const L
   const auto start = Clock::now();
   auto next_step = start;
   auto last_hand = start;
-  std::uint64_t samples_in = 0, messages_out = 1, overruns = 0, grabs_refused = 0;
+  std::uint64_t samples_in = 0, messages_out = 1, overruns = 0, cuts = 0, grabs_refused = 0;
+  double cut_length_m = 0.0;
   bool had_filter = false;
   std::vector<double> step_ms;
   heartbeat.set_metric("blade", static_cast<double>(shared.blade));  // index of Blade: the viewer's HUD names it
+  // acquired_ns of the newest applied hand sample: every state published from then on reflects it.
+  std::int64_t newest_acquired_ns = 0;
+  std::int64_t pending_latency_ns = 0;  // oldest applied sample whose state waits for its topology delta
+  common::LatencyWindow latency;
+  common::PeerWait waiting_for_filter("tachi-filter", live.bus.domain);
+
+  // Topology changes and closed strokes go out before the state that indexes the new topology.
+  // Changes are merged in the session and published as deltas at a bounded rate: a token bucket of 30 a
+  // second (two in hand), so a 30 Hz hand gets a delta with each cutting sample while a burst cannot
+  // exceed the bound; the whole topology goes out as a keyframe for late joiners and readers that missed
+  // a delta at most once a second while cuts go on (issue 11). Returns false while a change waits for a
+  // token: a state published then would index a topology no reader has yet.
+  double delta_tokens = 2.0;
+  auto last_refill = Clock::now();
+  const auto publish_changes = [&] {
+    const auto now = Clock::now();
+    delta_tokens = std::min(2.0, delta_tokens + 30.0 * std::chrono::duration<double>(now - last_refill).count());
+    last_refill = now;
+    bool in_sync = !session.topology_changed();
+    if (!in_sync && delta_tokens >= 1.0) {
+      if (const auto change = session.take_topology_change()) {
+        delta.fill(live.cloth_id, session.cloth(), *change, session_id);
+        delta_writer.write(delta.msg());
+        ++messages_out;
+        ++topology_updates;
+        topology_bytes += delta.payload_bytes();
+        delta_tokens -= 1.0;
+        keyframe_due = true;
+      }
+      in_sync = true;
+    }
+    if (keyframe_due && now - last_keyframe >= kKeyframePeriod) {
+      topology.fill(live.cloth_id, session.cloth(), nullptr, session_id);
+      topology_writer.write(topology.msg());
+      ++messages_out;
+      keyframe_due = false;
+      last_keyframe = now;
+    }
+    for (const auto& report : session.take_cut_reports()) {
+      cut_writer.write(cut_msg(live.cloth_id, session.cloth().topology_version, report, cut_line, session_id));
+      ++messages_out;
+      ++cuts;
+      spdlog::info("tachi-sim: stroke {} cut {} particles over {:.3f} m; {} pieces, {} falling", report.stroke_id,
+                   report.stroke.particles_duplicated, report.stroke.cut_length_m, report.pieces, report.fallen_pieces);
+      heartbeat.set_metric("pieces", static_cast<double>(report.pieces));
+      heartbeat.set_metric("fallen_pieces", static_cast<double>(report.fallen_pieces));
+      cut_length_m += report.stroke.cut_length_m;
+    }
+    return in_sync;
+  };
+  const auto publish_state = [&] {
+    auto msg = state_msg(live.cloth_id, session.steps(), session.time_s(), session.cloth(), session_id, session.held_particle());
+    msg.acquired_ns = newest_acquired_ns;
+    msg.published_ns = common::wall_clock_ns();
+    state_writer.write(msg);
+    ++messages_out;
+    return msg.published_ns;
+  };
 
   common::run_until_stopped([&] {
     strokes.wait_for_data(std::max(next_step - Clock::now(), Clock::duration::zero()));
+    std::int64_t batch_acquired_ns = 0;
     for (const auto& sample : strokes.take()) {
       const auto input = from_msg(*sample);
       if (!input) {
@@ -160,7 +220,18 @@ int run_live(const OfflineOptions& shared, std::optional<int> max_steps, const L
       if (journal) journal_append(*journal, {JournalRecord::Kind::Hand, session.steps(), input->sensor_id, sample->time_ns, hand});
       ++samples_in;
       last_hand = Clock::now();
+      batch_acquired_ns = std::max(batch_acquired_ns, sample->acquired_ns);
     }
+    // A stroke sample is applied as soon as it arrives (the waitset woke us), and the state that
+    // reflects it goes out now rather than at the next 60 Hz step: capture -> state latency.
+    if (batch_acquired_ns > 0) {
+      newest_acquired_ns = batch_acquired_ns;
+      if (publish_changes()) latency.add_since(batch_acquired_ns, publish_state());
+      else if (pending_latency_ns == 0) pending_latency_ns = batch_acquired_ns;
+      heartbeat.set_metric("latency_p50_ms", latency.percentile(50));
+      heartbeat.set_metric("latency_p99_ms", latency.percentile(99));
+    }
+    waiting_for_filter.warn_if_waiting(strokes.matched_writers() > 0);
     // A filter that vanished mid-stroke would leave the stroke open forever: close it.
     const bool has_filter = strokes.matched_writers() > 0;
     if (had_filter && !has_filter && session.cutter().stroke_open()) {
@@ -181,38 +252,16 @@ int run_live(const OfflineOptions& shared, std::optional<int> max_steps, const L
         next_step = Clock::now() + period;
         ++overruns;
       }
-      // Topology changes are merged in the session and published as deltas at most 30 times a second (a
-      // stroke cuts on most steps at 60 Hz); the whole topology goes out as a keyframe for late joiners and
-      // readers that missed a delta at most once a second while cuts go on (issue 11).
-      if (Clock::now() - last_topology >= kTopologyPeriod) {
-        if (const auto change = session.take_topology_change()) {
-          delta.fill(live.cloth_id, session.cloth(), *change, session_id);
-          delta_writer.write(delta.msg());
-          ++messages_out;
-          ++topology_updates;
-          topology_bytes += delta.payload_bytes();
-          last_topology = Clock::now();
-          keyframe_due = true;
-        }
+      const bool in_sync = publish_changes();
+      if (in_sync && session.steps() % static_cast<std::uint64_t>(live.state_every) == 0) {
+        const std::int64_t published_ns = publish_state();
+        // A cutting sample whose delta waited for a token is reflected by this state: its latency counts here.
+        if (pending_latency_ns > 0) latency.add_since(pending_latency_ns, published_ns);
+        pending_latency_ns = 0;
       }
-      if (keyframe_due && Clock::now() - last_keyframe >= kKeyframePeriod) {
-        topology.fill(live.cloth_id, session.cloth(), nullptr, session_id);
-        topology_writer.write(topology.msg());
-        ++messages_out;
-        keyframe_due = false;
-        last_keyframe = Clock::now();
-      }
-      for (const auto& report : session.take_cut_reports()) {
-        cut_writer.write(cut_msg(live.cloth_id, session.cloth().topology_version, report, cut_line, session_id));
-        ++messages_out;
-        spdlog::info("tachi-sim: stroke {} cut {} particles over {:.3f} m; {} pieces, {} falling", report.stroke_id,
-                     report.stroke.particles_duplicated, report.stroke.cut_length_m, report.pieces, report.fallen_pieces);
-      }
-      if (session.steps() % static_cast<std::uint64_t>(live.state_every) == 0) {
-        state_writer.write(
-            state_msg(live.cloth_id, session.steps(), session.time_s(), session.cloth(), session_id, session.held_particle()));
-        ++messages_out;
-      }
+      heartbeat.set_metric("cuts", static_cast<double>(cuts));
+      heartbeat.set_metric("cut_length_m", cut_length_m);
+      heartbeat.set_metric("steps", static_cast<double>(session.steps()));
       heartbeat.update(overruns > 0 ? tachi_msg_NODE_DEGRADED : tachi_msg_NODE_RUNNING, samples_in, messages_out,
                        "steps " + std::to_string(session.steps()));
     }
@@ -240,8 +289,7 @@ int run_live(const OfflineOptions& shared, std::optional<int> max_steps, const L
   }
   for (const auto& report : session.take_cut_reports())
     cut_writer.write(cut_msg(live.cloth_id, session.cloth().topology_version, report, cut_line, session_id));
-  state_writer.write(
-      state_msg(live.cloth_id, session.steps(), session.time_s(), session.cloth(), session_id, session.held_particle()));
+  publish_state();
   // Let late readers (viewer, tests) receive the final topology and cuts before the process goes.
   topology_writer.wait_for_acks(std::chrono::seconds(1));
   delta_writer.wait_for_acks(std::chrono::seconds(1));
@@ -255,10 +303,13 @@ int run_live(const OfflineOptions& shared, std::optional<int> max_steps, const L
   summary.extra["hand_samples"] = samples_in;
   summary.extra["hand_samples_rejected"] = rejected;
   summary.extra["step_overruns"] = overruns;
+  summary.extra["grabs_refused"] = grabs_refused;
   summary.extra["topology_updates"] = topology_updates;
   summary.extra["topology_bytes_per_update"] = topology_updates > 0 ? topology_bytes / topology_updates : 0;
   summary.extra["topology_keyframe_bytes"] = topology.payload_bytes();
-  summary.extra["grabs_refused"] = grabs_refused;
+  summary.extra["latency_p50_ms"] = latency.percentile(50);
+  summary.extra["latency_p99_ms"] = latency.percentile(99);
+  summary.extra["latency_ms"] = latency.values();  // capture -> published state per depth frame (the last 1024)
   spdlog::info("tachi-sim: stopped after {} steps ({} hand samples, {} pieces)", summary.steps, samples_in, summary.pieces);
   if (!shared.export_dir.empty()) export_run(summary, session.cloth(), shared.export_dir, &session.cutter());
   return common::kExitOk;

@@ -9,7 +9,8 @@
 namespace tachi::sensor {
 
 /// A RawHandSample for one depth frame (position and pixel are zero when the hand is lost).
+/// `acquired_ns`: wall clock when the frame reached this process (end-to-end latency starts there).
 tachi_msg_RawHandSample to_msg(const HandObservation& hand, std::uint32_t sensor_id, std::uint64_t frame,
-                               std::int64_t capture_time_ns);
+                               std::int64_t capture_time_ns, std::int64_t acquired_ns = 0);
 
 }  // namespace tachi::sensor

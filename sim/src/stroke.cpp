@@ -188,10 +188,12 @@ ClothPoint ClothLocator::locate(const Cloth& cloth, const Eigen::Vector3f& point
 }
 
 StrokeCutter::StrokeCutter(Cloth& cloth, StrokeOptions options)
-    : cloth_(&cloth), options_(options), cutter_(cloth), locator_(options.inside_margin_cells) {
+    : cloth_(&cloth), options_(options), cutter_(cloth), locator_(options.inside_margin_cells),
+      backtrack_cells_(options.tolerance_cells) {
   if (follows_path()) {
     exact_.emplace(cloth);
     options_.tolerance_cells = options_.exact_tolerance_cells;
+    backtrack_cells_ = options_.exact_backtrack_cells;
   }
 }
 
@@ -329,7 +331,7 @@ TopologyChange StrokeCutter::add_sample(const StrokeSample& sample) {
         }
         const double along = rel.dot(chord) / length;
         const double across = std::abs(rel.x() * chord.y() - rel.y() * chord.x()) / length;
-        if (across > options_.tolerance_cells || along < -options_.tolerance_cells) return false;
+        if (across > options_.tolerance_cells || along < -backtrack_cells_) return false;
       }
       return true;
     };

@@ -5,37 +5,17 @@
 # Usage: multihost_test.sh BIN_DIR RECORDING CONFIG_TEMPLATE    (exit 77 = skipped: needs root + ip netns)
 set -u
 bin=$1 recording=$2 template=$3
-[ "$(id -u)" -eq 0 ] || { echo "skip: needs root for ip netns"; exit 77; }
-command -v ip >/dev/null || { echo "skip: needs iproute2"; exit 77; }
-
-a="tachi-host-a-$$" b="tachi-host-b-$$"
-work=$(mktemp -d /tmp/tachi-multihost-XXXXXX)
-pids=()
-cleanup() {
-  for p in "${pids[@]}"; do kill "$p" 2>/dev/null; done
-  ip netns del "$a" 2>/dev/null; ip netns del "$b" 2>/dev/null
-  rm -rf "$work"
-}
-trap cleanup EXIT
-ip netns add "$a" && ip netns add "$b" || { echo "skip: cannot create network namespaces"; exit 77; }
-ip link add "va$$" netns "$a" type veth peer name "vb$$" netns "$b" || { echo "skip: cannot create veth"; exit 77; }
-ip -n "$a" addr add 198.51.100.1/24 dev "va$$"; ip -n "$b" addr add 198.51.100.2/24 dev "vb$$"
-for ns in "$a" "$b"; do ip -n "$ns" link set lo up; done
-ip -n "$a" link set "va$$" up; ip -n "$b" link set "vb$$" up
-
-fill() {  # interface -> config file for that host
-  sed -e "s/INTERFACE/$1/" -e "s/HOST_A_ADDRESS/198.51.100.1/" -e "s/HOST_B_ADDRESS/198.51.100.2/" "$template" > "$work/$1.xml"
-}
-fill "va$$"; fill "vb$$"
+prefix=v
+source "$(dirname "$0")/../support/two_hosts.sh"
 dom=100
 # exec: a backgrounded call is then the program itself, so its PID takes our signals.
-on_b() { exec ip netns exec "$b" "$@" --domain $dom --dds-config "$work/vb$$.xml"; }
+on_b() { exec ip netns exec "$b" "$@" --domain $dom --dds-config "$work/$if_b.xml"; }
 
 on_b "$bin/tachi-sim" --grid 32 --pin top-edge --exit-when-idle 2 --export "$work/out" 2>"$work/sim.log" & sim=$!; pids+=("$sim")
 on_b "$bin/tachi-viewer" --headless --snapshot "$work/final.png" --fps 10 --exit-when-idle 3 2>"$work/viewer.log" & viewer=$!; pids+=("$viewer")
 on_b "$bin/tachi-filter" --gate threshold 2>"$work/filter.log" & filter=$!; pids+=("$filter")
 ip netns exec "$a" timeout 120 "$bin/tachi-sensor" --recording "$recording" --rate 1 --domain $dom \
-  --dds-config "$work/va$$.xml" --wait-readers 1 2>"$work/sensor.log"
+  --dds-config "$work/$if_a.xml" --wait-readers 1 2>"$work/sensor.log"
 sensor_status=$?
 wait "$sim"; sim_status=$?
 wait "$viewer"; viewer_status=$?

@@ -85,6 +85,8 @@ class Session {
 
   /// Topology changes since the last call (merged), or nothing when the topology did not change.
   std::optional<TopologyChange> take_topology_change();
+  /// True when topology changes are waiting for take_topology_change().
+  [[nodiscard]] bool topology_changed() const { return pending_.has_value(); }
   /// Reports of strokes closed since the last call.
   std::vector<CutReport> take_cut_reports();
 

@@ -1,0 +1,231 @@
+// tachi: the one command. `tachi run` starts and supervises the pipeline's processes and leaves the
+// run's outputs in a folder; `tachi topics`, `tachi echo` and `tachi status` show what is on a
+// domain's bus (docs/cli.md "tachi").
+#include "src/bus_adapter.hpp"
+#include "src/run.hpp"
+#include "tachi/bus/discovery.hpp"
+#include "tachi/common/app.hpp"
+#include "tachi/launcher/config.hpp"
+#include "tachi/launcher/supervision.hpp"
+
+#include <spdlog/spdlog.h>
+#include <unistd.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <map>
+
+namespace {
+namespace fs = std::filesystem;
+namespace launcher = tachi::launcher;
+using nlohmann::json;
+
+struct RunFlags {
+  std::string config_file, recording, rate, gate, voice_wav, voice_device, blade, out, nodes, dds_config, secure;
+  bool live = false, headless = false, print_config = false, mouse = false;
+  int grid = 0;
+  unsigned domain = 0;
+  double settle_s = 0;
+  std::vector<std::string> sets;
+};
+
+fs::path self_dir(const char* argv0) {
+  std::error_code ec;
+  const auto exe = fs::read_symlink("/proc/self/exe", ec);
+  return ec ? fs::absolute(argv0).parent_path() : exe.parent_path();
+}
+
+// Defaults, then the config file, then the flags that were given, then --set.
+json effective_config(const CLI::App& run, const RunFlags& f) {
+  json config = launcher::default_config_json(std::getenv("DISPLAY") != nullptr && *std::getenv("DISPLAY") != '\0');
+  if (!f.config_file.empty()) {
+    std::ifstream in(f.config_file);
+    json file = json::parse(in, nullptr, false);
+    if (file.is_discarded() || !file.is_object()) throw std::invalid_argument("--config " + f.config_file + ": not a JSON object");
+    launcher::merge_into(config, file);
+  }
+  const auto given = [&](const char* flag) { return run.count(flag) > 0; };
+  if (given("--recording")) {
+    config["recording"] = f.recording;
+    config.erase("live");
+  }
+  if (given("--live")) {
+    config["recording"] = "";
+    config["live"] = true;
+  }
+  if (given("--rate")) config["rate"] = f.rate;
+  if (given("--gate")) config["gate"] = f.gate;
+  if (given("--voice-wav")) config["voice_wav"] = f.voice_wav;
+  if (given("--voice-device")) config["voice_device"] = f.voice_device;
+  if (given("--blade")) config["blade"] = f.blade;
+  if (given("--grid")) config["grid"] = f.grid;
+  if (given("--domain")) config["domain"] = f.domain;
+  if (given("--dds-config")) config["dds_config"] = fs::absolute(f.dds_config).string();
+  if (given("--secure")) config["secure"] = fs::absolute(f.secure).string();
+  if (given("--out")) config["out"] = f.out;
+  if (given("--headless")) config["headless"] = f.headless;
+  if (given("--nodes")) config["nodes"] = f.nodes;
+  if (given("--settle")) config["settle_s"] = f.settle_s;
+  if (given("--mouse")) config["mouse"] = f.mouse;
+  for (const auto& s : f.sets) launcher::merge_into(config, launcher::parse_set(s));
+  return config;
+}
+
+int cmd_run(const CLI::App& run, const RunFlags& f, const fs::path& bin_dir) {
+  launcher::RunConfig config;
+  json effective;
+  try {
+    effective = effective_config(run, f);
+    config = launcher::from_json(effective);
+  } catch (const std::exception& e) {
+    std::cerr << "tachi run: " << e.what() << '\n';
+    return launcher::kRunUsage;
+  }
+  if (f.print_config) {
+    std::cout << launcher::to_json(config).dump(2) << '\n';
+    return launcher::kRunOk;
+  }
+  if (!config.recording.empty() && !fs::exists(fs::path(config.recording) / "INDEX.txt")) {
+    std::cerr << "tachi run: --recording " << config.recording << ": not a fakenect recording (no INDEX.txt)\n";
+    return launcher::kRunUsage;
+  }
+  if (!config.recording.empty()) config.recording = fs::absolute(config.recording).string();
+  tachi::common::install_stop_handlers();
+  return launcher::run(config, {bin_dir, fs::path(TACHI_SCRIPTS_DIR) / "plot_run.py"});
+}
+
+int cmd_topics(const tachi::common::BusOptions& bus, double listen_s) {
+  tachi::bus::Participant dds{bus.domain, bus.dds_config, {bus.secure_dir, bus.identity}};
+  const auto snapshot = tachi::bus::discover(dds, std::chrono::milliseconds(static_cast<int>(listen_s * 1000)));
+  std::map<std::string, const tachi::bus::ParticipantInfo*> by_key;
+  std::cout << "participants on domain " << bus.domain << ":\n";
+  for (const auto& p : snapshot.participants) {
+    by_key[p.key] = &p;
+    if (p.self) continue;
+    std::cout << "  " << (p.process.empty() ? "?" : p.process) << "  host " << (p.host.empty() ? "?" : p.host) << "  pid "
+              << (p.pid.empty() ? "?" : p.pid) << "  guid " << p.key << '\n';
+  }
+  struct Counts {
+    std::string type;
+    std::vector<std::string> writers, readers;
+  };
+  std::map<std::string, Counts> topics;
+  for (const auto& e : snapshot.endpoints) {
+    const auto p = by_key.find(e.participant_key);
+    if (p != by_key.end() && p->second->self) continue;
+    auto& t = topics[e.topic];
+    t.type = e.type;
+    const std::string who = p == by_key.end() || p->second->process.empty() ? e.participant_key
+                                                                             : p->second->process + "[" + p->second->pid + "]";
+    (e.writer ? t.writers : t.readers).push_back(who);
+  }
+  std::cout << "topics:\n";
+  for (const auto& [name, t] : topics) {
+    std::cout << "  " << name << "  (" << t.type << ")  " << t.writers.size() << " writer(s), " << t.readers.size()
+              << " reader(s)\n";
+    for (const auto& w : t.writers) std::cout << "    writer " << w << '\n';
+    for (const auto& r : t.readers) std::cout << "    reader " << r << '\n';
+  }
+  return tachi::common::kExitOk;
+}
+
+int cmd_status(const tachi::common::BusOptions& bus, double listen_s) {
+  tachi::bus::Participant dds{bus.domain, bus.dds_config, {bus.secure_dir, bus.identity}};
+  tachi::bus::Reader<tachi_msg_NodeStatus> reader{dds, tachi::bus::topics::node_status};
+  launcher::StatusBoard board;
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(listen_s);
+  // Transient-local: each node's latest heartbeat arrives as soon as it is discovered.
+  while (std::chrono::steady_clock::now() < deadline && !tachi::common::stop_requested()) {
+    reader.wait_for_data(std::chrono::milliseconds(100));
+    for (const auto& s : reader.take()) board.update(launcher::from_msg(*s));
+  }
+  if (board.nodes().empty()) {
+    std::cout << "no heartbeats on domain " << bus.domain << '\n';
+    return tachi::common::kExitFailure;
+  }
+  for (const auto& [name, r] : board.nodes()) {
+    std::cout << name << "  host " << r.host << "  pid " << r.pid << "  " << r.state << "  in " << r.messages_in << "  out "
+              << r.messages_out << "  rejected " << r.rejected << (r.detail.empty() ? "" : "  \"" + r.detail + "\"") << '\n';
+    for (const auto& [metric, value] : r.metrics) std::cout << "    " << metric << " " << value << '\n';
+  }
+  std::cout << board.line(0) << '\n';
+  return tachi::common::kExitOk;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) try {
+  CLI::App app{"tachi: cut a virtual cloth with your hand. `tachi run` starts the whole pipeline; "
+               "`tachi topics|echo|status` show what is on the DDS bus"};
+  app.name("tachi");
+  app.require_subcommand(1);
+  std::string log_level;
+  tachi::common::add_log_level_flag(app, log_level);
+
+  RunFlags f;
+  auto* run = app.add_subcommand("run", "Start the pipeline (sensor, filter, sim, viewer; voice with a voice source) and supervise it");
+  run->add_option("--config", f.config_file, "JSON file with any of the options below (flags override it)")->check(CLI::ExistingFile);
+  run->add_flag("--print-config", f.print_config, "Print the effective config (defaults, --config, flags) as JSON and exit");
+  auto* rec = run->add_option("--recording", f.recording, "Play this fakenect recording folder")->check(CLI::ExistingDirectory);
+  run->add_flag("--live", f.live, "Use the live Kinect (the default without --recording)")->excludes(rec);
+  run->add_flag("--mouse", f.mouse, "Cut with the mouse in the viewer's window (seed 001's blade): sim and viewer only")
+      ->excludes(rec);
+  run->add_option("--rate", f.rate, "Recording pace: real (=1), max or a factor (tachi-sensor --rate)");
+  run->add_option("--gate", f.gate, "What opens a stroke")->check(CLI::IsMember({"threshold", "voice", "either"}));
+  auto* wav = run->add_option("--voice-wav", f.voice_wav, "Voice commands from a WAV file (starts tachi-voice)")->check(CLI::ExistingFile);
+  run->add_option("--voice-device", f.voice_device, "Voice commands from an ALSA capture device (starts tachi-voice)")->excludes(wav);
+  run->add_option("--blade", f.blade, "tachi-sim --blade (razor, scalpel, utility, kitchen, hunting, worn)");
+  run->add_option("--grid", f.grid, "Cloth particles per side")->check(CLI::Range(2, 1024));
+  run->add_option("--domain", f.domain, "DDS domain id of this pipeline")->check(CLI::Range(0u, 232u));
+  run->add_option("--dds-config", f.dds_config, "Cyclone DDS XML for every node (default: loopback only)")->check(CLI::ExistingFile);
+  run->add_option("--secure", f.secure, "DDS Security folder (scripts/make_test_pki.sh) for every node; each uses its own identity")
+      ->check(CLI::ExistingDirectory);
+  run->add_option("--out", f.out, "Output folder (summary.json, cloth.obj, plots, logs); default out/run");
+  run->add_flag("--headless,!--window", f.headless, "Viewer without a window (default when DISPLAY is unset)");
+  run->add_option("--nodes", f.nodes, "Start only these nodes, e.g. sensor,filter (the other host runs sim,viewer)");
+  run->add_option("--settle", f.settle_s, "With a recording: end this many seconds after the last hand sample")
+      ->check(CLI::Range(0.1, 60.0));
+  run->add_option("--set", f.sets, "NODE.FLAG=VALUE passed to one node, e.g. sim.material=denim (repeatable)");
+
+  tachi::common::BusOptions bus;
+  bus.identity = "monitor";  // with --secure: the identity that may read every topic (scripts/make_test_pki.sh)
+  double listen_s = 1.5;
+  auto* topics = app.add_subcommand("topics", "List the participants (process, host, pid) and topics (type, writers, readers) on a domain");
+  tachi::common::add_bus_flags(*topics, bus);
+  topics->add_option("--listen", listen_s, "Seconds to listen to discovery")->check(CLI::Range(0.1, 60.0))->capture_default_str();
+
+  std::string topic;
+  std::uint64_t count = 0;
+  bool full = false;
+  double timeout_s = 0;
+  auto* echo = app.add_subcommand("echo", "Print a topic's samples as JSON lines");
+  echo->add_option("topic", topic, "Topic, e.g. tachi/cloth/cut")->required()->check([](const std::string& t) {
+    return launcher::known_topic(t) ? std::string{}
+                                    : "unknown topic; known: tachi/hand/raw, tachi/voice/command, tachi/hand/stroke, "
+                                      "tachi/cloth/topology, tachi/cloth/topology_delta, tachi/cloth/state, tachi/cloth/cut, tachi/node/status";
+  });
+  tachi::common::add_bus_flags(*echo, bus);
+  echo->add_option("--count", count, "Stop after this many samples (0: until SIGINT)");
+  echo->add_flag("--full", full, "Print long arrays whole instead of their length and first elements");
+  echo->add_option("--timeout", timeout_s, "Stop after this many seconds (0: no limit)")->check(CLI::NonNegativeNumber);
+
+  auto* status = app.add_subcommand("status", "Show each node's latest heartbeat (state, counts, rejected inputs, figures)");
+  tachi::common::add_bus_flags(*status, bus);
+  status->add_option("--listen", listen_s, "Seconds to collect heartbeats")->check(CLI::Range(0.1, 60.0))->capture_default_str();
+
+  if (const int rc = tachi::common::parse(app, argc, argv); rc >= 0) return rc;
+  tachi::common::set_log_level(log_level);
+
+  if (run->parsed()) return cmd_run(*run, f, self_dir(argv[0]));
+  tachi::common::install_stop_handlers();
+  if (topics->parsed()) return cmd_topics(bus, listen_s);
+  if (status->parsed()) return cmd_status(bus, listen_s);
+  const auto n = launcher::echo(tachi::bus::Participant{bus.domain, bus.dds_config, {bus.secure_dir, bus.identity}}, topic, count, full,
+                                std::chrono::milliseconds(static_cast<long long>(timeout_s * 1000)));
+  return count > 0 && n < count ? tachi::common::kExitFailure : tachi::common::kExitOk;
+} catch (const std::exception& e) {
+  std::cerr << "tachi: " << e.what() << '\n';
+  return tachi::common::kExitFailure;
+}

@@ -1,0 +1,293 @@
+#include "run.hpp"
+
+#include "bus_adapter.hpp"
+#include "tachi/common/app.hpp"
+#include "tachi/launcher/child.hpp"
+#include "tachi/launcher/status.hpp"
+#include "tachi/launcher/supervision.hpp"
+
+#include <spdlog/spdlog.h>
+#include <unistd.h>
+
+#include <csignal>
+#include <fstream>
+#include <iostream>
+#include <memory>
+#include <thread>
+
+namespace tachi::launcher {
+namespace {
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+using namespace std::chrono_literals;
+
+struct Supervised {
+  std::unique_ptr<Child> child;
+  RestartPolicy policy;
+  std::optional<Clock::time_point> restart_at;
+  bool done = false;
+  int restarts = 0;
+};
+
+// A previous run's results in the same folder must not pass for this run's.
+void clear_outputs(const fs::path& out) {
+  fs::create_directories(out);
+  for (const auto* name : {"summary.json", "cloth.obj", "pattern.svg", "final.png", "video.mp4", "video.avi",
+                           "latency.png", "trajectory.png", "config.json"})
+    fs::remove(out / name);
+  fs::remove_all(out / kSimExportDir);
+  fs::remove_all(out / "trace");
+  for (const auto& entry : fs::directory_iterator(out))
+    if (entry.path().extension() == ".log") fs::remove(entry.path());
+}
+
+// Every file the simulator exported (cloth.obj, pattern.svg, ...) next to the run's summary; the
+// simulator's summary.json is merged into the run's instead.
+nlohmann::json collect_sim_export(const fs::path& out) {
+  const fs::path dir = out / kSimExportDir;
+  nlohmann::json sim = nlohmann::json::object();
+  if (!fs::is_directory(dir)) return sim;
+  for (const auto& entry : fs::directory_iterator(dir)) {
+    if (entry.path().filename() == "summary.json") {
+      std::ifstream in(entry.path());
+      sim = nlohmann::json::parse(in, nullptr, false);
+      if (!sim.is_object()) {
+        spdlog::warn("{}: not a JSON object; the simulator's figures are missing from summary.json", entry.path().string());
+        sim = nlohmann::json::object();
+      }
+    } else if (entry.is_regular_file()) {
+      fs::copy_file(entry.path(), out / entry.path().filename(), fs::copy_options::overwrite_existing);
+    }
+  }
+  return sim;
+}
+
+nlohmann::json make_summary(const RunConfig& config, const StatusBoard& board, const nlohmann::json& sim,
+                            std::uint64_t cut_events, int restarts, const std::string& ended) {
+  nlohmann::json s = sim;  // the simulator's own figures (pieces, cut line, ...) are authoritative
+  const nlohmann::json beats = board.summary();
+  for (const auto& [key, value] : beats.items())
+    if (!s.contains(key) || key.find("_p50_ms") != std::string::npos || key.find("_p99_ms") != std::string::npos)
+      s[key] = value;
+  if (!s.contains("e2e_p50_ms") && sim.contains("latency_p50_ms")) {
+    s["e2e_p50_ms"] = sim["latency_p50_ms"];
+    s["e2e_p99_ms"] = sim["latency_p99_ms"];
+  }
+  if (!s.contains("cuts")) s["cuts"] = cut_events;
+  // The fields are always there: counts default to 0, figures nobody measured to null.
+  for (const char* key : {"frames", "tracked_frames", "strokes", "cuts", "pieces", "fallen_pieces", "cut_length_m"})
+    if (!s.contains(key)) s[key] = 0;
+  for (const char* stage : {"e2e", "sensor", "filter", "sim", "viewer"})
+    for (const char* p : {"_p50_ms", "_p99_ms"})
+      if (!s.contains(std::string(stage) + p)) s[std::string(stage) + p] = nullptr;
+  s["restarts"] = restarts;
+  s["nodes"] = to_json(config)["nodes"];
+  s["domain"] = config.domain;
+  s["source"] = config.recording.empty() ? "live" : config.recording;
+  s["ended"] = ended;
+  return s;
+}
+
+void draw_plots(const RunPaths& paths, const fs::path& out) {
+  if (!fs::exists(paths.plot_script)) {
+    spdlog::warn("no plots: {} not found", paths.plot_script.string());
+    return;
+  }
+  Child plot({"plot", "python3", {paths.plot_script.string(), out.string()}, true}, "/usr/bin/python3", out / "plot.log");
+  plot.start();
+  const auto deadline = Clock::now() + 60s;
+  while (Clock::now() < deadline) {
+    if (const auto status = plot.poll()) {
+      if (classify_exit(*status, true) != ExitMeaning::Done)
+        spdlog::warn("plots failed ({}):\n{}", describe_exit(*status), plot.last_log_lines(5));
+      return;
+    }
+    std::this_thread::sleep_for(50ms);
+  }
+  spdlog::warn("plots took over 60 s; given up");
+}
+
+}  // namespace
+
+int run(const RunConfig& config, const RunPaths& paths) {
+  const fs::path out(config.out);
+  clear_outputs(out);
+  {
+    std::ofstream cfg(out / "config.json");
+    cfg << to_json(config).dump(2) << '\n';
+  }
+  // With DDS Security the launcher reads as "monitor", the identity that may read every topic.
+  bus::Participant dds{config.domain, config.dds_config, {config.secure, "monitor"}};
+  RunMonitor monitor{dds, out / "trace"};
+  StatusBoard board;
+
+  std::vector<Supervised> children;
+  for (auto& spec : plan(config)) {
+    const fs::path program = paths.bin_dir / spec.program;
+    const fs::path log = out / (spec.node + ".log");
+    children.push_back({std::make_unique<Child>(std::move(spec), program, log), RestartPolicy{}, {}, false, 0});
+  }
+  const bool recording = !config.recording.empty();
+  spdlog::info("run on DDS domain {}: {} ({}); outputs in {}", config.domain, to_json(config)["nodes"].get<std::string>(),
+               recording ? "recording " + config.recording : "live", out.string());
+  std::vector<std::string> started;
+  for (auto& c : children) {
+    // Consumers first. The sensor starts once the others said they are up (their first heartbeat:
+    // their readers and writers exist and are being discovered), so a recording's first frames are not lost.
+    if (c.child->spec().node == "sensor") {
+      const auto deadline = Clock::now() + 5s;
+      const auto all_up = [&] {
+        for (const auto& program : started)
+          if (!board.nodes().contains(program)) return false;
+        return true;
+      };
+      while (!all_up() && Clock::now() < deadline && !common::stop_requested()) monitor.poll(board, 50ms);
+      monitor.poll(board, 200ms);
+    }
+    c.child->start();
+    started.push_back(c.child->spec().program);
+    spdlog::info("started {} (pid {})", c.child->spec().program, c.child->pid());
+  }
+
+  const bool tty = ::isatty(STDERR_FILENO) == 1;
+  auto last_status = Clock::now();
+  int restarts = 0;
+  int exit_code = kRunOk;
+  std::string ended = "stopped";
+  std::optional<Clock::time_point> finite_done_at, sensor_done_at;
+  const auto sensor_in_run = config.has("sensor");
+  bool viewer_closed = false;
+  while (true) {
+    monitor.poll(board, 100ms);
+    if (common::stop_requested()) {
+      ended = "stopped by signal";
+      break;
+    }
+    const auto now = Clock::now();
+    bool failed = false;
+    for (auto& c : children) {
+      const auto& spec = c.child->spec();
+      if (c.restart_at && now >= *c.restart_at) {
+        c.restart_at.reset();
+        c.child->start();
+        spdlog::info("restarted {} (pid {})", spec.program, c.child->pid());
+      }
+      const auto status = c.child->poll();
+      if (!status) continue;
+      const ExitMeaning meaning = classify_exit(*status, spec.finite);
+      switch (meaning) {
+        case ExitMeaning::Done:
+          c.done = true;
+          spdlog::info("{} finished", spec.program);
+          if (spec.node == "sensor") sensor_done_at = now;
+          if (spec.node == "viewer" && !recording) viewer_closed = true;
+          break;
+        case ExitMeaning::Usage:
+        case ExitMeaning::NoDevice: {
+          const bool usage = meaning == ExitMeaning::Usage;
+          spdlog::error("{} cannot run ({}); its log {} ends:\n{}", spec.program, describe_exit(*status), c.child->log().string(),
+                        c.child->last_log_lines(10));
+          exit_code = usage ? kRunUsage : kRunNoDevice;
+          ended = spec.program + " " + describe_exit(*status);
+          failed = true;
+          break;
+        }
+        case ExitMeaning::Died: {
+          const auto decision = c.policy.on_death(now);
+          if (decision.give_up) {
+            spdlog::error("{} died {} times within 30 s (last: {}); stopping the run. Its log {} ends:\n{}", spec.program,
+                          c.policy.deaths_in_window(), describe_exit(*status), c.child->log().string(),
+                          c.child->last_log_lines(10));
+            exit_code = kRunChildGaveUp;
+            ended = spec.program + " kept dying";
+            failed = true;
+            break;
+          }
+          ++restarts;
+          ++c.restarts;
+          c.restart_at = now + decision.delay;
+          spdlog::warn("{} died ({}); restart {} in {} ms", spec.program, describe_exit(*status), c.restarts,
+                       decision.delay.count());
+          break;
+        }
+      }
+    }
+    if (failed) break;
+    if (viewer_closed) {
+      ended = "viewer window closed";
+      break;
+    }
+
+    if (recording) {
+      bool all_finite_done = true, any_finite = false;
+      for (const auto& c : children) {
+        if (!c.child->spec().finite) continue;
+        any_finite = true;
+        all_finite_done = all_finite_done && c.done;
+      }
+      if (any_finite && all_finite_done) {
+        // Non-finite nodes (the filter) get a moment to pass the last samples on before they stop.
+        if (!finite_done_at) finite_done_at = now;
+        if (now - *finite_done_at > 500ms) {
+          ended = "recording played, cloth settled";
+          break;
+        }
+      }
+      // A node that never saw the recording's samples (e.g. restarted after the sensor finished)
+      // would wait forever for them: the recording is over, so the run ends.
+      if (sensor_in_run && sensor_done_at && now - *sensor_done_at > std::chrono::duration<double>(config.settle_s + 20.0)) {
+        spdlog::warn("the recording ended {:.0f} s ago and some nodes are still waiting; stopping them",
+                     config.settle_s + 20.0);
+        ended = "recording played; nodes stopped after a timeout";
+        break;
+      }
+    }
+
+    if (tty && now - last_status >= 500ms) {
+      std::cerr << "\r\033[K" << board.line(restarts) << std::flush;
+      last_status = now;
+    } else if (!tty && now - last_status >= 5s) {
+      spdlog::info("status: {}", board.line(restarts));
+      last_status = now;
+    }
+  }
+  if (tty) std::cerr << '\n';
+
+  // Children first: SIGINT lets each finish its frame and write its outputs (the simulator exports).
+  for (auto& c : children) {
+    c.restart_at.reset();
+    c.child->signal(SIGINT);
+  }
+  const auto deadline = Clock::now() + 3s;
+  for (auto& c : children) {
+    while (c.child->running() && Clock::now() < deadline) {
+      if (c.child->poll()) break;
+      monitor.poll(board, 20ms);
+    }
+    if (c.child->running()) {
+      spdlog::warn("{} did not stop within 3 s of SIGINT; killed", c.child->spec().program);
+      c.child->signal(SIGKILL);
+      while (!c.child->poll()) std::this_thread::sleep_for(10ms);
+    }
+  }
+  monitor.poll(board, 200ms);  // the nodes' last heartbeats (NODE_STOPPING, final figures)
+
+  const nlohmann::json sim = collect_sim_export(out);
+  const nlohmann::json summary = make_summary(config, board, sim, monitor.cut_events(), restarts, ended);
+  {
+    std::ofstream f(out / "summary.json");
+    f << summary.dump(2) << '\n';
+    if (!f) throw std::runtime_error("cannot write " + (out / "summary.json").string());
+  }
+  draw_plots(paths, out);
+  // stdout: the headline figures (summary.json has them all), then where the outputs are.
+  nlohmann::json headline = nlohmann::json::object();
+  for (const char* key : {"frames", "tracked_frames", "strokes", "cuts", "pieces", "fallen_pieces", "cut_length_m",
+                          "restarts", "e2e_p50_ms", "e2e_p99_ms"})
+    headline[key] = summary[key];
+  std::cout << headline.dump() << '\n' << "outputs in " << fs::absolute(out).string() << '\n';
+  spdlog::info("run ended: {} ({} restarts)", ended, restarts);
+  return exit_code;
+}
+
+}  // namespace tachi::launcher

@@ -1,0 +1,45 @@
+#!/usr/bin/env bash
+# `tachi run --mouse` as a user runs it, under a virtual display: the launcher starts only tachi-sim and
+# tachi-viewer --mouse; a mouse drag across the window (xdotool) cuts the cloth; `q` closes the window,
+# which ends the run with its outputs written.
+# Usage: mouse_run_test.sh BIN_DIR    (exit 77 = skipped: Xvfb or xdotool missing)
+set -u
+bin=$1
+command -v Xvfb >/dev/null && command -v xdotool >/dev/null || { echo "skip: needs Xvfb and xdotool"; exit 77; }
+work=$(mktemp -d /tmp/tachi-mouse-run-XXXXXX)
+pids=() xvfb=""
+cleanup() { for p in "${pids[@]}" $xvfb; do kill "$p" 2>/dev/null; done; rm -rf "$work"; }
+trap cleanup EXIT
+for n in $(seq $((600 + $$ % 300)) 999); do [ -e "/tmp/.X$n-lock" ] || break; done
+Xvfb ":$n" -screen 0 1024x900x24 -nolisten tcp >/dev/null 2>&1 & xvfb=$!
+for _ in $(seq 100); do [ -S "/tmp/.X11-unix/X$n" ] && break; sleep 0.05; done
+export DISPLAY=":$n"
+
+timeout 120 "$bin/tachi" run --mouse --grid 16 --domain 131 --out "$work/run" --set viewer.size=600 \
+  --set sim.cut-mode=grid >"$work/out" 2>"$work/err" & run=$!; pids+=("$run")
+fail() { echo "FAIL: $*"; cat "$work/err"; for f in "$work"/run/*.log; do echo "--- $f"; tail -5 "$f"; done; exit 1; }
+window=""
+for _ in $(seq 200); do window=$(xdotool search --onlyvisible --name '^tachi$' 2>/dev/null | head -1); [ -n "$window" ] && break; sleep 0.1; done
+[ -n "$window" ] || fail "no viewer window"
+sleep 2  # the viewer has the cloth to cast the cursor onto
+eval "$(xdotool getwindowgeometry --shell "$window")"  # WIDTH, HEIGHT
+y=$((HEIGHT * 58 / 100))
+xdotool mousemove --window "$window" $((WIDTH / 20)) $y mousedown 1
+for i in $(seq 1 30); do xdotool mousemove --window "$window" $((WIDTH / 20 + WIDTH * 9 * i / 300)) $y; sleep 0.03; done
+xdotool mouseup 1
+sleep 1.5
+xdotool key --window "$window" q
+wait "$run"; status=$?
+pids=()
+[ "$status" -eq 0 ] || fail "tachi run --mouse exited $status"
+[ ! -e "$work/run/sensor.log" ] || fail "the mouse run started a sensor"
+grep -q -- "--mouse" "$work/run/viewer.log" || fail "the viewer did not get --mouse"
+[ -s "$work/run/video.mp4" ] || fail "no video.mp4"
+python3 - "$work/run/summary.json" <<'PY' || fail "summary: $(head -c 600 "$work/run/summary.json")"
+import json, sys
+s = json.load(open(sys.argv[1]))
+assert s["ended"] == "viewer window closed", s["ended"]
+assert s["cuts"] >= 1, "the mouse drag cut the cloth"
+assert s["cut_particles"] > 3, s["cut_particles"]
+PY
+echo "tachi run --mouse: $(python3 -c "import json;s=json.load(open('$work/run/summary.json'));print(s['cuts'],'cut(s),',s['cut_particles'],'particles,',s['pieces'],'pieces')")"

@@ -24,7 +24,12 @@ HandSample from_msg(const tachi_msg_RawHandSample& msg) {
 }
 
 VoiceCommandKind from_msg(const tachi_msg_VoiceCommand& msg) {
-  return msg.command == tachi_msg_VOICE_START ? VoiceCommandKind::Start : VoiceCommandKind::Stop;
+  switch (msg.command) {
+    case tachi_msg_VOICE_START: return VoiceCommandKind::Start;
+    case tachi_msg_VOICE_GRAB: return VoiceCommandKind::Grab;
+    case tachi_msg_VOICE_RELEASE: return VoiceCommandKind::Release;
+    default: return VoiceCommandKind::Stop;
+  }
 }
 
 tachi_msg_StrokeSample to_msg(const StrokeSample& s, std::uint32_t sensor_id, std::uint64_t session_id) {
@@ -38,6 +43,7 @@ tachi_msg_StrokeSample to_msg(const StrokeSample& s, std::uint32_t sensor_id, st
   m.tracked = s.tracked;
   m.gate = s.gate == GateOutput::Cutting   ? tachi_msg_GATE_CUTTING
            : s.gate == GateOutput::Holding ? tachi_msg_GATE_HOLDING
+           : s.gate == GateOutput::Grabbing ? tachi_msg_GATE_GRABBING
                                            : tachi_msg_GATE_IDLE;
   m.opened_by = to_msg(s.opened_by);
   m.closed_by = to_msg(s.closed_by);

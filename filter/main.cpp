@@ -61,11 +61,13 @@ std::vector<TimedCommand> read_voice_csv(const std::string& path) {
     std::getline(cells, command, ',');
     char* end = nullptr;
     const double t = std::strtod(time.c_str(), &end);
-    if (end == time.c_str() || (command != "start" && command != "stop")) {
-      spdlog::warn("{} line {}: expected time_s,start|stop,phrase; skipped", path, line_no);
+    using Kind = tachi::filter::VoiceCommandKind;
+    const Kind kind = command == "start" ? Kind::Start : command == "stop" ? Kind::Stop : command == "grab" ? Kind::Grab : Kind::Release;
+    if (end == time.c_str() || (command != "start" && command != "stop" && command != "grab" && command != "release")) {
+      spdlog::warn("{} line {}: expected time_s,start|stop|grab|release,phrase; skipped", path, line_no);
       continue;
     }
-    commands.push_back({t, command == "start" ? tachi::filter::VoiceCommandKind::Start : tachi::filter::VoiceCommandKind::Stop});
+    commands.push_back({t, kind});
   }
   std::stable_sort(commands.begin(), commands.end(), [](const auto& a, const auto& b) { return a.time_s < b.time_s; });
   return commands;
@@ -88,8 +90,9 @@ int run_offline(const Options& o, const tachi::filter::FilterConfig& config) {
   for (const auto& hand : hands.samples) {
     // Voice time 0 is the first hand sample: the recording's audio track starts with its video.
     const double t = static_cast<double>(hand.stamp_ns - t0) * 1e-9;
-    while (next_command < commands.size() && commands[next_command].time_s <= t)
-      filter.on_voice(commands[next_command++].kind);
+    while (next_command < commands.size() && commands[next_command].time_s <= t) {
+      if (const auto why = filter.on_voice(commands[next_command++].kind)) spdlog::warn("{}", *why);
+    }
     const auto stroke = filter.on_hand(hand);
     strokes = stroke.stroke_id;
     tachi::filter::write_stroke_csv_row(out, stroke, o.camera_frame);
@@ -133,8 +136,9 @@ int run_bus(const Options& o, const tachi::filter::FilterConfig& config) {
     waitset.wait(100ms);
     // Commands first: one spoken before a hand sample arrived applies to that sample.
     for (const auto& c : voice.take()) {
-      spdlog::info("voice command {} (\"{}\")", c->command == tachi_msg_VOICE_START ? "start" : "stop", c->phrase);
-      filter.on_voice(tachi::filter::from_msg(*c));
+      static constexpr const char* kNames[] = {"start", "stop", "grab", "release"};
+      spdlog::info("voice command {} (\"{}\")", kNames[static_cast<int>(tachi::filter::from_msg(*c))], c->phrase);
+      if (const auto why = filter.on_voice(tachi::filter::from_msg(*c))) spdlog::warn("{}", *why);
     }
     for (const auto& h : hands.take()) {
       ++in_count;

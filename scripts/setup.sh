@@ -13,6 +13,8 @@ packages=(
   libfreenect-dev libfreenect-bin
   # maths, vision (libopencv-dev carries the CMake package config the module -dev packages lack)
   libeigen3-dev libopencv-dev
+  # objects to drape the cloth over: PLY point clouds (assimp) and nearest-point queries (nanoflann)
+  libassimp-dev libnanoflann-dev
   # conventions shared by every executable
   libcli11-dev libspdlog-dev nlohmann-json3-dev
   # voice commands

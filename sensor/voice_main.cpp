@@ -27,6 +27,8 @@ struct Options {
   std::string config_file;
   std::string start_phrase;
   std::string stop_phrase;
+  std::string grab_phrase;
+  std::string release_phrase;
   bool no_dds = false;
   double wait_readers_s = 1.0;
   unsigned source_id = 0;
@@ -61,7 +63,12 @@ class CommandPublisher {
     tachi_msg_VoiceCommand msg{};
     msg.source_id = source_id_;
     msg.time_ns = time_ns;
-    msg.command = d.command == tachi::sensor::VoiceCommand::Start ? tachi_msg_VOICE_START : tachi_msg_VOICE_STOP;
+    switch (d.command) {
+      case tachi::sensor::VoiceCommand::Start: msg.command = tachi_msg_VOICE_START; break;
+      case tachi::sensor::VoiceCommand::Stop: msg.command = tachi_msg_VOICE_STOP; break;
+      case tachi::sensor::VoiceCommand::Grab: msg.command = tachi_msg_VOICE_GRAB; break;
+      case tachi::sensor::VoiceCommand::Release: msg.command = tachi_msg_VOICE_RELEASE; break;
+    }
     std::snprintf(msg.phrase, sizeof msg.phrase, "%s", d.phrase.c_str());
     writer_->write(msg);
     ++published_;
@@ -149,6 +156,8 @@ int main(int argc, char** argv) try {
   app.add_option("--config", o.config_file, "Voice config JSON (see config/voice.json)")->check(CLI::ExistingFile);
   app.add_option("--start-phrase", o.start_phrase, "Phrase that starts cutting (default \"start cutting\")");
   app.add_option("--stop-phrase", o.stop_phrase, "Phrase that stops cutting (default \"stop cutting\")");
+  app.add_option("--grab-phrase", o.grab_phrase, "Phrase that makes the hand grab the cloth (none by default; e.g. \"grab cloth\")");
+  app.add_option("--release-phrase", o.release_phrase, "Phrase that lets the grabbed cloth go (none by default; e.g. \"release cloth\")");
   app.add_flag("--no-dds", o.no_dds, "Do not publish on the bus; only print");
   app.add_option("--wait-readers", o.wait_readers_s, "With a file: seconds to wait for a subscriber before publishing")
       ->check(CLI::Range(0.0, 60.0))
@@ -166,6 +175,8 @@ int main(int argc, char** argv) try {
     if (!o.config_file.empty()) config = tachi::sensor::load_voice_config(o.config_file);
     if (!o.start_phrase.empty()) tachi::sensor::set_phrase(config, tachi::sensor::VoiceCommand::Start, o.start_phrase);
     if (!o.stop_phrase.empty()) tachi::sensor::set_phrase(config, tachi::sensor::VoiceCommand::Stop, o.stop_phrase);
+    if (!o.grab_phrase.empty()) tachi::sensor::set_phrase(config, tachi::sensor::VoiceCommand::Grab, o.grab_phrase);
+    if (!o.release_phrase.empty()) tachi::sensor::set_phrase(config, tachi::sensor::VoiceCommand::Release, o.release_phrase);
     if (const auto why = tachi::sensor::validate(config)) throw std::invalid_argument(*why);
   } catch (const std::invalid_argument& e) {
     std::cerr << "tachi-voice: " << e.what() << '\n';

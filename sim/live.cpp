@@ -65,19 +65,16 @@ void add_live_flags(CLI::App& app, LiveOptions& options) {
 }
 
 int run_live(const OfflineOptions& shared, std::optional<int> max_steps, const LiveOptions& live) {
-  SessionOptions session_options;
-  session_options.cloth = shared.cloth;
-  session_options.solver = shared.solver;
-  session_options.stroke.blade = shared.blade;
-  session_options.stroke.mode = shared.cut_mode;
-  session_options.hand_radius_m = live.hand_radius_m;
-  Session session{session_options};
+  SessionOptions options = session_options(shared);
+  options.hand_radius_m = live.hand_radius_m;
+  Session session{options};
+  session.set_shapes(shared.spheres, shared.ground);
   // No lost cuts: replay what a previous run of this journal applied, then append to it.
   std::optional<Journal> journal;
   std::map<std::pair<std::uint32_t, std::uint64_t>, std::int64_t> replayed;
   if (!live.journal.empty()) {
     const auto t0 = Clock::now();
-    journal.emplace(live.journal, journal_fingerprint(session_options));
+    journal.emplace(live.journal, journal_fingerprint(options));
     replayed = replay(journal->recovered(), session);
     (void)session.take_cut_reports();  // the previous run reported them
     (void)session.take_topology_change();  // published whole below
@@ -113,11 +110,19 @@ int run_live(const OfflineOptions& shared, std::optional<int> max_steps, const L
   std::size_t topology_bytes = 0;
   std::vector<tachi_msg_GridCoord> cut_line;
 
-  const auto period = std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(shared.solver.dt));
+  ObjectMessage object;
+  std::optional<bus::Writer<tachi_msg_SceneObject>> object_writer;
+  if (session.object() != nullptr) {
+    // Transient-local: a viewer that starts later still gets the object it should draw.
+    object_writer.emplace(dds, bus::topics::scene_object);
+    object_writer->write(object.fill(live.cloth_id, session.object()->points(), session_id));
+  }
+
+  const auto period = std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(options.solver.dt));
   const auto start = Clock::now();
   auto next_step = start;
   auto last_hand = start;
-  std::uint64_t samples_in = 0, messages_out = 1, overruns = 0, cuts = 0;
+  std::uint64_t samples_in = 0, messages_out = 1, overruns = 0, cuts = 0, grabs_refused = 0;
   double cut_length_m = 0.0;
   bool had_filter = false;
   std::vector<double> step_ms;
@@ -173,7 +178,7 @@ int run_live(const OfflineOptions& shared, std::optional<int> max_steps, const L
     return in_sync;
   };
   const auto publish_state = [&] {
-    auto msg = state_msg(live.cloth_id, session.steps(), session.time_s(), session.cloth(), session_id);
+    auto msg = state_msg(live.cloth_id, session.steps(), session.time_s(), session.cloth(), session_id, session.held_particle());
     msg.acquired_ns = newest_acquired_ns;
     msg.published_ns = common::wall_clock_ns();
     state_writer.write(msg);
@@ -200,8 +205,18 @@ int run_live(const OfflineOptions& shared, std::optional<int> max_steps, const L
           !guard.id(input->session_id ^ input->sensor_id, input->stroke_id))
         continue;
       const HandInput hand{input->stroke_id, input->time_s,  input->position_m, input->tracked,
-                           input->cutting,   input->holding, input->session_id, input->sensor_id};
+                           input->cutting,   input->holding, input->session_id, input->sensor_id,
+                           input->grabbing};
+      const auto held_before = session.held_particle();
       session.on_hand(hand);
+      if (session.held_particle() != held_before) {
+        if (session.held_particle()) spdlog::info("tachi-sim: the hand took particle {}", *session.held_particle());
+        else spdlog::info("tachi-sim: the hand let go of particle {}", *held_before);
+      }
+      if (const auto why = session.take_grab_refusal()) {
+        spdlog::warn("tachi-sim: {}", *why);
+        ++grabs_refused;
+      }
       if (journal) journal_append(*journal, {JournalRecord::Kind::Hand, session.steps(), input->sensor_id, sample->time_ns, hand});
       ++samples_in;
       last_hand = Clock::now();
@@ -283,10 +298,12 @@ int run_live(const OfflineOptions& shared, std::optional<int> max_steps, const L
   Summary summary = summarize(session.cloth());
   summary.steps = static_cast<int>(session.steps());
   add_cut_summary(summary, session.cloth(), session.cutter());
+  add_session_summary(summary, session);
   add_step_times(summary, step_ms);
   summary.extra["hand_samples"] = samples_in;
   summary.extra["hand_samples_rejected"] = rejected;
   summary.extra["step_overruns"] = overruns;
+  summary.extra["grabs_refused"] = grabs_refused;
   summary.extra["topology_updates"] = topology_updates;
   summary.extra["topology_bytes_per_update"] = topology_updates > 0 ? topology_bytes / topology_updates : 0;
   summary.extra["topology_keyframe_bytes"] = topology.payload_bytes();

@@ -1,6 +1,7 @@
 // tachi-sim: the cloth simulator process. --offline runs the library's offline driver (no DDS); the
 // live mode (publish topology/state, subscribe strokes) joins the DDS pipeline.
 #include "tachi/common/app.hpp"
+#include "tachi/sim/object.hpp"
 #include "tachi/sim/offline.hpp"
 #include "live.hpp"
 
@@ -17,13 +18,17 @@ int main(int argc, char** argv) try {
   std::string log_level = "info";
   tachi::sim::OfflineOptions options;
   tachi::sim::LiveOptions live;
+  tachi::sim::ObjectOptions object;
   auto* offline_flag = app.add_flag("--offline", offline, "Run without DDS: simulate, then export the mesh and a summary");
   tachi::sim::add_offline_flags(app, options);
   app.get_option("--stroke")->needs(offline_flag);  // live strokes come over DDS
+  tachi::sim::add_object_flags(app, object);
   tachi::sim::add_live_flags(app, live);
   tachi::common::add_log_level_flag(app, log_level);
   if (const int rc = tachi::common::parse(app, argc, argv); rc >= 0) return rc;
   tachi::common::set_log_level(log_level);
+  options.object = tachi::sim::load_object(object);
+  if (options.object) spdlog::info("tachi-sim: object of {} points", options.object->points().size());
 
   if (!offline) {
     // Live: strokes come from tachi-filter over DDS; --steps, when given, bounds the run.

@@ -128,11 +128,39 @@ void Gate::apply(GateEvent event) {
                                                    : GateOutput::Idle;
 }
 
-void Gate::on_voice(VoiceCommandKind command) {
-  apply(command == VoiceCommandKind::Start ? GateEvent::VoiceStart : GateEvent::VoiceStop);
+void Gate::release_grab() {
+  if (!grabbing_) return;
+  grabbing_ = false;
+  // The hand is at the cloth it just let go of: the threshold may not open a cut there.
+  status_.phase = params_.mode == GateMode::Voice ? GatePhase::Idle : GatePhase::HeldOff;
+  status_.output = GateOutput::Idle;
+}
+
+std::optional<std::string> Gate::on_voice(VoiceCommandKind command) {
+  switch (command) {
+    case VoiceCommandKind::Grab:
+      if (is_cutting(status_.phase))
+        return "grab refused: stroke " + std::to_string(status_.stroke_id) + " is cutting (one hand, one tool)";
+      grabbing_ = true;
+      status_.phase = GatePhase::Idle;  // an arming threshold is abandoned
+      status_.output = GateOutput::Grabbing;
+      return std::nullopt;
+    case VoiceCommandKind::Release:
+      release_grab();
+      return std::nullopt;
+    case VoiceCommandKind::Start:
+      release_grab();
+      apply(GateEvent::VoiceStart);
+      return std::nullopt;
+    case VoiceCommandKind::Stop:
+      apply(GateEvent::VoiceStop);
+      return std::nullopt;
+  }
+  return std::nullopt;
 }
 
 const GateStatus& Gate::on_sample(std::optional<float> distance_m) {
+  if (grabbing_) return status_;
   apply(distance_m ? classify_distance(params_, *distance_m) : GateEvent::Lost);
   const GatePhase phase = status_.phase;
   if (phase == GatePhase::Arming || phase == GatePhase::Disarming) {

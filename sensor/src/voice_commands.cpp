@@ -15,7 +15,21 @@
 
 namespace tachi::sensor {
 
-std::string to_string(VoiceCommand command) { return command == VoiceCommand::Start ? "start" : "stop"; }
+std::string to_string(VoiceCommand command) {
+  switch (command) {
+    case VoiceCommand::Start: return "start";
+    case VoiceCommand::Stop: return "stop";
+    case VoiceCommand::Grab: return "grab";
+    case VoiceCommand::Release: return "release";
+  }
+  return "?";
+}
+
+std::optional<VoiceCommand> voice_command_from_string(const std::string& name) {
+  for (const VoiceCommand c : {VoiceCommand::Start, VoiceCommand::Stop, VoiceCommand::Grab, VoiceCommand::Release})
+    if (to_string(c) == name) return c;
+  return std::nullopt;
+}
 
 std::string normalise_phrase(const std::string& phrase) {
   std::istringstream words(phrase);
@@ -76,8 +90,9 @@ VoiceConfig parse_voice_config(const std::string& json_text) {
         VoicePhrase vp;
         vp.phrase = normalise_phrase(p.at("phrase").get<std::string>());
         const std::string command = p.at("command").get<std::string>();
-        if (command != "start" && command != "stop") fail("phrases[].command must be \"start\" or \"stop\" (got \"" + command + "\")");
-        vp.command = command == "start" ? VoiceCommand::Start : VoiceCommand::Stop;
+        const auto kind = voice_command_from_string(command);
+        if (!kind) fail("phrases[].command must be \"start\", \"stop\", \"grab\" or \"release\" (got \"" + command + "\")");
+        vp.command = *kind;
         if (p.contains("threshold")) vp.threshold = p.at("threshold").get<double>();
         c.phrases.push_back(vp);
       }

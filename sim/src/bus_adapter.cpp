@@ -27,6 +27,7 @@ std::optional<StrokeInput> from_msg(const tachi_msg_StrokeSample& msg) {
   input.tracked = msg.tracked;
   input.cutting = msg.gate == tachi_msg_GATE_CUTTING;
   input.holding = msg.gate == tachi_msg_GATE_HOLDING;
+  input.grabbing = msg.gate == tachi_msg_GATE_GRABBING;
   return input;
 }
 
@@ -117,19 +118,32 @@ std::size_t TopologyDeltaMessage::payload_bytes() const {
 }
 
 tachi_msg_ClothState state_msg(std::uint32_t cloth_id, std::uint64_t frame, double sim_time_s, const Cloth& cloth,
-                               std::uint64_t session_id) {
+                               std::uint64_t session_id, std::optional<std::uint32_t> held) {
   tachi_msg_ClothState msg{};
   msg.cloth_id = cloth_id;
   msg.session_id = session_id;
   msg.frame = frame;
   msg.sim_time_ns = static_cast<std::int64_t>(std::llround(sim_time_s * 1e9));
   msg.topology_version = cloth.topology_version;
-  msg.held_particle = -1;  // nothing held (a zeroed message would say particle 0)
+  // -1: nothing held (a zeroed message would say particle 0).
+  msg.held_particle = held ? static_cast<std::int32_t>(*held) : -1;
   // The message is only read by dds_write; the cast drops const for the C struct's sake.
   msg.positions._buffer = const_cast<float*>(cloth.position.empty() ? nullptr : cloth.position.front().data());
   msg.positions._length = msg.positions._maximum = static_cast<std::uint32_t>(3 * cloth.particle_count());
   msg.positions._release = false;
   return msg;
+}
+
+const tachi_msg_SceneObject& ObjectMessage::fill(std::uint32_t cloth_id, const std::vector<Eigen::Vector3f>& points,
+                                                 std::uint64_t session_id) {
+  xyz_.clear();
+  xyz_.reserve(3 * points.size());
+  for (const Eigen::Vector3f& p : points) xyz_.insert(xyz_.end(), {p.x(), p.y(), p.z()});
+  msg_ = {};
+  msg_.cloth_id = cloth_id;
+  msg_.session_id = session_id;
+  point_at(msg_.points, xyz_);
+  return msg_;
 }
 
 }  // namespace tachi::sim

@@ -23,6 +23,7 @@ struct StrokeInput {
   bool tracked = false;
   bool cutting = false;
   bool holding = false;
+  bool grabbing = false;  ///< GATE_GRABBING: the hand holds the cloth
 };
 
 /// Rejects samples a filter should never send but a faulty peer might: non-finite coordinates or a
@@ -75,7 +76,19 @@ class TopologyDeltaMessage {
 
 /// A ClothState message whose positions point straight at the cloth's position array
 /// (Eigen::Vector3f is three packed floats). Valid until the cloth's particle arrays grow.
+/// `held`: the particle the hand holds (held_particle, -1 when none).
 tachi_msg_ClothState state_msg(std::uint32_t cloth_id, std::uint64_t frame, double sim_time_s, const Cloth& cloth,
-                               std::uint64_t session_id = 0);
+                               std::uint64_t session_id = 0, std::optional<std::uint32_t> held = std::nullopt);
+
+/// Owns the array a SceneObject message points into.
+class ObjectMessage {
+ public:
+  const tachi_msg_SceneObject& fill(std::uint32_t cloth_id, const std::vector<Eigen::Vector3f>& points,
+                                    std::uint64_t session_id = 0);
+
+ private:
+  tachi_msg_SceneObject msg_{};
+  std::vector<float> xyz_;
+};
 
 }  // namespace tachi::sim

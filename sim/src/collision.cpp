@@ -1,52 +1,53 @@
 #include "tachi/sim/collision.hpp"
 
+#include <nanoflann.hpp>
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
 
 namespace tachi::sim {
 
-PointCloudCollider::PointCloudCollider(std::vector<Eigen::Vector3f> points, float influence_m, float stiffness)
-    : points_(std::move(points)), influence_(std::max(influence_m, 1e-4F)), stiffness_(stiffness) {
-  for (std::size_t i = 0; i < points_.size(); ++i) {
-    if (!points_[i].allFinite()) continue;  // a bad sample is skipped, not fatal
-    const Eigen::Vector3i c = cell_of(points_[i]);
-    cells_[key(c.x(), c.y(), c.z())].push_back(static_cast<std::uint32_t>(i));
+namespace {
+/// nanoflann's dataset adaptor over the collider's points.
+struct CloudAdaptor {
+  const std::vector<Eigen::Vector3f>* points;
+  [[nodiscard]] std::size_t kdtree_get_point_count() const { return points->size(); }
+  [[nodiscard]] float kdtree_get_pt(std::size_t i, std::size_t dim) const { return (*points)[i][static_cast<Eigen::Index>(dim)]; }
+  template <class Box>
+  bool kdtree_get_bbox(Box& /*box*/) const {
+    return false;
   }
+};
+using KdTree = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<float, CloudAdaptor>, CloudAdaptor, 3, std::uint32_t>;
+}  // namespace
+
+struct PointCloudCollider::Index {
+  CloudAdaptor adaptor;
+  KdTree tree;
+  explicit Index(const std::vector<Eigen::Vector3f>& points)
+      : adaptor{&points}, tree(3, adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(16)) {
+    tree.buildIndex();
+  }
+};
+
+PointCloudCollider::PointCloudCollider(std::vector<Eigen::Vector3f> points, float influence_m, float stiffness)
+    : influence_(std::max(influence_m, 1e-4F)), stiffness_(stiffness) {
+  points_.reserve(points.size());
+  for (const Eigen::Vector3f& p : points) {
+    if (p.allFinite()) points_.push_back(p);  // a bad sample is skipped, not fatal
+  }
+  if (!points_.empty()) index_ = std::make_unique<Index>(points_);
 }
 
-std::int64_t PointCloudCollider::key(int x, int y, int z) const {
-  // 21 bits per axis is +-1e6 cells: far beyond any scene the sensor sees.
-  constexpr std::int64_t mask = (1 << 21) - 1;
-  return ((static_cast<std::int64_t>(x) & mask) << 42) | ((static_cast<std::int64_t>(y) & mask) << 21) |
-         (static_cast<std::int64_t>(z) & mask);
-}
-
-Eigen::Vector3i PointCloudCollider::cell_of(const Eigen::Vector3f& p) const {
-  return (p / influence_).array().floor().cast<int>();
-}
+PointCloudCollider::~PointCloudCollider() = default;
 
 std::optional<Eigen::Vector3f> PointCloudCollider::nearest_within(const Eigen::Vector3f& p) const {
-  if (!p.allFinite()) return std::nullopt;
-  const Eigen::Vector3i c = cell_of(p);
-  float best = influence_ * influence_;
-  std::optional<Eigen::Vector3f> out;
-  for (int dx = -1; dx <= 1; ++dx) {
-    for (int dy = -1; dy <= 1; ++dy) {
-      for (int dz = -1; dz <= 1; ++dz) {
-        const auto it = cells_.find(key(c.x() + dx, c.y() + dy, c.z() + dz));
-        if (it == cells_.end()) continue;
-        for (const std::uint32_t i : it->second) {
-          const float d2 = (points_[i] - p).squaredNorm();
-          if (d2 < best) {
-            best = d2;
-            out = points_[i];
-          }
-        }
-      }
-    }
-  }
-  return out;
+  if (!index_ || !p.allFinite()) return std::nullopt;
+  std::uint32_t nearest = 0;
+  float d2 = 0.0F;
+  if (index_->tree.knnSearch(p.data(), 1, &nearest, &d2) == 0 || !(d2 < influence_ * influence_)) return std::nullopt;
+  return points_[nearest];
 }
 
 Eigen::Vector3f PointCloudCollider::repulsion(const Eigen::Vector3f& p) const {
@@ -56,6 +57,26 @@ Eigen::Vector3f PointCloudCollider::repulsion(const Eigen::Vector3f& p) const {
   const float d = away.norm();
   if (d < 1e-9F) return Eigen::Vector3f::Zero();  // no direction to push along
   return away / d * (stiffness_ * (1.0F - d / influence_));
+}
+
+std::optional<PointCloudCollider::Contact> PointCloudCollider::project(Eigen::Vector3f& p, const Eigen::Vector3f& previous,
+                                                                      float contact_m, float h) const {
+  const auto q = nearest_within(p);
+  if (!q) return std::nullopt;
+  Eigen::Vector3f away = p - *q;
+  // Which side of the point layer the particle belongs to: the side it came from.
+  const Eigen::Vector3f from = previous - *q;
+  if (away.dot(from) < 0.0F || away.squaredNorm() < 1e-18F) away = from;
+  const float n = away.norm();
+  if (!(n > 1e-9F)) return std::nullopt;  // came from exactly the point: no side to push to
+  const Eigen::Vector3f normal = away / n;
+  const float distance = (p - *q).dot(normal);
+  float push = stiffness_ * std::max(0.0F, 1.0F - std::abs(distance) / influence_) * h * h;
+  if (distance < contact_m) {
+    p = *q + normal * contact_m;
+    push += contact_m - distance;
+  }
+  return Contact{normal, push};
 }
 
 bool project_out_of_sphere(Eigen::Vector3f& p, const Sphere& s, float margin) {
@@ -92,6 +113,35 @@ bool project_out_of_shapes(Eigen::Vector3f& p, const Colliders& colliders) {
   for (const Sphere& s : colliders.spheres) hit = project_out_of_sphere(p, s, margin) || hit;
   for (const Box& b : colliders.boxes) hit = project_out_of_box(p, b, margin) || hit;
   if (colliders.ground) hit = project_above_ground(p, *colliders.ground, margin) || hit;
+  return hit;
+}
+
+namespace {
+/// The part of the motion previous -> p across the normal n (unit or not).
+Eigen::Vector3f tangential_motion(const Eigen::Vector3f& p, const Eigen::Vector3f& previous, const Eigen::Vector3f& n) {
+  const Eigen::Vector3f moved = p - previous;
+  return moved - n * (moved.dot(n) / n.squaredNorm());
+}
+}  // namespace
+
+bool collide_with_friction(Eigen::Vector3f& p, const Eigen::Vector3f& previous, const Colliders& colliders, float h) {
+  const Eigen::Vector3f before = p;
+  bool hit = false;
+  if (project_out_of_shapes(p, colliders)) {
+    hit = true;
+    const Eigen::Vector3f push = p - before;
+    if (push.squaredNorm() > 0.0F) p -= colliders.friction * tangential_motion(p, previous, push);
+  }
+  if (colliders.point_cloud != nullptr) {
+    const float contact = colliders.point_contact_m > 0.0F ? colliders.point_contact_m : 0.5F * colliders.point_cloud->influence();
+    if (const auto c = colliders.point_cloud->project(p, previous, contact, h)) {
+      hit = true;
+      const Eigen::Vector3f slide = tangential_motion(p, previous, c->normal);
+      const float length = slide.norm();
+      const float limit = colliders.friction * c->push_m;
+      p -= length <= limit ? slide : Eigen::Vector3f{slide * (limit / length)};
+    }
+  }
   return hit;
 }
 

@@ -15,7 +15,10 @@ std::string journal_fingerprint(const SessionOptions& o) {
     << " pin=" << static_cast<int>(o.cloth.pin) << " blade=" << to_string(o.stroke.blade)
     << " cut=" << to_string(o.stroke.mode) << " dt=" << std::hexfloat
     << o.solver.dt << std::defaultfloat << " substeps=" << o.solver.substeps << " iterations=" << o.solver.iterations
-    << " hand=" << std::hexfloat << o.hand_radius_m;
+    << " hand=" << std::hexfloat << o.hand_radius_m << " solver=" << to_string(o.solver_kind)
+    << " blade_force=" << o.blade_force_n.value_or(0.0F) << " material=" << o.material.mass_per_area_kg_m2 << ','
+    << o.material.stretch_n_per_m << ',' << o.material.shear_n_per_m << ',' << o.material.bend_n_m << ','
+    << o.material.damping_per_s << std::defaultfloat << " object=" << (o.object ? o.object->points().size() : 0U);
   return f.str();
 }
 
@@ -26,7 +29,7 @@ std::string format_record(const JournalRecord& r) {
     return line;
   }
   const HandInput& h = r.hand;
-  const int flags = (h.tracked ? 1 : 0) | (h.cutting ? 2 : 0) | (h.holding ? 4 : 0);
+  const int flags = (h.tracked ? 1 : 0) | (h.cutting ? 2 : 0) | (h.holding ? 4 : 0) | (h.grabbing ? 8 : 0);
   // %a: hex floats, so a replayed position is the applied one to the last bit.
   std::snprintf(line, sizeof line, "h %" PRIu64 " %" PRIu32 " %" PRIu64 " %" PRId64 " %" PRIu32 " %a %a %a %d", r.step,
                 r.sensor_id, h.session_id, r.time_ns, h.stroke_id, static_cast<double>(h.position_m.x()),
@@ -48,13 +51,14 @@ std::optional<JournalRecord> parse_record(const std::string& line) {
   HandInput& h = r.hand;
   if (std::sscanf(line.c_str(), "h %" SCNu64 " %" SCNu32 " %" SCNu64 " %" SCNd64 " %" SCNu32 " %la %la %la %d%n", &r.step,
                   &r.sensor_id, &h.session_id, &r.time_ns, &h.stroke_id, &x, &y, &z, &flags, &used) != 9 ||
-      static_cast<std::size_t>(used) != line.size() || flags < 0 || flags > 7)
+      static_cast<std::size_t>(used) != line.size() || flags < 0 || flags > 15)
     return std::nullopt;
   h.position_m = Eigen::Vector3d{x, y, z}.cast<float>();
   h.time_s = static_cast<double>(r.time_ns) * 1e-9;
   h.tracked = (flags & 1) != 0;
   h.cutting = (flags & 2) != 0;
   h.holding = (flags & 4) != 0;
+  h.grabbing = (flags & 8) != 0;
   h.sensor_id = r.sensor_id;  // the Session tells hand sources apart by it (mouse blade vs camera hand)
   return r;
 }

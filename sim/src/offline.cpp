@@ -57,6 +57,76 @@ std::optional<std::pair<int, int>> parse_grid(const std::string& text) {
   return std::pair{*columns, *rows};
 }
 
+namespace {
+
+/// --solver, --material and the material's quantities, each checked with validate(Material) so one
+/// message names the flag that is out of range.
+void add_material_flags(CLI::App& app, OfflineOptions& o) {
+  app.add_option_function<std::string>(
+         "--solver",
+         [&o](const std::string& text) {
+           const auto kind = parse_solver_kind(text);
+           if (!kind) throw CLI::ValidationError("--solver", "'" + text + "' is not pbd or provot");
+           o.solver_kind = *kind;
+         },
+         "Cloth solver: pbd (position-based, default) or provot (explicit mass-spring with Provot's "
+         "deformation constraint, as the seeds; docs/sim.md compares them)")
+      ->default_str("pbd");
+  app.add_option_function<std::string>(
+         "--material",
+         [&o](const std::string& text) {
+           const auto material = material_preset(text);
+           if (!material) {
+             throw CLI::ValidationError("--material", "'" + text + "' is not one of " + std::string{material_names()});
+           }
+           o.material = *material;
+         },
+         "Material preset: cotton, silk, denim or felt (values and sources in docs/sim.md)");
+  struct Field {
+    const char* flag;
+    float Material::*member;
+    const char* help;
+  };
+  static constexpr Field kFields[] = {
+      {"--mass-per-area", &Material::mass_per_area_kg_m2, "Cloth mass per area, kg/m^2 [0.005, 5]"},
+      {"--stretch-stiffness", &Material::stretch_n_per_m, "Stretch stiffness per unit width, N/m [1, 1e6]"},
+      {"--shear-stiffness", &Material::shear_n_per_m, "Shear stiffness per unit width, N/m [0.01, 1e6]"},
+      {"--bend-stiffness", &Material::bend_n_m, "Bending rigidity, N m [1e-9, 1]"},
+      {"--damping", &Material::damping_per_s, "Velocity damping (air drag), 1/s [0, 100]"},
+  };
+  for (const Field& field : kFields) {
+    app.add_option_function<float>(
+        field.flag,
+        [&o, field](float value) {
+          Material m = o.material.value_or(Material{});
+          m.*field.member = value;
+          if (auto bad = validate(m)) throw CLI::ValidationError(field.flag, *bad);
+          o.material = m;
+        },
+        std::string{field.help} + " (overrides --material's value)");
+  }
+}
+
+}  // namespace
+
+SessionOptions session_options(const OfflineOptions& o) {
+  SessionOptions s;
+  s.cloth = o.cloth;
+  s.solver = o.solver;
+  s.solver_kind = o.solver_kind;
+  if (o.material) {
+    s.material = *o.material;
+    apply_material(*o.material, s.cloth, s.solver);
+  }
+  if (!o.substeps_given) s.solver.substeps = SolverParams{}.substeps;
+  if (o.substeps_given) s.provot.substeps = o.solver.substeps;
+  s.stroke.blade = o.blade;
+  s.blade_force_n = o.blade_force_n;
+  s.stroke.mode = o.cut_mode;
+  s.object = o.object;
+  return s;
+}
+
 std::uint64_t available_memory_bytes() {
   std::uint64_t available = 0;
   std::ifstream meminfo{"/proc/meminfo"};
@@ -127,9 +197,14 @@ void add_offline_flags(CLI::App& app, OfflineOptions& o) {
   app.add_option("--export", o.export_dir, "Folder for cloth.obj and summary.json (created if missing)");
   app.add_option("--seed", o.seed, "Seed of the tiny out-of-plane jitter that breaks the grid's symmetry")
       ->capture_default_str();
-  app.add_option("--substeps", o.solver.substeps, "Solver sub-steps per 1/60 s step")
-      ->check(CLI::Range(1, 64))
-      ->capture_default_str();
+  app.add_option_function<int>(
+         "--substeps",
+         [&o](int n) {
+           o.solver.substeps = n;
+           o.substeps_given = true;
+         },
+         "Solver sub-steps per 1/60 s step (default: 2 for pbd, 32 for provot)")
+      ->check(CLI::Range(1, 512));
   app.add_option("--iterations", o.solver.iterations, "Structural Gauss-Seidel passes per sub-step")
       ->check(CLI::Range(1, 200))
       ->capture_default_str();
@@ -162,7 +237,8 @@ void add_offline_flags(CLI::App& app, OfflineOptions& o) {
            }
            o.blade = *blade;
          },
-         "Blade sharpness (seed 001 Figure 4): razor, scalpel, utility, kitchen, hunting or worn")
+         "Blade sharpness (seed 001 Figure 4): razor, scalpel, utility, kitchen, hunting or worn; it cuts only when "
+         "its contact force reaches the blade's sharpness force, else it drags the cloth")
       ->default_str("scalpel");
   app.add_option_function<std::string>(
          "--cut-mode",
@@ -174,6 +250,16 @@ void add_offline_flags(CLI::App& app, OfflineOptions& o) {
          "How strokes cut: exact (along the stroke's own path, splitting triangles), grid (seed 000: along grid "
          "lines, eqs. 1-4) or delete (seed 001: the crossed triangles are deleted, completeCUT)")
       ->default_str("exact");
+  app.add_option_function<float>(
+         "--blade-force",
+         [&o](float n) {
+           if (!std::isfinite(n) || n <= 0.0F || n > 1000.0F) {
+             throw CLI::ValidationError("--blade-force", "must be a force in (0, 1000] N");
+           }
+           o.blade_force_n = n;
+         },
+         "Sharpness force of the blade in N (overrides --blade's; seed 001 Figure 4: razor 0.3-0.4 ... worn 6-11)");
+  add_material_flags(app, o);
 }
 
 nlohmann::json to_json(const Summary& s) {
@@ -304,19 +390,18 @@ Summary summarize(const Cloth& cloth) {
 }
 
 Summary run_offline(const OfflineOptions& options) {
-  Cloth cloth{options.cloth};
+  Session session{session_options(options)};
+  Cloth& cloth = session.cloth_for_setup();
   std::uint64_t state = options.seed;
   for (std::size_t i = 0; i < cloth.particle_count(); ++i) {
     if (cloth.pinned[i] != 0) continue;
     const double unit = static_cast<double>(splitmix64(state) >> 11U) * 0x1.0p-53;  // [0, 1)
     cloth.position[i].z() += options.jitter_m * static_cast<float>(2.0 * unit - 1.0);
   }
-  Solver solver{options.solver};
-  Colliders colliders;
-  colliders.spheres = options.spheres;
-  colliders.ground = options.ground;
+  session.set_shapes(options.spheres, options.ground);
 
-  // The stroke is cut while stepping, each sample at its own time (issue 4).
+  // The stroke is cut while stepping, each sample at its own time (issue 4), through the session's
+  // blade (it cuts only once its contact force reaches the blade's sharpness force).
   StrokeFile stroke;
   if (!options.stroke_file.empty()) {
     std::ifstream in{options.stroke_file};
@@ -327,37 +412,49 @@ Summary run_offline(const OfflineOptions& options) {
       spdlog::warn("{}: {} rows skipped in all", options.stroke_file.string(), stroke.skipped_rows);
     if (!stroke.error.empty()) throw std::runtime_error(options.stroke_file.string() + ": " + stroke.error);
   }
-  StrokeOptions stroke_options;
-  stroke_options.blade = options.blade;
-  stroke_options.mode = options.cut_mode;
-  StrokeCutter cutter{cloth, stroke_options};
   std::size_t next_sample = 0;
 
   std::vector<double> step_ms;
   step_ms.reserve(static_cast<std::size_t>(options.steps));
+  const double dt = session_options(options).solver.dt;
   for (int s = 0; s < options.steps; ++s) {
-    const double step_end = (s + 1) * static_cast<double>(options.solver.dt);
+    const double step_end = (s + 1) * dt;
     while (next_sample < stroke.samples.size() && stroke.samples[next_sample].t < step_end) {
-      cutter.add_sample(stroke.samples[next_sample++]);
-      if (next_sample == stroke.samples.size()) cutter.end_stroke();
+      const StrokeSample& sample = stroke.samples[next_sample++];
+      session.on_hand({1, sample.t, sample.position, true, true});
+      if (next_sample == stroke.samples.size()) session.end_stroke();
     }
     const auto t0 = std::chrono::steady_clock::now();
-    solver.step(cloth, colliders);
+    session.step();
     step_ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
   }
 
-  cutter.end_stroke();  // a stroke still open when the run ends is cut up to its last applied sample
+  session.end_stroke();  // a stroke still open when the run ends is cut up to its last applied sample
 
-  Summary summary = summarize(cloth);
+  Summary summary = summarize(session.cloth());
   summary.steps = options.steps;
-  add_cut_summary(summary, cloth, cutter);
+  add_cut_summary(summary, session.cloth(), session.cutter());
+  add_session_summary(summary, session);
   summary.extra["stroke_samples"] = stroke.samples.size();
   summary.extra["stroke_samples_applied"] = next_sample;
   summary.extra["stroke_rows_skipped"] = stroke.skipped_rows;
   add_step_times(summary, step_ms);
-  if (!options.export_dir.empty()) export_run(summary, cloth, options.export_dir, &cutter);
+  if (!options.export_dir.empty()) export_run(summary, session.cloth(), options.export_dir, &session.cutter());
   return summary;
 }
+
+void add_session_summary(Summary& summary, const Session& session) {
+  summary.extra["blade_force_n"] = session.blade().params().force_n;
+  summary.extra["blade_drag_m"] = session.max_drag_m();
+  summary.extra["blade_max_contact_force_n"] = session.max_contact_force_n();
+  summary.extra["solver"] = std::string{to_string(session.solver_kind())};
+  summary.extra["object_points"] = session.object() ? session.object()->points().size() : 0U;
+  const Cloth& cloth = session.cloth();
+  float lowest = std::numeric_limits<float>::infinity();
+  for (std::size_t i = 0; i < cloth.particle_count(); ++i) lowest = std::min(lowest, cloth.position[i].y());
+  summary.extra["lowest_y_m"] = cloth.particle_count() > 0 ? lowest : 0.0F;
+}
+
 
 namespace {
 

@@ -2,10 +2,49 @@
 
 #include "tachi/sim/pieces.hpp"
 
+#include <algorithm>
+#include <cstdio>
+
 namespace tachi::sim {
 
+namespace {
+
+BladeContactParams blade_params(const SessionOptions& options) {
+  BladeContactParams p;
+  p.force_n = options.blade_force_n.value_or(sharpness(options.stroke.blade).force_n());
+  p.reach_m = options.blade_reach_m;
+  const float spacing_x = options.cloth.width_m / static_cast<float>(std::max(options.cloth.columns - 1, 1));
+  const float spacing_y = options.cloth.height_m / static_cast<float>(std::max(options.cloth.rows - 1, 1));
+  p.stiffness = spring_stiffness(options.material, spacing_x, spacing_y);
+  return p;
+}
+
+/// The cutter's own blade drag (a velocity kick scaled by the blade's force, blade.hpp) is off here: in a
+/// session the blade's contact drags the cloth itself (BladeContact), and both would count it twice.
+StrokeOptions cutter_options(const SessionOptions& options) {
+  StrokeOptions s = options.stroke;
+  s.drag.gain_mps_per_n = 0.0F;
+  return s;
+}
+
+ProvotParams provot_params(const SessionOptions& options) {
+  ProvotParams p = options.provot;
+  p.dt = options.solver.dt;
+  p.gravity = options.solver.gravity;
+  p.material = options.material;
+  return p;
+}
+
+}  // namespace
+
 Session::Session(const SessionOptions& options)
-    : cloth_(options.cloth), solver_(options.solver), cutter_(cloth_, options.stroke), hand_radius_m_(options.hand_radius_m) {}
+    : cloth_(options.cloth),
+      solver_(options.solver_kind, options.solver, provot_params(options)),
+      cutter_(cloth_, cutter_options(options)),
+      blade_(blade_params(options)),
+      object_(options.object),
+      grab_reach_m_(options.grab_reach_m),
+      hand_radius_m_(options.hand_radius_m) {}
 
 void Session::absorb(const TopologyChange& change) {
   if (change.empty()) return;
@@ -17,25 +56,66 @@ void Session::absorb(const TopologyChange& change) {
 }
 
 void Session::close_stroke() {
-  if (!cutter_.stroke_open()) return;
+  if (!stroke_active_) return;
+  stroke_active_ = false;
+  approach_.reset();
   absorb(cutter_.end_stroke());
   const Pieces pieces = find_pieces(cloth_);
-  reports_.push_back({stroke_id_, cutter_.report(), pieces.count(), pieces.fallen(), stroke_sensor_});
+  reports_.push_back(
+      {stroke_id_, cutter_.report(), pieces.count(), pieces.fallen(), stroke_sensor_, blade_.max_force_n(), blade_.drag_m()});
+  max_drag_m_ = std::max(max_drag_m_, blade_.drag_m());
+  max_contact_force_n_ = std::max(max_contact_force_n_, blade_.max_force_n());
+  blade_.end_stroke(cloth_);
+}
+
+void Session::on_grab(const HandInput& hand, bool seen) {
+  hand_.reset();
+  if (stroke_active_) {
+    if (!grab_refused_) {
+      grab_refused_ = true;
+      grab_refusal_ = "grab refused: stroke " + std::to_string(stroke_id_) + " is cutting (one hand, one tool)";
+    }
+    return;
+  }
+  if (!seen) return;  // a held particle stays where the hand was last seen
+  if (!grab_.held()) {
+    last_grab_time_.reset();
+    if (!grab_.grab(cloth_, hand.position_m, grab_reach_m_)) {
+      if (!grab_refused_) {
+        grab_refused_ = true;
+        char why[96];
+        std::snprintf(why, sizeof why, "grab refused: no cloth within %.3f m of the hand", static_cast<double>(grab_reach_m_));
+        grab_refusal_ = why;
+      }
+      return;
+    }
+  }
+  const float dt = last_grab_time_ ? static_cast<float>(hand.time_s - *last_grab_time_) : 0.0F;
+  grab_.move(cloth_, hand.position_m, dt);
+  last_grab_time_ = hand.time_s;
 }
 
 void Session::on_hand(const HandInput& hand) {
   const bool same_source = hand.sensor_id == stroke_sensor_ && hand.session_id == stroke_session_;
-  if (cutter_.stroke_open()) {
+  if (stroke_active_) {
     if (!same_source && time_s() - stroke_heard_s_ < kSilentSource_s) return;
     if (same_source) stroke_heard_s_ = time_s();
   }
+  const bool seen = hand.tracked && hand.position_m.allFinite();
+  if (hand.grabbing) {
+    on_grab(hand, seen);
+    return;
+  }
+  // Any other sample lets go of what the hand held.
+  grab_.release(cloth_);
+  grab_refused_ = false;
   // The gate's verdict holds whether or not the hand is seen: it usually closes a stroke on samples
   // of a hand that has just been lost.
   const bool idle = !hand.cutting && !hand.holding;
   if (idle) close_stroke();
-  const bool seen = hand.tracked && hand.position_m.allFinite();
   if (!seen || hand.holding) {
     hand_.reset();  // neither cutting nor pushing the cloth
+    blade_.let_go(cloth_);
     return;
   }
   if (idle) {
@@ -43,22 +123,53 @@ void Session::on_hand(const HandInput& hand) {
     return;
   }
   hand_.reset();
-  if (cutter_.stroke_open() && (hand.stroke_id != stroke_id_ || !same_source)) close_stroke();
-  if (!cutter_.stroke_open()) {
+  if (stroke_active_ && (hand.stroke_id != stroke_id_ || hand.session_id != stroke_session_)) close_stroke();
+  if (!stroke_active_) {
     stroke_id_ = hand.stroke_id;
     stroke_sensor_ = hand.sensor_id;
     stroke_session_ = hand.session_id;
-    stroke_heard_s_ = time_s();
+    stroke_active_ = true;
     absorb(cutter_.begin_stroke());
   }
-  absorb(cutter_.add_sample({hand.time_s, hand.position_m}));
+  const StrokeSample sample{hand.time_s, hand.position_m};
+  const bool had_cut = blade_.has_cut();
+  const BladeContact::Verdict verdict = blade_.press(cloth_, hand.position_m);
+  if (verdict == BladeContact::Verdict::Away) {
+    // Not touching the cloth (beyond the blade's reach): the stroke goes on as the gate says, so the cutter
+    // sees where it came from (a stroke entering across an edge is clipped there); it cuts nothing here.
+    absorb(cutter_.add_sample(sample));
+    approach_.reset();
+    return;
+  }
+  if (verdict == BladeContact::Verdict::Pushing) {
+    approach_ = sample;  // the blade drags the cloth, it does not cut
+    return;
+  }
+  // The stroke's first cut starts where the blade met the cloth (the previous sample); later ones go on
+  // from the cut so far (the cutter joins them).
+  if (!had_cut && approach_) absorb(cutter_.add_sample(*approach_));
+  absorb(cutter_.add_sample(sample));
 }
 
 void Session::end_stroke() { close_stroke(); }
 
+std::optional<std::string> Session::take_grab_refusal() {
+  auto why = std::move(grab_refusal_);
+  grab_refusal_.reset();
+  return why;
+}
+
+void Session::set_shapes(std::vector<Sphere> spheres, std::optional<GroundPlane> ground) {
+  spheres_ = std::move(spheres);
+  ground_ = ground;
+}
+
 void Session::step() {
   Colliders colliders;
+  colliders.spheres = spheres_;
+  colliders.ground = ground_;
   if (hand_ && hand_radius_m_ > 0.0F) colliders.spheres.push_back({*hand_, hand_radius_m_});
+  colliders.point_cloud = object_.get();
   solver_.step(cloth_, colliders);
   ++steps_;
 }

@@ -43,7 +43,8 @@ std::optional<const char*> validate(const SolverParams& p) {
   if (p.iterations < 1 || p.iterations > 200) return "iterations must be in [1, 200]";
   if (!p.gravity.allFinite()) return "gravity must be finite";
   if (!(p.damping >= 0.0F) || !std::isfinite(p.damping)) return "damping must be >= 0";
-  if (!(p.shear_compliance >= 0.0F) || !(p.bend_compliance >= 0.0F)) return "compliance must be >= 0";
+  if (!(p.shear_compliance >= 0.0F) || !(p.bend_compliance >= 0.0F) || !(p.structural_compliance >= 0.0F))
+    return "compliance must be >= 0";
   if (!(p.max_strain > 0.0F) || !(p.max_strain < 10.0F)) return "max_strain must be in (0, 10)";
   if (p.strain_limit_passes < 1 || p.strain_limit_passes > 100) return "strain_limit_passes must be in [1, 100]";
   return std::nullopt;
@@ -616,8 +617,9 @@ void Solver::substep(Cloth& cloth, const Colliders& colliders, float h, bool fir
   // 4. Structural springs, hard, Gauss-Seidel. Near rest length the square root is replaced by its
   // first-order expansion, |d| ~ (|d|^2 + L^2) / 2L (Jakobsen 2001, "Advanced Character Physics"):
   // the fixed point is still |d| = L, and step 5 below is exact.
+  const float structural_alpha = params_.structural_compliance / (h * h);
   for (int it = 0; it < params_.iterations; ++it) {
-    sweep_near_rest(padded, groups_[0], 0.0F);
+    sweep_near_rest(padded, groups_[0], structural_alpha);
   }
 
   // 5. Provot's deformation constraint: a structural spring longer than (1 + max_strain) L is brought
@@ -661,24 +663,15 @@ void Solver::substep(Cloth& cloth, const Colliders& colliders, float h, bool fir
     if (corrections == 0) break;
   }
 
-  // 6. Collisions by projection, then velocities from the positions actually reached.
-  const bool any_shape = !colliders.spheres.empty() || !colliders.boxes.empty() || colliders.ground.has_value();
-  if (any_shape) {
+  // 6. Collisions by projection with friction (collide_with_friction), then velocities from the positions
+  // actually reached.
+  const bool any_collider = !colliders.spheres.empty() || !colliders.boxes.empty() || colliders.ground.has_value() ||
+                            cloud != nullptr;
+  if (any_collider) {
     for (std::size_t i = 0; i < n; ++i) {
       if (x[i].w() == 0.0F) continue;
-      const Eigen::Vector3f before = x[i].head<3>();
-      Eigen::Vector3f p = before;
-      if (!project_out_of_shapes(p, colliders)) continue;
-      // Friction on contact: the part of this sub-step's motion along the surface is reduced by the
-      // friction factor (position-based friction, Macklin et al. 2014, section 6.1, in its simplest form).
-      const Eigen::Vector3f push = p - before;
-      const float push2 = push.squaredNorm();
-      if (push2 > 0.0F) {
-        const Eigen::Vector3f moved = p - old_x[i].head<3>();
-        const Eigen::Vector3f tangential = moved - push * (moved.dot(push) / push2);
-        p -= colliders.friction * tangential;
-      }
-      x[i].head<3>() = p;
+      Eigen::Vector3f p = x[i].head<3>();
+      if (collide_with_friction(p, old_x[i].head<3>(), colliders, h)) x[i].head<3>() = p;
     }
   }
   const float inv_h = 1.0F / h;

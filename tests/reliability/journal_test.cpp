@@ -57,7 +57,7 @@ TEST(Journal, ARecordRoundTripsExactly) {
   EXPECT_EQ(back->hand.position_m, r.hand.position_m);  // bit for bit
   EXPECT_TRUE(back->hand.cutting);
   EXPECT_FALSE(parse_record("h 1 2 3"));
-  EXPECT_FALSE(parse_record("h 1 2 3 4 5 0x1p+0 0x1p+0 0x1p+0 9"));
+  EXPECT_FALSE(parse_record("h 1 2 3 4 5 0x1p+0 0x1p+0 0x1p+0 16"));
   EXPECT_FALSE(parse_record(format_record(r) + " trailing"));
 }
 

@@ -89,20 +89,28 @@ class Gate {
  public:
   explicit Gate(const GateParams& params) : params_(params) {}
 
-  /// Applies a voice command now (it arrived before the next hand sample).
-  void on_voice(VoiceCommandKind command);
+  /// Applies a voice command now (it arrived before the next hand sample). Grab and Release work in
+  /// every mode and beside the phases: while grabbing the output is Grabbing and distance events are
+  /// ignored (the hand is at the cloth on purpose); a release holds the threshold off until the hand has
+  /// gone beyond the exit distance, so letting go does not start a cut. Start while grabbing releases
+  /// first. A grab while the gate is cutting is refused (one hand, one tool): returns why.
+  std::optional<std::string> on_voice(VoiceCommandKind command);
   /// Applies one hand sample: its distance event (nullopt distance = hand lost), then the dwell.
   const GateStatus& on_sample(std::optional<float> distance_m);
 
   const GateStatus& status() const noexcept { return status_; }
+  bool grabbing() const noexcept { return grabbing_; }
   const GateParams& params() const noexcept { return params_; }
 
  private:
   void apply(GateEvent event);
 
   GateParams params_;
+  void release_grab();
+
   GateStatus status_;
   int dwell_ = 0;
+  bool grabbing_ = false;
 };
 
 }  // namespace tachi::filter

@@ -1,5 +1,5 @@
 // The offline formats: the sensor's hand CSV in (frame,stamp_ns,x,y,z,u,v,tracked,confidence) and the
-// stroke CSV out (frame,stamp_ns,x,y,z,gate,stroke_id; gate 0 = idle, 1 = cutting, 2 = holding).
+// stroke CSV out (frame,stamp_ns,x,y,z,gate,stroke_id; gate 0 = idle, 1 = cutting, 2 = holding, 3 = grabbing).
 #pragma once
 
 #include "tachi/filter/types.hpp"

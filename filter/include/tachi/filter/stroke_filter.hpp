@@ -12,6 +12,7 @@
 #include <cstdint>
 #include <optional>
 #include <span>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -21,8 +22,8 @@ class StrokeFilter {
  public:
   explicit StrokeFilter(const FilterConfig& config);
 
-  /// A voice command; it takes effect before the next hand sample.
-  void on_voice(VoiceCommandKind command) { gate_.on_voice(command); }
+  /// A voice command; it takes effect before the next hand sample. Returns why a grab was refused.
+  std::optional<std::string> on_voice(VoiceCommandKind command) { return gate_.on_voice(command); }
   /// The newest cloth positions (x, y, z per particle, world frame); replaces the rest cloth.
   void on_cloth_state(std::span<const float> xyz);
   /// One hand sample in, one stroke sample out.

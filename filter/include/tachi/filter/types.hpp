@@ -20,13 +20,15 @@ struct HandSample {
 /// Whether cutting is on. Matches tachi_msg_GateState.
 /// Holding: a stroke is open but the hand is out of reach (exit dwell): the sample does not cut, so a
 /// hand leaving the cloth never drags the cut with it; the stroke continues if the hand comes back.
-enum class GateOutput : std::uint8_t { Idle, Cutting, Holding };
+/// Grabbing: the hand holds the cloth (voice "grab" until "release"; seed 000 section 2): the simulator
+/// moves the particle it took with the hand; nothing is cut.
+enum class GateOutput : std::uint8_t { Idle, Cutting, Holding, Grabbing };
 
 /// What opened or closed a stroke. Matches tachi_msg_GateSource.
 enum class GateSource : std::uint8_t { None, Threshold, Voice };
 
 /// A voice command as the gate sees it.
-enum class VoiceCommandKind : std::uint8_t { Start, Stop };
+enum class VoiceCommandKind : std::uint8_t { Start, Stop, Grab, Release };
 
 /// One output sample: the smoothed hand in the cloth's world frame with the gate's verdict.
 struct StrokeSample {

@@ -19,6 +19,7 @@ TACHI_BUS_DESCRIPTOR(tachi_msg_ClothTopologyDelta);
 TACHI_BUS_DESCRIPTOR(tachi_msg_ClothState);
 TACHI_BUS_DESCRIPTOR(tachi_msg_CutEvent);
 TACHI_BUS_DESCRIPTOR(tachi_msg_NodeStatus);
+TACHI_BUS_DESCRIPTOR(tachi_msg_SceneObject);
 #undef TACHI_BUS_DESCRIPTOR
 
 namespace topics {
@@ -32,6 +33,8 @@ inline constexpr TopicSpec<tachi_msg_ClothTopologyDelta> cloth_topology_delta{"t
 inline constexpr TopicSpec<tachi_msg_ClothState> cloth_state{"tachi/cloth/state", QosProfile::State};
 inline constexpr TopicSpec<tachi_msg_CutEvent> cut_event{"tachi/cloth/cut", QosProfile::Commands};
 inline constexpr TopicSpec<tachi_msg_NodeStatus> node_status{"tachi/node/status", QosProfile::Status};
+/// Transient-local like the topology: a late viewer still gets the object.
+inline constexpr TopicSpec<tachi_msg_SceneObject> scene_object{"tachi/scene/object", QosProfile::Topology};
 }  // namespace topics
 
 }  // namespace tachi::bus

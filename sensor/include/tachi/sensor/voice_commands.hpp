@@ -11,9 +11,14 @@
 
 namespace tachi::sensor {
 
-enum class VoiceCommand : std::uint8_t { Start, Stop };
+/// Start and Stop drive the cutting gate; Grab and Release make the hand hold the cloth (seed 000 section 2;
+/// optional phrases, none by default so the cutting phrases keep their false-alarm figures: add them
+/// in the config ({"phrase": "grab cloth", "command": "grab"}) or with --grab-phrase / --release-phrase).
+enum class VoiceCommand : std::uint8_t { Start, Stop, Grab, Release };
 
-std::string to_string(VoiceCommand command);  ///< "start" / "stop"
+std::string to_string(VoiceCommand command);  ///< "start" / "stop" / "grab" / "release"
+/// The inverse of to_string; nothing for anything else.
+std::optional<VoiceCommand> voice_command_from_string(const std::string& name);
 
 /// One key phrase. Two-word phrases by default: a single "stop" false-alarms on ordinary speech
 /// (FIELD_NOTES: 5 false alarms on 27.5 s of LibriVox at 1e-20, "stop cutting" none).

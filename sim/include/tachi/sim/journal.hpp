@@ -8,7 +8,7 @@
 //   tachi-sim-journal 1 <fingerprint>          first line: the run's configuration (grid, pinning,
 //                                              size, blade, solver); a journal of another config is refused
 //   h <step> <sensor> <session> <time_ns> <stroke> <x> <y> <z> <flags>   a hand sample (flags: tracked 1,
-//                                              cutting 2, holding 4), position as C99 hex floats (exact)
+//                                              cutting 2, holding 4, grabbing 8), position as C99 hex floats (exact)
 //   e <step>                                   the open stroke was ended (its publisher went away)
 // A torn last line (a kill mid-write) is dropped on reading; any other bad line is an error naming it.
 #pragma once

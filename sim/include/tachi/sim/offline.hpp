@@ -5,7 +5,10 @@
 
 #include "tachi/sim/blade.hpp"
 #include "tachi/sim/cloth.hpp"
+#include "tachi/sim/cloth_solver.hpp"
 #include "tachi/sim/collision.hpp"
+#include "tachi/sim/material.hpp"
+#include "tachi/sim/session.hpp"
 #include "tachi/sim/solver.hpp"
 #include "tachi/sim/stroke.hpp"
 
@@ -14,6 +17,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -32,7 +36,17 @@ struct OfflineOptions {
   std::filesystem::path stroke_file;    ///< --stroke: CSV t,x,y,z cut while stepping (t = seconds from the start)
   Blade blade = Blade::Scalpel;         ///< --blade
   CutMode cut_mode = CutMode::Exact;    ///< --cut-mode
+  std::optional<float> blade_force_n;   ///< --blade-force: overrides the blade's sharpness force
+  SolverKind solver_kind = SolverKind::Pbd;  ///< --solver
+  bool substeps_given = false;          ///< --substeps was given (else each solver's own default)
+  /// --material and --mass-per-area, --stretch-stiffness, --shear-stiffness, --bend-stiffness, --damping;
+  /// nothing: the position-based solver keeps its tuned defaults (Provot's solver uses Material{}).
+  std::optional<Material> material;
+  std::shared_ptr<const PointCloudCollider> object;  ///< --object / --object-from-recording (loaded by main)
 };
+
+/// The session the options describe (cloth, solver, material, blade, object), for offline and live runs.
+[[nodiscard]] SessionOptions session_options(const OfflineOptions& options);
 
 /// What a run produced. Keys of to_json(): the contract plus extras.
 struct Summary {
@@ -84,6 +98,9 @@ void write_pattern_svg(const Cloth& cloth, const StrokeCutter& cutter, const std
 /// blade_force_n, topology_version, cut_mode, cut_deviation_cells_max) to a summary; the offline and live
 /// modes report the same keys.
 void add_cut_summary(Summary& summary, const Cloth& cloth, const StrokeCutter& cutter);
+/// Adds what the session layer did (blade_force_n, blade_drag_m, blade_max_contact_force_n, solver,
+/// object_points, lowest_y_m) to a summary; the offline and live modes report the same keys.
+void add_session_summary(Summary& summary, const Session& session);
 /// Sets step_ms_median, step_ms_p95 and step_ms_max from the step times of a run.
 void add_step_times(Summary& summary, const std::vector<double>& step_ms);
 /// Writes dir/cloth.obj and dir/summary.json (creating dir), and dir/pattern.svg when a cutter is given.

@@ -4,13 +4,19 @@
 // The same Cloth/Solver/StrokeCutter serve tachi-sim --offline; this adds only the gate handling.
 #pragma once
 
+#include "tachi/sim/blade_contact.hpp"
 #include "tachi/sim/cloth.hpp"
+#include "tachi/sim/cloth_solver.hpp"
 #include "tachi/sim/collision.hpp"
+#include "tachi/sim/grab.hpp"
+#include "tachi/sim/material.hpp"
 #include "tachi/sim/solver.hpp"
 #include "tachi/sim/stroke.hpp"
 
 #include <cstdint>
+#include <memory>
 #include <optional>
+#include <string>
 #include <vector>
 
 namespace tachi::sim {
@@ -25,6 +31,7 @@ struct HandInput {
   bool holding = false;  ///< stroke open, hand beyond reach: the sample must not cut (GATE_HOLDING)
   std::uint64_t session_id = 0;  ///< the filter run that numbered the stroke: stroke 1 of a restarted filter is a new stroke
   std::uint32_t sensor_id = 0;   ///< the hand source (camera hand, mouse blade): with session and stroke id, names a stroke
+  bool grabbing = false;  ///< the hand holds the cloth (GATE_GRABBING): take, move, and on the next other sample release
 };
 
 /// What one stroke did, reported when it closes.
@@ -34,12 +41,22 @@ struct CutReport {
   std::size_t pieces = 0;
   std::size_t fallen_pieces = 0;
   std::uint32_t sensor_id = 0;  ///< the hand source that made the stroke
+  float max_contact_force_n = 0.0F;  ///< largest blade contact force of the stroke (blade_contact.hpp)
+  float drag_m = 0.0F;               ///< farthest the blade dragged the cloth before it cut (or without cutting)
 };
 
 struct SessionOptions {
   ClothConfig cloth;
   SolverParams solver;
+  SolverKind solver_kind = SolverKind::Pbd;
+  ProvotParams provot;  ///< used when solver_kind is Provot
+  Material material;    ///< the cloth's springs for the blade's contact force (and the Provot solver)
   StrokeOptions stroke;
+  /// Sharpness force of the blade, N (seed 001 Figure 4); nothing: the middle of stroke.blade's range.
+  std::optional<float> blade_force_n;
+  float blade_reach_m = 0.06F;  ///< the blade meets the cloth within this distance of a particle
+  float grab_reach_m = 0.10F;   ///< a grab takes the nearest particle within this distance of the hand
+  std::shared_ptr<const PointCloudCollider> object;  ///< an object to drape over (seed 000), or null
   /// The hand as a collider sphere while it is not cutting (seed 000 section 2: the cloth reacts to
   /// the hand); 0 disables it. While cutting, the blade passes through the cloth.
   float hand_radius_m = 0.0F;
@@ -55,6 +72,10 @@ class Session {
   /// filter's gate decides when a lost hand ends a stroke). Untracked or non-finite samples never cut.
   /// Several sources may publish: while one source's stroke is open, the others' samples are ignored
   /// (one blade cuts at a time), unless that source fell silent for kSilentSource_s.
+  /// A CUTTING sample cuts only once the blade is through the cloth (BladeContact): until its contact
+  /// force reaches the sharpness force the blade holds and drags the particle it met. A GRABBING sample
+  /// takes the nearest particle within grab reach and moves it to the hand; any other sample releases
+  /// it. A grab while a stroke is open is refused (one hand, one tool): take_grab_refusal() says why.
   void on_hand(const HandInput& hand);
   static constexpr double kSilentSource_s = 1.0;
   /// Closes the open stroke, if any (e.g. when the filter vanished mid-stroke).
@@ -69,18 +90,48 @@ class Session {
   /// Reports of strokes closed since the last call.
   std::vector<CutReport> take_cut_reports();
 
+  /// Why the last grab was refused, once per refused grab; nothing when none was.
+  std::optional<std::string> take_grab_refusal();
+
   [[nodiscard]] const Cloth& cloth() const { return cloth_; }
+  /// The cloth before the first step, to set its initial shape (e.g. the offline driver's jitter).
+  [[nodiscard]] Cloth& cloth_for_setup() { return cloth_; }
+  /// Fixed shape colliders (spheres, ground) present in every step, besides the hand and the object.
+  void set_shapes(std::vector<Sphere> spheres, std::optional<GroundPlane> ground);
   [[nodiscard]] const StrokeCutter& cutter() const { return cutter_; }
+  [[nodiscard]] SolverKind solver_kind() const { return solver_.kind(); }
+  [[nodiscard]] const PointCloudCollider* object() const { return object_.get(); }
+  /// Over every stroke so far: farthest blade drag, largest blade contact force.
+  [[nodiscard]] float max_drag_m() const { return max_drag_m_; }
+  [[nodiscard]] float max_contact_force_n() const { return max_contact_force_n_; }
+  [[nodiscard]] const BladeContact& blade() const { return blade_; }
+  /// The particle the hand holds (grab), if any.
+  [[nodiscard]] std::optional<std::uint32_t> held_particle() const { return grab_.held(); }
   [[nodiscard]] std::uint64_t steps() const { return steps_; }
-  [[nodiscard]] double time_s() const { return static_cast<double>(steps_) * solver_.params().dt; }
+  [[nodiscard]] double time_s() const { return static_cast<double>(steps_) * solver_.dt(); }
 
  private:
   void absorb(const TopologyChange& change);
   void close_stroke();
+  /// Applies a GRABBING sample; false when the grab was refused.
+  void on_grab(const HandInput& hand, bool seen);
 
   Cloth cloth_;
-  Solver solver_;
+  ClothSolver solver_;
   StrokeCutter cutter_;
+  BladeContact blade_;
+  Grab grab_;
+  std::shared_ptr<const PointCloudCollider> object_;
+  std::vector<Sphere> spheres_;
+  std::optional<GroundPlane> ground_;
+  float max_drag_m_ = 0.0F;
+  float max_contact_force_n_ = 0.0F;
+  float grab_reach_m_;
+  std::optional<double> last_grab_time_;
+  bool grab_refused_ = false;  ///< the current grab was refused (reported once)
+  std::optional<std::string> grab_refusal_;
+  bool stroke_active_ = false;  ///< a cutting stroke is open (the blade may not be through yet)
+  std::optional<StrokeSample> approach_;  ///< the stroke's previous sample, for the cut to start where the blade met the cloth
   float hand_radius_m_;
   std::optional<Eigen::Vector3f> hand_;  ///< last tracked hand position while not cutting
   std::uint32_t stroke_id_ = 0;

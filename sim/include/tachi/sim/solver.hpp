@@ -29,6 +29,7 @@ struct SolverParams {
   float damping = 0.5F;            ///< velocity damping, 1/s (air drag)
   float shear_compliance = 0.2F;   ///< XPBD compliance, m/N (inverse spring stiffness)
   float bend_compliance = 2.0F;    ///< XPBD compliance, m/N
+  float structural_compliance = 0.0F;  ///< XPBD compliance of the structural springs, m/N (0: hard; materials set 1/k)
   float max_strain = 0.10F;        ///< Provot's critical deformation rate (10%)
   int strain_limit_passes = 4;     ///< at most this many strain-limit sweeps per sub-step (stops when clean)
   /// The last strain-limit sweep (and every sweep after the first next to a cut) moves only the end

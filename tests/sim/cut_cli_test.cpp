@@ -86,7 +86,7 @@ TEST_F(CutCli, FullWidthStrokeCutsOffTheLowerPieceWhichFalls) {
 
 TEST_F(CutCli, ExactModeFollowsTheStrokeAndExportsPiecesAndThePattern) {
   // Between two rows (y = 0 on an even grid is half-way between rows 31 and 32): the grid mode
-  // zig-zags there; the exact mode (the default) cuts straight along the stroke.
+  // zig-zags there; the exact mode cuts straight along the stroke.
   const fs::path stroke = write_stroke(0.0);
   const fs::path out = dir_ / "out";
   const auto r = sim({"--offline", "--cut-mode", "exact", "--grid", "64", "--pin", "top-edge", "--stroke",

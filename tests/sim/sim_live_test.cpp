@@ -37,7 +37,7 @@ tachi_msg_StrokeSample sample(std::uint32_t stroke, std::uint64_t frame, float x
 TEST(SimLive, CutsOffTheLowerPieceFromStrokesOverDdsAndReportsIt) {
   const tachi::test::ScratchDir scratch{"sim_live"};
   const auto out = scratch / "out";
-  tachi::test::ChildProcess sim({TACHI_SIM_EXE, "--grid", "16", "--pin", "top-edge", "--domain", std::to_string(kDomain),
+  tachi::test::ChildProcess sim({TACHI_SIM_EXE, "--cut-mode", "exact", "--grid", "16", "--pin", "top-edge", "--domain", std::to_string(kDomain),
                                  "--exit-when-idle", "1.5", "--export", out.string()});
   bus::Participant dds{kDomain};
   bus::Writer<tachi_msg_StrokeSample> strokes{dds, bus::topics::stroke};
@@ -83,7 +83,7 @@ TEST(SimLive, CutsOffTheLowerPieceFromStrokesOverDdsAndReportsIt) {
   EXPECT_EQ(summary["hand_samples_rejected"], 1);
   EXPECT_TRUE(std::filesystem::exists(out / "cloth.obj"));
   EXPECT_TRUE(std::filesystem::exists(out / "pattern.svg"));
-  EXPECT_EQ(summary["cut_mode"], "exact");  // the product's default
+  EXPECT_EQ(summary["cut_mode"], "exact");
 
   // Issue 11: the deltas (<= 30 Hz) applied to the first keyframe give exactly the last keyframe.
   bus::TopologyAssembler assembled;

@@ -86,8 +86,8 @@ enum class CutMode : std::uint8_t { Exact, Grid, Delete };
 [[nodiscard]] std::string_view to_string(CutMode mode);
 
 struct StrokeOptions {
-  /// Grid here so that the library reproduces seed 000 unless asked; the product (tachi-sim's
-  /// --cut-mode, offline and live) defaults to exact.
+  /// Grid here so that the library reproduces seed 000 unless asked; tachi-sim's --cut-mode defaults to
+  /// grid too until exact mode holds in the live pipeline (docs/cutting.md section 8).
   CutMode mode = CutMode::Grid;
   Blade blade = Blade::Scalpel;
   BladeDrag drag;

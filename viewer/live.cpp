@@ -292,6 +292,7 @@ int run_live(const ViewerOptions& o) {
 
   SceneState state;
   FrameStats stats;
+  std::int64_t counted_acquired_ns = 0;  // acquired_ns whose first showing the stats counted
   MouseControl mouse{o.mouse, mouse_source};
   std::string sim_blade = "-";
   std::uint64_t messages_in = 0, messages_out = 0;
@@ -393,7 +394,11 @@ int run_live(const ViewerOptions& o) {
       }
       std::optional<double> age_ms;
       if (state.shown_acquired_ns() > 0) age_ms = static_cast<double>(wall_ns() - state.shown_acquired_ns()) * 1e-6;
-      stats.frame(now, age_ms);
+      // The stage's latency is capture -> the first frame that shows a new hand sample; once the hand
+      // stops, the shown state's age keeps growing (the HUD shows it) but is no delay of this viewer.
+      const bool new_sample_shown = state.shown_acquired_ns() > 0 && state.shown_acquired_ns() != counted_acquired_ns;
+      stats.frame(now, new_sample_shown ? age_ms : std::nullopt);
+      if (new_sample_shown) counted_acquired_ns = state.shown_acquired_ns();
       state.advance(seconds(now));
       Scene& scene = state.scene();
       if (!scene.hud) scene.hud.emplace();

@@ -363,9 +363,9 @@ void Solver::build_attachments(const Cloth& cloth) {
   // its nearest, as Kim et al. do, which keeps the cost at one tether per particle.
   constexpr std::size_t kAllPinsUpTo = 4;
   if (cached_pins_.size() <= kAllPinsUpTo) {
-    for (const std::uint32_t pin : cached_pins_) searches_.push_back({{pin}, {}, {}, {}, {}});
+    for (const std::uint32_t pin : cached_pins_) searches_.emplace_back().sources = {pin};
   } else {
-    searches_.push_back({cached_pins_, {}, {}, {}, {}});
+    searches_.emplace_back().sources = cached_pins_;
   }
   for (Search& search : searches_) {
     search.dist.assign(n, kInf);

@@ -96,21 +96,21 @@ TEST_P(JournalReplay, AKilledRunReplaysToTheSameClothAndCuts) {
 }
 
 INSTANTIATE_TEST_SUITE_P(CutModes, JournalReplay, ::testing::Values(CutMode::Grid, CutMode::Exact, CutMode::Delete),
-                         [](const ::testing::TestParamInfo<CutMode>& info) { return std::string(to_string(info.param)); });
+                         [](const ::testing::TestParamInfo<CutMode>& mode) { return std::string(to_string(mode.param)); });
 
 TEST(Journal, ATornLastLineIsDroppedAndAppendingGoesOn) {
   test::ScratchDir dir{"journal"};
   const auto path = dir / "sim.journal";
   {
     Journal journal{path, "f"};
-    journal.append({JournalRecord::Kind::EndStroke, 5});
+    journal.append({JournalRecord::Kind::EndStroke, 5, 0, 0, {}});
     journal.flush();
   }
   std::ofstream(path, std::ios::app) << "h 6 3 77 12";  // killed mid-write
   {
     Journal journal{path, "f"};
     EXPECT_EQ(journal.recovered().size(), 1u);
-    journal.append({JournalRecord::Kind::EndStroke, 9});
+    journal.append({JournalRecord::Kind::EndStroke, 9, 0, 0, {}});
   }
   Journal again{path, "f"};
   ASSERT_EQ(again.recovered().size(), 2u);
@@ -141,7 +141,7 @@ TEST(Journal, IsBounded) {
   test::ScratchDir dir{"journal"};
   Journal journal{dir / "sim.journal", "f", 200};
   int appended = 0;
-  while (journal.append({JournalRecord::Kind::EndStroke, 123456}) && appended < 1000) ++appended;
+  while (journal.append({JournalRecord::Kind::EndStroke, 123456, 0, 0, {}}) && appended < 1000) ++appended;
   journal.flush();
   EXPECT_TRUE(journal.full());
   EXPECT_LT(appended, 30);

@@ -237,7 +237,7 @@ int run_live(const OfflineOptions& shared, std::optional<int> max_steps, const L
     if (had_filter && !has_filter && session.cutter().stroke_open()) {
       spdlog::warn("tachi-sim: the stroke publisher went away mid-stroke; closing the stroke");
       session.end_stroke();
-      if (journal) journal_append(*journal, {JournalRecord::Kind::EndStroke, session.steps()});
+      if (journal) journal_append(*journal, {JournalRecord::Kind::EndStroke, session.steps(), 0, 0, {}});
     }
     if (journal) journal->flush();
     had_filter = has_filter;
@@ -275,7 +275,7 @@ int run_live(const OfflineOptions& shared, std::optional<int> max_steps, const L
 
   session.end_stroke();
   if (journal) {
-    journal_append(*journal, {JournalRecord::Kind::EndStroke, session.steps()});
+    journal_append(*journal, {JournalRecord::Kind::EndStroke, session.steps(), 0, 0, {}});
     journal->flush();
   }
   if (const auto change = session.take_topology_change()) {

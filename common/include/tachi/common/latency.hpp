@@ -32,6 +32,7 @@ class LatencyWindow {
 
  private:
   std::vector<double> values_;
+  mutable std::vector<double> scratch_;  ///< percentile()'s working copy, reused
   std::size_t capacity_;
   std::size_t next_ = 0;
   std::uint64_t total_ = 0;

@@ -64,70 +64,15 @@ std::optional<JournalRecord> parse_record(const std::string& line) {
 }
 
 Journal::Journal(std::filesystem::path path, const std::string& fingerprint, std::uintmax_t max_bytes)
-    : path_(std::move(path)), max_bytes_(max_bytes) {
-  const std::string header = "tachi-sim-journal 1 " + fingerprint;
-  std::error_code ec;
-  bool fresh = !std::filesystem::exists(path_, ec) || std::filesystem::file_size(path_, ec) == 0;
-  if (!fresh) {
-    std::ifstream in(path_, std::ios::binary);
-    if (!in) throw std::runtime_error("journal " + path_.string() + ": cannot read");
-    std::string line;
-    std::getline(in, line);
-    if (line != header)
-      throw std::runtime_error("journal " + path_.string() + ": written by another configuration (\"" + line.substr(0, 120) +
-                               "\", this run is \"" + header + "\"); give a new file or delete this one");
-    std::size_t number = 1;
-    std::string bad;
-    std::size_t bad_line = 0;
-    while (std::getline(in, line)) {
-      ++number;
-      if (!bad.empty()) {
-        // Only the very last line may be torn by a kill mid-write.
-        throw std::runtime_error("journal " + path_.string() + ": line " + std::to_string(bad_line) + " is corrupt: \"" +
-                                 bad.substr(0, 80) + "\"");
-      }
-      const bool complete = !in.eof();  // getline hit a newline
-      if (auto r = parse_record(line); r && complete) {
-        recovered_.push_back(*r);
-      } else {
-        bad = line.empty() ? std::string("(empty)") : line;
-        bad_line = number;
-      }
-    }
-    bytes_ = std::filesystem::file_size(path_, ec);
-    if (!bad.empty()) {
-      // Drop the torn tail so appends start on a fresh line.
-      std::filesystem::resize_file(path_, bytes_ - line.size(), ec);
-      bytes_ -= line.size();
-    }
-  }
-  out_.open(path_, std::ios::binary | std::ios::app);
-  if (!out_) throw std::runtime_error("journal " + path_.string() + ": cannot open for appending");
-  if (fresh) {
-    out_ << header << '\n';
-    out_.flush();
-    bytes_ = header.size() + 1;
-  }
-  if (!out_) throw std::runtime_error("journal " + path_.string() + ": cannot write");
-}
+    : file_(std::move(path), "tachi-sim-journal 1 " + fingerprint,
+            [this](const std::string& line) {
+              const auto r = parse_record(line);
+              if (r) recovered_.push_back(*r);
+              return r.has_value();
+            },
+            max_bytes) {}
 
-bool Journal::append(const JournalRecord& record) {
-  if (full_) return false;
-  const std::string line = format_record(record);
-  if (bytes_ + line.size() + 1 > max_bytes_) {
-    full_ = true;
-    flush();
-    return false;
-  }
-  out_ << line << '\n';
-  bytes_ += line.size() + 1;
-  return true;
-}
-
-void Journal::flush() {
-  out_.flush();
-  if (!out_) throw std::runtime_error("journal " + path_.string() + ": write failed");
-}
+bool Journal::append(const JournalRecord& record) { return file_.append(format_record(record)); }
 
 std::map<std::pair<std::uint32_t, std::uint64_t>, std::int64_t> replay(const std::vector<JournalRecord>& records,
                                                                         Session& session) {

@@ -13,6 +13,7 @@
 // A torn last line (a kill mid-write) is dropped on reading; any other bad line is an error naming it.
 #pragma once
 
+#include "tachi/common/line_journal.hpp"
 #include "tachi/sim/session.hpp"
 
 #include <cstdint>
@@ -58,17 +59,13 @@ class Journal {
   bool append(const JournalRecord& record);
   /// Writes the buffered records through to the file (one write + fflush; no fsync: the journal
   /// survives the process, not the machine).
-  void flush();
-  [[nodiscard]] bool full() const { return full_; }
-  [[nodiscard]] const std::filesystem::path& path() const { return path_; }
+  void flush() { file_.flush(); }
+  [[nodiscard]] bool full() const { return file_.full(); }
+  [[nodiscard]] const std::filesystem::path& path() const { return file_.path(); }
 
  private:
-  std::filesystem::path path_;
-  std::ofstream out_;
-  std::vector<JournalRecord> recovered_;
-  std::uintmax_t bytes_ = 0;
-  std::uintmax_t max_bytes_;
-  bool full_ = false;
+  std::vector<JournalRecord> recovered_;  // before file_: filled while file_ is constructed
+  common::LineJournal file_;
 };
 
 /// Replays `records` into a fresh `session`: steps it to each record's step, then applies the record.

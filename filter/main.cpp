@@ -8,6 +8,7 @@
 #include "tachi/common/peer_wait.hpp"
 #include "tachi/filter/config.hpp"
 #include "tachi/filter/hand_csv.hpp"
+#include "tachi/filter/journal.hpp"
 #include "tachi/filter/stroke_filter.hpp"
 
 #include <spdlog/spdlog.h>
@@ -15,7 +16,10 @@
 #include <algorithm>
 #include <fstream>
 #include <iostream>
+#include <optional>
 #include <sstream>
+#include <thread>
+#include <vector>
 
 namespace {
 
@@ -29,6 +33,7 @@ struct Options {
   std::string gate;
   bool camera_frame = false;
   bool print_config = false;
+  std::string journal;
   std::string log_level;
   tachi::common::BusOptions bus;
 };
@@ -123,10 +128,38 @@ int run_bus(const Options& o, const tachi::filter::FilterConfig& config) {
     if (heartbeat.rejected() == 1 || heartbeat.rejected() % 100 == 0)
       spdlog::warn("{} input samples rejected (last: {})", heartbeat.rejected(), reason);
   }};
-  const std::uint64_t session_id = bus::new_session_id();
   tachi::filter::StrokeFilter filter{config};
+  // No lost cuts: a journal left by a killed run is replayed first (same state, same session), and
+  // the hand samples it already holds are skipped when the sensor's history delivers them again.
+  std::optional<tachi::filter::FilterJournal> journal;
+  tachi::filter::ProcessedSamples processed;
+  std::vector<tachi_msg_StrokeSample> resend;
+  if (!o.journal.empty()) {
+    journal.emplace(o.journal, config, bus::new_session_id());
+    if (!journal->recovered().empty()) {
+      const auto t0 = std::chrono::steady_clock::now();
+      auto replayed = tachi::filter::replay(journal->recovered(), filter);
+      processed = std::move(replayed.processed);
+      // The last sample was journaled before it was published: if the kill fell in between, the
+      // simulator never got it. Sent again (the strokes topic is transient-local): at worst a duplicate.
+      if (replayed.last) resend.push_back(tachi::filter::to_msg(replayed.last->second, replayed.last->first, journal->session_id()));
+      spdlog::info("tachi-filter: replayed {} journal records from {} in {:.0f} ms: session {:x} goes on at stroke {} ({})",
+                   journal->recovered().size(), o.journal,
+                   std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count(),
+                   journal->session_id(), filter.gate().status().stroke_id,
+                   tachi::filter::to_string(filter.gate().status().phase));
+    }
+  }
+  const std::uint64_t session_id = journal ? journal->session_id() : bus::new_session_id();
+  // A recovered gate measures the hand against the cloth it was cutting: wait (up to 1 s) for the
+  // simulator's next state rather than judging the catch-up samples against the flat rest cloth.
+  const bool recovering = journal && !journal->recovered().empty();
+  const auto cloth_due = std::chrono::steady_clock::now() + 1s;
+  bool cloth_seen = false;
   std::uint64_t in_count = 0;
   std::uint64_t out_count = 0;
+  std::uint64_t redelivered = 0;
+  std::vector<tachi_msg_StrokeSample> batch = std::move(resend);
   tachi::common::LatencyWindow latency;
   tachi::common::PeerWait waiting_for_sensor("tachi-sensor", o.bus.domain);
   spdlog::info("tachi-filter on domain {}: gate {}, smoother {}", o.bus.domain, tachi::filter::to_string(config.gate.mode),
@@ -137,34 +170,58 @@ int run_bus(const Options& o, const tachi::filter::FilterConfig& config) {
     // Commands first: one spoken before a hand sample arrived applies to that sample.
     for (const auto& c : voice.take()) {
       static constexpr const char* kNames[] = {"start", "stop", "grab", "release"};
-      spdlog::info("voice command {} (\"{}\")", kNames[static_cast<int>(tachi::filter::from_msg(*c))], c->phrase);
-      if (const auto why = filter.on_voice(tachi::filter::from_msg(*c))) spdlog::warn("{}", *why);
+      const auto command = tachi::filter::from_msg(*c);
+      spdlog::info("voice command {} (\"{}\")", kNames[static_cast<int>(command)], c->phrase);
+      if (const auto why = filter.on_voice(command)) spdlog::warn("{}", *why);
+      if (journal) journal->append({tachi::filter::FilterJournalRecord::Kind::Voice, 0, {}, {}, command});
     }
-    for (const auto& h : hands.take()) {
+    const bool take_hands = !recovering || cloth_seen || std::chrono::steady_clock::now() >= cloth_due;
+    for (const auto& h : take_hands ? hands.take() : std::vector<bus::Owned<tachi_msg_RawHandSample>>{}) {
+      if (processed.contains(h->sensor_id, h->capture_time_ns)) {
+        ++redelivered;  // processed before the restart (or a frame sent twice): not a new sample
+        continue;
+      }
       ++in_count;
       if (h->tracked && !guard.position(h->position_m.x, h->position_m.y, h->position_m.z, kMaxHandRange_m)) continue;
       if (!guard.time(h->sensor_id, h->capture_time_ns, kSensorRestartGap_ns)) continue;
-      const auto stroke = filter.on_hand(tachi::filter::from_msg(*h));
+      const auto hand = tachi::filter::from_msg(*h);
+      const auto stroke = filter.on_hand(hand);
+      processed.add(h->sensor_id, h->capture_time_ns);
+      if (journal)
+        journal->append({tachi::filter::FilterJournalRecord::Kind::Hand, h->sensor_id, hand,
+                         {stroke.distance_to_cloth_m, stroke.hand_outside_cloth, {}}, {}});
       auto msg = tachi::filter::to_msg(stroke, h->sensor_id, session_id);
       msg.acquired_ns = h->acquired_ns;  // the depth frame's time rides on to the simulator
-      strokes.write(msg);
-      latency.add_since(h->acquired_ns, tachi::common::wall_clock_ns());
-      ++out_count;
+      batch.push_back(msg);
       heartbeat.set_metric("strokes", stroke.stroke_id);
       heartbeat.set_metric("gate", static_cast<double>(msg.gate));
       heartbeat.set_metric("gate_opened_by", static_cast<double>(msg.opened_by));
+    }
+    // Journaled before published: a sample the simulator has, the journal has.
+    if (journal) journal->flush();
+    for (const auto& msg : batch) {
+      strokes.write(msg);
+      if (msg.acquired_ns > 0) latency.add_since(msg.acquired_ns, tachi::common::wall_clock_ns());
+      ++out_count;
+    }
+    if (!batch.empty()) {
       heartbeat.set_metric("latency_p50_ms", latency.percentile(50));
       heartbeat.set_metric("latency_p99_ms", latency.percentile(99));
     }
+    batch.clear();
+    if (!take_hands) std::this_thread::sleep_for(5ms);  // the waitset stays triggered by the waiting hands
     waiting_for_sensor.warn_if_waiting(hands.matched_writers() > 0);
     // The cloth after the hands: a 128 x 128 state is 196 KB to copy and scan, and the hand samples
     // must not wait for it (end-to-end latency); the gate then uses the cloth as of one state earlier.
     auto states = cloth.take();
     if (!states.empty()) {
       const auto& newest = *states.back();
-      if (guard.size(newest.positions._length, kMaxClothFloats, 3))
+      if (guard.size(newest.positions._length, kMaxClothFloats, 3)) {
         filter.on_cloth_state({newest.positions._buffer, newest.positions._length});
+        cloth_seen = true;
+      }
     }
+    heartbeat.set_metric("redelivered", static_cast<double>(redelivered));
     heartbeat.update(tachi_msg_NODE_RUNNING, in_count, out_count, "gate " + tachi::filter::to_string(config.gate.mode));
     return true;
   });
@@ -192,6 +249,9 @@ int main(int argc, char** argv) try {
   app.add_option("--gate", o.gate, "Override the config's gate mode")->check(CLI::IsMember({"threshold", "voice", "either"}));
   app.add_flag("--camera-frame", o.camera_frame, "Offline: write camera-frame positions instead of world-frame ones");
   app.add_flag("--print-config", o.print_config, "Print the effective config as JSON and exit");
+  app.add_option("--journal", o.journal,
+                 "Journal every hand sample and voice command to this file; started again with the same file, the "
+                 "filter replays it and carries the open stroke on under the same session (tachi run passes it)");
   tachi::common::add_log_level_flag(app, o.log_level);
   tachi::common::add_bus_flags(app, o.bus);
   if (const int rc = tachi::common::parse(app, argc, argv); rc >= 0) return rc;
@@ -212,6 +272,10 @@ int main(int argc, char** argv) try {
     return tachi::common::kExitOk;
   }
   if (o.offline) {
+    if (!o.journal.empty()) {
+      std::cerr << "tachi-filter: --journal is for the DDS filter, not --offline\n";
+      return tachi::common::kExitUsage;
+    }
     if (o.hands_csv.empty() || o.out_csv.empty()) {
       std::cerr << "tachi-filter: --offline needs --hands IN.csv and --out OUT.csv\n";
       return tachi::common::kExitUsage;

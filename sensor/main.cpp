@@ -20,6 +20,7 @@
 #include "tachi/sensor/hand_csv.hpp"
 #include "tachi/sensor/hand_finder.hpp"
 #include "tachi/sensor/kinect_source.hpp"
+#include "tachi/sensor/playback_progress.hpp"
 
 namespace {
 
@@ -36,6 +37,7 @@ struct Options {
   unsigned sensor_id = 0;
   unsigned wait_readers = 0;
   std::uint64_t max_frames = 0;
+  std::string resume;
   int device = 0;
   std::string log_level;
 };
@@ -47,10 +49,10 @@ double parse_rate(const std::string& text) {
   return std::stod(text);
 }
 
-std::unique_ptr<tachi::sensor::DepthSource> open_source(const Options& o) {
+std::unique_ptr<tachi::sensor::DepthSource> open_source(const Options& o, std::uint64_t resume_after) {
   using namespace tachi::sensor;
   if (!o.recording.empty()) {
-    auto source = std::make_unique<RecordingSource>(o.recording, Playback{parse_rate(o.rate), o.loop});
+    auto source = std::make_unique<RecordingSource>(o.recording, Playback{parse_rate(o.rate), o.loop, resume_after});
     if (!o.calibration.empty()) spdlog::warn("--calibration ignored: the recording's own calibration (or the default) applies");
     spdlog::info("playing {} ({} depth frames, rate {})", o.recording, source->depth_frame_count(), o.rate);
     return source;
@@ -93,14 +95,24 @@ int main(int argc, char** argv) try {
   app.add_option("--wait-readers", o.wait_readers, "Before the first frame, wait up to 5 s for this many DDS readers")
       ->check(CLI::Range(0u, 64u));
   app.add_option("--max-frames", o.max_frames, "Stop after this many depth frames (0 = no limit)");
+  app.add_option("--resume", o.resume,
+                 "Recording: keep the count of published frames in this file and, when it already holds one, "
+                 "continue after that frame (a restarted sensor does not play the recording from the top; tachi run "
+                 "passes it)")
+      ->needs(rec);
   tachi::common::add_log_level_flag(app, o.log_level);
   if (const int rc = tachi::common::parse(app, argc, argv); rc >= 0) return rc;
   tachi::common::set_log_level(o.log_level);
   tachi::common::install_stop_handlers();
 
+  // A resumed playback runs the frames already published through the hand finder again, unpaced and
+  // unpublished, so the finder's tracking state is the killed sensor's when it goes on.
+  std::optional<tachi::sensor::PlaybackProgress> progress;
+  if (!o.resume.empty()) progress.emplace(o.resume);
+  const std::uint64_t resume_after = progress ? progress->resumed_after() : 0;
   std::unique_ptr<tachi::sensor::DepthSource> source;
   try {
-    source = open_source(o);
+    source = open_source(o, resume_after);
   } catch (const tachi::sensor::NoKinectError& e) {
     std::cerr << "tachi-sensor: " << e.what() << '\n';
     return tachi::common::kExitNoDevice;
@@ -141,6 +153,12 @@ int main(int argc, char** argv) try {
     // End-to-end latency starts when the frame reaches this process (the recording's pacing is before it).
     const std::int64_t acquired_ns = tachi::common::wall_clock_ns();
     const auto hand = finder.find(*frame);
+    if (frames < resume_after) {
+      ++frames;
+      tracked += hand.tracked ? 1 : 0;
+      if (frames == resume_after) spdlog::info("resumed {} after frame {} (from {})", o.recording, frames, o.resume);
+      continue;
+    }
     if (recorder) {
       recorder->write_depth(*frame);
       if (frame->accel) recorder->write_accel(frame->stamp_ns, frame->device_timestamp, *frame->accel);
@@ -149,6 +167,7 @@ int main(int argc, char** argv) try {
     if (writer) writer->write(tachi::sensor::to_msg(hand, o.sensor_id, frame->frame, frame->stamp_ns, acquired_ns));
     ++frames;
     tracked += hand.tracked ? 1 : 0;
+    if (progress) progress->record(frames);  // after publishing: a kill in between resends a frame, never skips one
     latency.add_since(acquired_ns, tachi::common::wall_clock_ns());
     if (heartbeat) {
       const double elapsed_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();

@@ -11,6 +11,7 @@
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
+#include <optional>
 
 namespace tachi::sim {
 namespace {
@@ -125,6 +126,11 @@ int run_live(const OfflineOptions& shared, std::optional<int> max_steps, const L
   std::uint64_t samples_in = 0, messages_out = 1, overruns = 0, cuts = 0, grabs_refused = 0;
   double cut_length_m = 0.0;
   bool had_filter = false;
+  // A stroke whose publisher went away stays open this long for it to come back: a filter restarted
+  // on its journal (tachi run restarts it in ~0.5 s) carries the same stroke on under the same session.
+  constexpr auto kStrokePublisherGrace = std::chrono::seconds(2);
+  std::optional<Clock::time_point> publisher_gone_at;
+  std::uint64_t cutting_session = 0;  // the filter session of the newest cutting sample
   std::vector<double> step_ms;
   heartbeat.set_metric("blade", static_cast<double>(shared.blade));  // index of Blade: the viewer's HUD names it
   // acquired_ns of the newest applied hand sample: every state published from then on reflects it.
@@ -209,6 +215,11 @@ int run_live(const OfflineOptions& shared, std::optional<int> max_steps, const L
                            input->grabbing};
       const auto held_before = session.held_particle();
       session.on_hand(hand);
+      if (hand.cutting) cutting_session = hand.session_id;
+      if (publisher_gone_at && hand.session_id == cutting_session) {
+        spdlog::info("tachi-sim: the stroke's publisher is back (session {:x}); the stroke goes on", hand.session_id);
+        publisher_gone_at.reset();
+      }
       if (session.held_particle() != held_before) {
         if (session.held_particle()) spdlog::info("tachi-sim: the hand took particle {}", *session.held_particle());
         else spdlog::info("tachi-sim: the hand let go of particle {}", *held_before);
@@ -232,12 +243,20 @@ int run_live(const OfflineOptions& shared, std::optional<int> max_steps, const L
       heartbeat.set_metric("latency_p99_ms", latency.percentile(99));
     }
     waiting_for_filter.warn_if_waiting(strokes.matched_writers() > 0);
-    // A filter that vanished mid-stroke would leave the stroke open forever: close it.
+    // A filter that vanished mid-stroke would leave the stroke open forever: close it, unless it comes back.
     const bool has_filter = strokes.matched_writers() > 0;
     if (had_filter && !has_filter && session.cutter().stroke_open()) {
-      spdlog::warn("tachi-sim: the stroke publisher went away mid-stroke; closing the stroke");
-      session.end_stroke();
-      if (journal) journal_append(*journal, {JournalRecord::Kind::EndStroke, session.steps(), 0, 0, {}});
+      spdlog::warn("tachi-sim: the stroke publisher went away mid-stroke; closing the stroke unless it is back within {} s",
+                   kStrokePublisherGrace.count());
+      publisher_gone_at = Clock::now();
+    }
+    if (publisher_gone_at && Clock::now() - *publisher_gone_at > kStrokePublisherGrace) {
+      publisher_gone_at.reset();
+      if (session.cutter().stroke_open()) {
+        spdlog::warn("tachi-sim: the stroke publisher did not come back; the stroke is closed");
+        session.end_stroke();
+        if (journal) journal_append(*journal, {JournalRecord::Kind::EndStroke, session.steps(), 0, 0, {}});
+      }
     }
     if (journal) journal->flush();
     had_filter = has_filter;

@@ -10,7 +10,7 @@ void StrokeFilter::on_cloth_state(std::span<const float> xyz) {
   have_cloth_ = !cloth_xyz_.empty();
 }
 
-StrokeSample StrokeFilter::on_hand(const HandSample& hand) {
+StrokeSample StrokeFilter::apply(const HandSample& hand, const std::optional<Proximity>& given) {
   StrokeSample out;
   out.frame = hand.frame;
   out.stamp_ns = hand.stamp_ns;
@@ -21,8 +21,8 @@ StrokeSample StrokeFilter::on_hand(const HandSample& hand) {
     have_last_ = true;
     out.camera_position_m = last_camera_;
     out.position_m = config_.workspace.to_world(last_camera_);
-    std::optional<Proximity> near;
-    if (have_cloth_) near = proximity_to_particles(out.position_m, cloth_xyz_, config_.cloth);
+    std::optional<Proximity> near = given;
+    if (!near && have_cloth_) near = proximity_to_particles(out.position_m, cloth_xyz_, config_.cloth);
     if (!near) near = proximity_to_rest_cloth(out.position_m, config_.cloth);
     distance = near->distance_m;
     out.distance_to_cloth_m = near->distance_m;

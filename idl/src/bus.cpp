@@ -103,8 +103,13 @@ QosPtr make_qos(QosProfile profile) {
   QosPtr qos(dds_create_qos(), &dds_delete_qos);
   switch (profile) {
     case QosProfile::SensorData:
-      dds_qset_reliability(qos.get(), DDS_RELIABILITY_BEST_EFFORT, 0);
-      dds_qset_history(qos.get(), DDS_HISTORY_KEEP_LAST, 8);
+      // Keep-last, so a slow reader never blocks the camera; reliable and transient-local, so a filter
+      // restarted mid-stroke receives the hand samples published while it was down and its journal
+      // (tachi-filter --journal) carries the stroke on without a gap. Loopback loses nothing, so being
+      // reliable costs no latency here; on a lossy link keep-last still bounds what is resent.
+      dds_qset_reliability(qos.get(), DDS_RELIABILITY_RELIABLE, DDS_MSECS(100));
+      dds_qset_durability(qos.get(), DDS_DURABILITY_TRANSIENT_LOCAL);
+      dds_qset_history(qos.get(), DDS_HISTORY_KEEP_LAST, 64);
       break;
     case QosProfile::Commands:
       dds_qset_reliability(qos.get(), DDS_RELIABILITY_RELIABLE, DDS_SECS(1));

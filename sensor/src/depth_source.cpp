@@ -39,7 +39,7 @@ bool RecordingSource::next_into(DepthFrame& frame) {
   frame.accel.reset();
   read_depth_file(depth_files_[position_], frame.raw, file_bytes_);
 
-  if (playback_.rate > 0.0) {
+  if (playback_.rate > 0.0 && frames_out_ >= playback_.unpaced_frames) {
     const auto now = std::chrono::steady_clock::now();
     if (!start_wall_) {
       start_wall_ = now;

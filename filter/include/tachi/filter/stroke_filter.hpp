@@ -27,11 +27,16 @@ class StrokeFilter {
   /// The newest cloth positions (x, y, z per particle, world frame); replaces the rest cloth.
   void on_cloth_state(std::span<const float> xyz);
   /// One hand sample in, one stroke sample out.
-  StrokeSample on_hand(const HandSample& hand);
+  StrokeSample on_hand(const HandSample& hand) { return apply(hand, std::nullopt); }
+  /// The same with the hand-to-cloth proximity given instead of measured: a journal's replay, where
+  /// the cloth of the time is gone (journal.hpp). Only its distance and `outside` are used.
+  StrokeSample on_hand(const HandSample& hand, const Proximity& measured_then) { return apply(hand, measured_then); }
 
   const Gate& gate() const noexcept { return gate_; }
 
  private:
+  StrokeSample apply(const HandSample& hand, const std::optional<Proximity>& given);
+
   FilterConfig config_;
   Smoother smoother_;
   Gate gate_;

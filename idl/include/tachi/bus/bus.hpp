@@ -42,7 +42,7 @@ std::uint64_t new_session_id();
 /// Named QoS profiles. A topic's writers and readers use the same profile, so offered and
 /// requested QoS always match (a mismatch in Cyclone is silent: nothing arrives).
 enum class QosProfile {
-  SensorData,  ///< best effort, keep last 8: a late hand sample is worth less than the next one
+  SensorData,  ///< reliable, transient-local, keep last 64 (~2 s of hand): a restarted filter catches up (issue 13)
   Commands,    ///< reliable, keep last 1024: voice commands, cut events must all arrive
   Strokes,     ///< Commands, and transient-local: a restarted tachi-sim gets the samples it missed (issue 13)
   Topology,    ///< reliable, transient-local, keep last 1 per key: late joiners get the current mesh

@@ -35,6 +35,9 @@ class DepthSource {
 struct Playback {
   double rate = 1.0;
   bool loop = false;
+  /// The first this many frames go out as fast as possible and pacing starts after them: a sensor
+  /// resuming a killed one's playback (PlaybackProgress) catches up to where it stopped.
+  std::uint64_t unpaced_frames = 0;
 };
 
 /// Plays a fakenect recording's depth frames (colour and accelerometer entries are skipped).

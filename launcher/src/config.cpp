@@ -236,6 +236,8 @@ std::vector<ChildSpec> plan(const RunConfig& c) {
       child.finite = recording || !c.headless;
     } else if (node == "filter") {
       a.insert(a.end(), {"--gate", c.gate});
+      // A filter the launcher restarts replays this journal and carries the open stroke on.
+      a.insert(a.end(), {"--journal", (out / "filter.journal").string()});
     } else if (node == "voice") {
       if (!c.voice_wav.empty()) {
         a.insert(a.end(), {"--wav", c.voice_wav, "--wait-readers", "5"});
@@ -245,7 +247,8 @@ std::vector<ChildSpec> plan(const RunConfig& c) {
       }
     } else if (node == "sensor") {
       if (recording) {
-        a.insert(a.end(), {"--recording", c.recording, "--rate", c.rate});
+        // A sensor the launcher restarts goes on after the last frame it published, not from the top.
+        a.insert(a.end(), {"--recording", c.recording, "--rate", c.rate, "--resume", (out / "sensor.progress").string()});
       } else {
         a.push_back("--live");
       }

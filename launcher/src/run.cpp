@@ -9,6 +9,7 @@
 #include <spdlog/spdlog.h>
 #include <unistd.h>
 
+#include <cmath>
 #include <csignal>
 #include <fstream>
 #include <iostream>
@@ -27,18 +28,35 @@ struct Supervised {
   std::optional<Clock::time_point> restart_at;
   bool done = false;
   int restarts = 0;
+  std::optional<Clock::time_point> died_at;  ///< until its restarted process reports for the first time
 };
+
+// A killed viewer's unfinished video (no index: unplayable) is kept aside, not overwritten by the
+// restarted viewer's, which starts where the run is now.
+void keep_aside_partial_video(const RunConfig& config, int restart) {
+  if (config.video.empty()) return;
+  const fs::path video = fs::path(config.out) / config.video;
+  if (!fs::exists(video)) return;
+  const fs::path aside =
+      video.parent_path() / (video.stem().string() + ".before-restart-" + std::to_string(restart) + video.extension().string());
+  std::error_code ec;
+  fs::rename(video, aside, ec);
+  if (ec) spdlog::warn("cannot move {} aside: {}", video.string(), ec.message());
+  else spdlog::warn("the killed viewer's unfinished video is {}", aside.string());
+}
 
 // A previous run's results in the same folder must not pass for this run's.
 void clear_outputs(const fs::path& out) {
   fs::create_directories(out);
   for (const auto* name : {"summary.json", "cloth.obj", "pattern.svg", "final.png", "video.mp4", "video.avi",
-                           "latency.png", "trajectory.png", "config.json", "sim.journal"})
+                           "latency.png", "trajectory.png", "config.json", "sim.journal", "filter.journal",
+                           "sensor.progress"})
     fs::remove(out / name);
   fs::remove_all(out / kSimExportDir);
   fs::remove_all(out / "trace");
   for (const auto& entry : fs::directory_iterator(out))
-    if (entry.path().extension() == ".log") fs::remove(entry.path());
+    if (entry.path().extension() == ".log" || entry.path().stem().string().find(".before-restart-") != std::string::npos)
+      fs::remove(entry.path());
 }
 
 // Every file the simulator exported (cloth.obj, pattern.svg, ...) next to the run's summary; the
@@ -63,7 +81,8 @@ nlohmann::json collect_sim_export(const fs::path& out) {
 }
 
 nlohmann::json make_summary(const RunConfig& config, const StatusBoard& board, const nlohmann::json& sim,
-                            std::uint64_t cut_events, int restarts, const std::string& ended) {
+                            std::uint64_t cut_events, int restarts, const nlohmann::json& recoveries,
+                            const std::string& ended) {
   nlohmann::json s = sim;  // the simulator's own figures (pieces, cut line, ...) are authoritative
   const nlohmann::json beats = board.summary();
   for (const auto& [key, value] : beats.items())
@@ -81,6 +100,7 @@ nlohmann::json make_summary(const RunConfig& config, const StatusBoard& board, c
     for (const char* p : {"_p50_ms", "_p99_ms"})
       if (!s.contains(std::string(stage) + p)) s[std::string(stage) + p] = nullptr;
   s["restarts"] = restarts;
+  s["recoveries"] = recoveries;
   s["nodes"] = to_json(config)["nodes"];
   s["domain"] = config.domain;
   s["source"] = config.recording.empty() ? "live" : config.recording;
@@ -152,6 +172,7 @@ int run(const RunConfig& config, const RunPaths& paths) {
   const bool tty = ::isatty(STDERR_FILENO) == 1;
   auto last_status = Clock::now();
   int restarts = 0;
+  nlohmann::json recoveries = nlohmann::json::array();
   int exit_code = kRunOk;
   std::string ended = "stopped";
   std::optional<Clock::time_point> finite_done_at, sensor_done_at;
@@ -169,6 +190,7 @@ int run(const RunConfig& config, const RunPaths& paths) {
       const auto& spec = c.child->spec();
       if (c.restart_at && now >= *c.restart_at) {
         c.restart_at.reset();
+        if (spec.node == "viewer") keep_aside_partial_video(config, c.restarts);
         c.child->start();
         spdlog::info("restarted {} (pid {})", spec.program, c.child->pid());
       }
@@ -206,6 +228,7 @@ int run(const RunConfig& config, const RunPaths& paths) {
           ++restarts;
           ++c.restarts;
           c.restart_at = now + decision.delay;
+          c.died_at = now;
           spdlog::warn("{} died ({}); restart {} in {} ms", spec.program, describe_exit(*status), c.restarts,
                        decision.delay.count());
           break;
@@ -213,6 +236,17 @@ int run(const RunConfig& config, const RunPaths& paths) {
       }
     }
     if (failed) break;
+    // Recovered: the restarted process reported (its first heartbeat: it is up and, for the simulator,
+    // has replayed its journal). From the death to that report, backoff included.
+    for (auto& c : children) {
+      if (!c.died_at || c.restart_at || !c.child->running()) continue;
+      const auto it = board.nodes().find(c.child->spec().program);
+      if (it == board.nodes().end() || it->second.pid != static_cast<std::uint32_t>(c.child->pid())) continue;
+      const double ms = std::chrono::duration<double, std::milli>(now - *c.died_at).count();
+      recoveries.push_back({{"node", c.child->spec().node}, {"restart", c.restarts}, {"recovery_ms", std::round(ms)}});
+      spdlog::info("{} recovered {:.0f} ms after it died", c.child->spec().program, ms);
+      c.died_at.reset();
+    }
     if (viewer_closed) {
       ended = "viewer window closed";
       break;
@@ -273,7 +307,7 @@ int run(const RunConfig& config, const RunPaths& paths) {
   monitor.poll(board, 200ms);  // the nodes' last heartbeats (NODE_STOPPING, final figures)
 
   const nlohmann::json sim = collect_sim_export(out);
-  const nlohmann::json summary = make_summary(config, board, sim, monitor.cut_events(), restarts, ended);
+  const nlohmann::json summary = make_summary(config, board, sim, monitor.cut_events(), restarts, recoveries, ended);
   {
     std::ofstream f(out / "summary.json");
     f << summary.dump(2) << '\n';

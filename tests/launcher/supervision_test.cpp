@@ -16,7 +16,7 @@ TEST(RestartPolicy, BacksOffThenGivesUpAtTheFifthDeathWithinTheWindow) {
     ASSERT_FALSE(d.give_up) << i;
     delays.push_back(d.delay);
   }
-  EXPECT_EQ(delays, (std::vector<std::chrono::milliseconds>{500ms, 1000ms, 2000ms, 4000ms}));
+  EXPECT_EQ(delays, (std::vector<std::chrono::milliseconds>{100ms, 500ms, 1000ms, 2000ms}));
   EXPECT_TRUE(policy.on_death(t0 + 5s).give_up);
 }
 

@@ -1,5 +1,5 @@
 // Supervision policy, kept apart from fork/exec so it is tested without processes: a child that
-// dies is restarted after a backoff that doubles (0.5 s, 1 s, 2 s, ... capped at 4 s); one that dies
+// dies is restarted after 0.1 s, then after a backoff that doubles (0.5 s, 1 s, 2 s, ... capped at 4 s); one that dies
 // `max_deaths` times within `window` stops the run. Exit codes that restarting cannot fix (bad flags,
 // no device) stop the run at once.
 #pragma once

@@ -1,0 +1,112 @@
+// No lost cuts under the launcher (issue 13, docs/reliability.md): `tachi run` on the recorded straight
+// cut, once undisturbed and then once per node with that node SIGKILLed mid-stroke. The launcher
+// restarts it and the restarted node picks up where the killed one stopped: the sensor after the
+// last frame it published (--resume), the filter from its journal under the same session, the
+// simulator from its journal, the viewer from the transient-local topology. Each run must complete
+// with the undisturbed run's cut: the same strokes and pieces, the cut line from the same entry to the
+// same exit (within a cell: two live runs differ by a frame in where the gate opens on the swaying
+// cloth), and the node back within a second. Domain ids 195-199 belong to this file.
+#include "process.hpp"
+#include "same_cut.hpp"
+#include "scratch_dir.hpp"
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <csignal>
+#include <fstream>
+#include <regex>
+#include <thread>
+
+using namespace std::chrono_literals;
+using tachi::test::ChildProcess;
+using tachi::test::entry_and_exit_columns;
+namespace fs = std::filesystem;
+
+namespace {
+const std::string kBin = TACHI_BIN_DIR;
+const std::string kRecordings = TACHI_RECORDINGS_DIR;
+
+struct RunResult {
+  int exit_code = -1;
+  nlohmann::json summary;
+  std::string log;
+};
+
+// The pid the launcher logged for `program` ("started tachi-sim (pid 1234)"), once it did.
+std::optional<pid_t> started_pid(ChildProcess& launcher, const std::string& program, std::chrono::milliseconds timeout) {
+  const std::regex started("started " + program + " \\(pid ([0-9]+)\\)");
+  const auto deadline = std::chrono::steady_clock::now() + timeout;
+  while (std::chrono::steady_clock::now() < deadline && launcher.running()) {
+    std::smatch m;
+    const std::string err = launcher.err();
+    if (std::regex_search(err, m, started)) return static_cast<pid_t>(std::stol(m[1]));
+    launcher.wait_for_output("never printed", 20ms);  // reads what the launcher wrote meanwhile
+  }
+  return std::nullopt;
+}
+
+RunResult run(unsigned domain, const std::string& victim) {
+  tachi::test::ScratchDir out("tachi_kill_" + (victim.empty() ? std::string("none") : victim));
+  ChildProcess launcher({kBin + "/tachi", "run", "--recording", kRecordings + "/straight_cut", "--grid", "32", "--domain",
+                         std::to_string(domain), "--out", out.path().string(), "--headless", "--settle", "1.5",
+                         // The grid cut lists the cells it cut (summary cut_line), which the comparison reads.
+                         "--set", "sim.cut-mode=grid"});
+  RunResult r;
+  if (!victim.empty()) {
+    // The sensor starts last; the hand crosses the cloth between ~1.5 s and ~3.5 s of the recording.
+    const auto sensor = started_pid(launcher, "tachi-sensor", 20s);
+    const auto pid = victim == "sensor" ? sensor : started_pid(launcher, "tachi-" + victim, 1s);
+    EXPECT_TRUE(sensor && pid) << launcher.err();
+    if (pid) {
+      std::this_thread::sleep_for(2500ms);
+      ::kill(*pid, SIGKILL);
+    }
+  }
+  r.exit_code = launcher.wait(120s);
+  r.log = launcher.err();
+  std::ifstream in(out / "summary.json");
+  r.summary = in ? nlohmann::json::parse(in, nullptr, false) : nlohmann::json();
+  if (!victim.empty())
+    for (const char* log : {"sensor.log", "filter.log", "sim.log"}) {
+      std::ifstream l(out / log);
+      r.log += std::string("\n--- ") + log + "\n" + std::string(std::istreambuf_iterator<char>(l), {});
+    }
+  return r;
+}
+
+}  // namespace
+
+TEST(NoLostCutsUnderTheLauncher, EachNodeKilledMidStrokeInTurnLeavesTheUndisturbedCut) {
+  const RunResult undisturbed = run(195, "");
+  ASSERT_EQ(undisturbed.exit_code, 0) << undisturbed.log;
+  ASSERT_TRUE(undisturbed.summary.is_object()) << undisturbed.log;
+  const auto [entry, exit] = entry_and_exit_columns(undisturbed.summary["cut_line"]);
+  ASSERT_GT(undisturbed.summary["cut_particles"].get<int>(), 0) << undisturbed.log;
+  std::printf("undisturbed: %d strokes, %d pieces, %d particles, cut line u %d..%d, %.3f m\n",
+              undisturbed.summary["strokes"].get<int>(), undisturbed.summary["pieces"].get<int>(),
+              undisturbed.summary["cut_particles"].get<int>(), entry, exit, undisturbed.summary["cut_length_m"].get<double>());
+
+  unsigned domain = 196;
+  for (const std::string victim : {"sensor", "filter", "sim", "viewer"}) {
+    SCOPED_TRACE("tachi-" + victim + " killed");
+    const RunResult killed = run(domain++, victim);
+    ASSERT_EQ(killed.exit_code, 0) << killed.log;
+    ASSERT_TRUE(killed.summary.is_object()) << killed.log;
+    const auto& s = killed.summary;
+    const auto [k_entry, k_exit] = entry_and_exit_columns(s["cut_line"]);
+    const double recovery_ms = s["recoveries"].empty() ? -1.0 : s["recoveries"][0]["recovery_ms"].get<double>();
+    std::printf("%s killed: %d strokes, %d pieces, %d particles, cut line u %d..%d, %.3f m; recovered in %.0f ms\n",
+                victim.c_str(), s["strokes"].get<int>(), s["pieces"].get<int>(), s["cut_particles"].get<int>(), k_entry, k_exit,
+                s["cut_length_m"].get<double>(), recovery_ms);
+    EXPECT_EQ(s["restarts"], 1) << killed.log;
+    ASSERT_EQ(s["recoveries"].size(), 1u) << killed.log;
+    EXPECT_EQ(s["recoveries"][0]["node"], victim);
+    EXPECT_LT(recovery_ms, 1000.0) << killed.log;
+    // The same cut: no stroke split in two, none lost, none played twice.
+    EXPECT_EQ(s["frames"], undisturbed.summary["frames"]) << killed.log;
+    EXPECT_EQ(s["strokes"], undisturbed.summary["strokes"]) << killed.log;
+    EXPECT_EQ(s["cuts"], undisturbed.summary["cuts"]) << killed.log;
+    tachi::test::expect_same_cut(s, undisturbed.summary, killed.log);
+  }
+}

@@ -31,6 +31,8 @@ constexpr auto kNoStateHudAfter = 3s;
 const std::string kWindowName = "tachi";
 // A held, unmoving blade repeats its sample this often (tachi-sim lets another source take over after 1 s).
 constexpr auto kBladeHoldPeriod = 250ms;
+// An object's point cloud is drawn as at most this many dots (evenly thinned): enough to see its shape.
+constexpr std::size_t kMaxObjectDots = 20000;
 
 const CLI::Validator kVideoFile(
     [](std::string& path) {
@@ -255,6 +257,7 @@ int run_live(const ViewerOptions& o) {
   bus::Reader<tachi_msg_StrokeSample> strokes{dds, bus::topics::stroke};
   bus::Reader<tachi_msg_CutEvent> cuts{dds, bus::topics::cut_event};
   bus::Reader<tachi_msg_NodeStatus> statuses{dds, bus::topics::node_status};
+  bus::Reader<tachi_msg_SceneObject> objects{dds, bus::topics::scene_object};  // issue 12: what the cloth drapes over
   std::optional<bus::Writer<tachi_msg_StrokeSample>> blade_writer;
   if (o.mouse) blade_writer.emplace(dds, bus::topics::stroke);
   bus::WaitSet waitset{dds};
@@ -369,6 +372,10 @@ int run_live(const ViewerOptions& o) {
     }
     for (const auto& s : statuses.take())
       if (const auto blade = blade_of(*s)) sim_blade = *blade;
+    for (const auto& obj : objects.take()) {
+      ++messages_in;
+      if (auto points = object_points(*obj, guard, kMaxObjectDots)) state.scene().object_points = std::move(*points);
+    }
 
     const auto now = Clock::now();
     const auto without_state = now - last_state;

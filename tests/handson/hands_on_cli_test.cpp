@@ -3,6 +3,7 @@
 // library), each bad value a usage error naming its flag.
 #include "process.hpp"
 #include "scratch_dir.hpp"
+#include "table_ply.hpp"
 #include "tachi/sensor/fakenect_recording.hpp"
 
 #include <gtest/gtest.h>
@@ -91,11 +92,7 @@ TEST(HandsOnCli, APlyObjectHoldsTheClothUp) {
   const tachi::test::ScratchDir dir{"object_cli"};
   // A 1.2 m square table of points, 2 cm apart, ascii PLY, placed 0.3 m below the cloth's centre and
   // turned flat (the cloth hangs in x-y; the table is made in x-y and turned 90 degrees about x).
-  std::ofstream out{dir / "table.ply"};
-  out << "ply\nformat ascii 1.0\nelement vertex " << 61 * 61 << "\nproperty float x\nproperty float y\nproperty float z\nend_header\n";
-  for (int i = -30; i <= 30; ++i)
-    for (int k = -30; k <= 30; ++k) out << 0.02 * i << ' ' << 0.02 * k << " 0\n";
-  out.close();
+  tachi::test::write_table_ply(dir / "table.ply", 30, 0.02);
   const auto with = summary_of(sim({"--offline", "--grid", "16", "--pin", "none", "--steps", "60", "--object",
                                     (dir / "table.ply").string(), "--object-pose", "0,-0.8,0,90,0,0"}));
   const auto without = summary_of(sim({"--offline", "--grid", "16", "--pin", "none", "--steps", "60"}));

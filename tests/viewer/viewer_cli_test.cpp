@@ -142,11 +142,19 @@ TEST(ViewerCli, BadInputsAreRejectedAndTheVideoKeepsShowingTheRealCloth) {
   nan.held_particle = -1;
   nan.positions._buffer = positions.data();
   nan.positions._length = nan.positions._maximum = static_cast<std::uint32_t>(positions.size());
-  bad_state.write(nan);
+  std::vector<float> too_few(30, 0.0f);
   tachi_msg_ClothState short_state = nan;
-  positions[7] = 0.0f;
-  short_state.positions._length = 30;
-  bad_state.write(short_state);
+  short_state.positions._buffer = too_few.data();
+  short_state.positions._length = short_state.positions._maximum = static_cast<std::uint32_t>(too_few.size());
+  // The state topic keeps the last 2 per cloth and the simulator writes the same cloth at 60 Hz: on a
+  // loaded machine its next states can replace a bad one before the viewer reads it. Each bad state
+  // goes out three times, so every kind is read at least once (the count below is a lower bound).
+  for (int i = 0; i < 3; ++i) {
+    bad_state.write(nan);
+    std::this_thread::sleep_for(50ms);
+    bad_state.write(short_state);
+    std::this_thread::sleep_for(50ms);
+  }
 
   std::this_thread::sleep_for(1500ms);
   viewer.signal(SIGINT);

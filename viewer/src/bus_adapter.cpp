@@ -135,4 +135,21 @@ bool plausible(const tachi_msg_ClothState& msg, bus::InputGuard& guard) {
   return guard.size(msg.positions._length, 3 * kMaxParticles, 3);
 }
 
+std::optional<std::vector<Eigen::Vector3f>> object_points(const tachi_msg_SceneObject& msg, bus::InputGuard& guard,
+                                                          std::size_t max_drawn) {
+  constexpr std::size_t kMaxObjectPoints = std::size_t{4} << 20;  // a 640 x 480 depth frame is 0.3 M
+  constexpr float kMaxCoordinate_m = 100.0F;
+  if (!guard.size(msg.points._length, 3 * kMaxObjectPoints, 3)) return std::nullopt;
+  const std::size_t n = msg.points._length / 3;
+  const std::size_t stride = max_drawn == 0 ? 1 : std::max<std::size_t>(1, (n + max_drawn - 1) / max_drawn);
+  std::vector<Eigen::Vector3f> points;
+  points.reserve(n / stride + 1);
+  for (std::size_t i = 0; i < n; ++i) {
+    const float* p = msg.points._buffer + 3 * i;
+    if (!guard.position(p[0], p[1], p[2], kMaxCoordinate_m)) return std::nullopt;
+    if (i % stride == 0) points.emplace_back(p[0], p[1], p[2]);
+  }
+  return points;
+}
+
 }  // namespace tachi::viewer

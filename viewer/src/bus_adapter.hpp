@@ -7,6 +7,9 @@
 #include "tachi/viewer/controls.hpp"
 #include "tachi/viewer/scene_state.hpp"
 
+#include <optional>
+#include <vector>
+
 namespace tachi::viewer {
 TopologyUpdate from_msg(const tachi_msg_ClothTopology& msg);
 /// The topology a TopologyAssembler built from keyframes and deltas (issue 11); takes its split-off list.
@@ -34,4 +37,12 @@ tachi_msg_StrokeSample to_msg(const BladeSample& sample, const MouseSource& sour
 /// reaches the scene, with its reason counted in `guard` (issue 13).
 bool plausible(const tachi_msg_ClothTopology& msg, bus::InputGuard& guard);
 bool plausible(const tachi_msg_ClothState& msg, bus::InputGuard& guard);
+
+/// An object's points (issue 12: what the cloth drapes over), thinned to at most `max_drawn` evenly
+/// spread ones (a depth frame's scene is ~300,000 points; dots beyond a few thousand add nothing to the
+/// view and cost every frame). Refused, counted in `guard`, when the sequence is not xyz triples or
+/// larger than any cloud tachi-sim loads (`oversized`), or a point is non-finite (`nonfinite`) or
+/// beyond 100 m (`out_of_range`).
+std::optional<std::vector<Eigen::Vector3f>> object_points(const tachi_msg_SceneObject& msg, bus::InputGuard& guard,
+                                                          std::size_t max_drawn);
 }  // namespace tachi::viewer

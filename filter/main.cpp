@@ -151,6 +151,13 @@ int run_bus(const Options& o, const tachi::filter::FilterConfig& config) {
     }
   }
   const std::uint64_t session_id = journal ? journal->session_id() : bus::new_session_id();
+  bool journal_full_said = false;
+  const auto warn_journal_full = [&] {
+    if (journal_full_said) return;
+    journal_full_said = true;
+    spdlog::warn("tachi-filter: journal {} reached {} MB; no longer journaling (a restart from here would lose the rest)",
+                 o.journal, tachi::filter::FilterJournal::kMaxBytes >> 20);
+  };
   // A recovered gate measures the hand against the cloth it was cutting: wait (up to 1 s) for the
   // simulator's next state rather than judging the catch-up samples against the flat rest cloth.
   const bool recovering = journal && !journal->recovered().empty();
@@ -173,7 +180,8 @@ int run_bus(const Options& o, const tachi::filter::FilterConfig& config) {
       const auto command = tachi::filter::from_msg(*c);
       spdlog::info("voice command {} (\"{}\")", kNames[static_cast<int>(command)], c->phrase);
       if (const auto why = filter.on_voice(command)) spdlog::warn("{}", *why);
-      if (journal) journal->append({tachi::filter::FilterJournalRecord::Kind::Voice, 0, {}, {}, command});
+      if (journal && !journal->append({tachi::filter::FilterJournalRecord::Kind::Voice, 0, {}, {}, command}))
+        warn_journal_full();
     }
     const bool take_hands = !recovering || cloth_seen || std::chrono::steady_clock::now() >= cloth_due;
     for (const auto& h : take_hands ? hands.take() : std::vector<bus::Owned<tachi_msg_RawHandSample>>{}) {
@@ -187,9 +195,9 @@ int run_bus(const Options& o, const tachi::filter::FilterConfig& config) {
       const auto hand = tachi::filter::from_msg(*h);
       const auto stroke = filter.on_hand(hand);
       processed.add(h->sensor_id, h->capture_time_ns);
-      if (journal)
-        journal->append({tachi::filter::FilterJournalRecord::Kind::Hand, h->sensor_id, hand,
-                         {stroke.distance_to_cloth_m, stroke.hand_outside_cloth, {}}, {}});
+      if (journal && !journal->append({tachi::filter::FilterJournalRecord::Kind::Hand, h->sensor_id, hand,
+                                       {stroke.distance_to_cloth_m, stroke.hand_outside_cloth, {}}, {}}))
+        warn_journal_full();
       auto msg = tachi::filter::to_msg(stroke, h->sensor_id, session_id);
       msg.acquired_ns = h->acquired_ns;  // the depth frame's time rides on to the simulator
       batch.push_back(msg);

@@ -131,6 +131,7 @@ int run_live(const OfflineOptions& shared, std::optional<int> max_steps, const L
   constexpr auto kStrokePublisherGrace = std::chrono::seconds(2);
   std::optional<Clock::time_point> publisher_gone_at;
   std::uint64_t cutting_session = 0;  // the filter session of the newest cutting sample
+  std::uint64_t gone_session = 0;     // ... when the stroke's publisher went away
   std::vector<double> step_ms;
   heartbeat.set_metric("blade", static_cast<double>(shared.blade));  // index of Blade: the viewer's HUD names it
   // acquired_ns of the newest applied hand sample: every state published from then on reflects it.
@@ -216,7 +217,7 @@ int run_live(const OfflineOptions& shared, std::optional<int> max_steps, const L
       const auto held_before = session.held_particle();
       session.on_hand(hand);
       if (hand.cutting) cutting_session = hand.session_id;
-      if (publisher_gone_at && hand.session_id == cutting_session) {
+      if (publisher_gone_at && hand.session_id == gone_session) {
         spdlog::info("tachi-sim: the stroke's publisher is back (session {:x}); the stroke goes on", hand.session_id);
         publisher_gone_at.reset();
       }
@@ -249,10 +250,12 @@ int run_live(const OfflineOptions& shared, std::optional<int> max_steps, const L
       spdlog::warn("tachi-sim: the stroke publisher went away mid-stroke; closing the stroke unless it is back within {} s",
                    kStrokePublisherGrace.count());
       publisher_gone_at = Clock::now();
+      gone_session = cutting_session;
     }
     if (publisher_gone_at && Clock::now() - *publisher_gone_at > kStrokePublisherGrace) {
       publisher_gone_at.reset();
-      if (session.cutter().stroke_open()) {
+      // Only the stroke that lost its publisher: another filter's new stroke (its own session) goes on.
+      if (session.cutter().stroke_open() && cutting_session == gone_session) {
         spdlog::warn("tachi-sim: the stroke publisher did not come back; the stroke is closed");
         session.end_stroke();
         if (journal) journal_append(*journal, {JournalRecord::Kind::EndStroke, session.steps(), 0, 0, {}});

@@ -101,25 +101,33 @@ int publish_states(const Options& o, bus::Participant& dds) {
   return acked ? 0 : 1;
 }
 
+// The State profile keeps the last 2 states: a reader that falls more than two behind (a loaded
+// machine) skips stale ones by design. What must hold: every state taken is intact, none comes back
+// in time, the newest (the last sent) always arrives, and skips stay rare (at most 5 %).
 int subscribe_states(const Options& o, bus::Participant& dds) {
   bus::Reader<tachi_msg_ClothState> reader{dds, bus::topics::cloth_state};
-  unsigned received = 0, out_of_order = 0, corrupt = 0;
+  unsigned received = 0, backwards = 0, skipped = 0, corrupt = 0;
   std::uint64_t expected = 0;
+  bool got_last = false;
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(o.timeout_s);
-  while (received < o.count && std::chrono::steady_clock::now() < deadline) {
+  while (!got_last && std::chrono::steady_clock::now() < deadline) {
     reader.wait_for_data(100ms);
     for (const auto& s : reader.take()) {
-      if (s->frame != expected) ++out_of_order;
+      if (s->frame < expected) ++backwards;
+      if (s->frame > expected) skipped += static_cast<unsigned>(s->frame - expected);
       expected = s->frame + 1;
+      got_last = got_last || s->frame + 1 == o.count;
       bool good = s->positions._length == o.bytes / sizeof(float);
       for (std::size_t k = 0; good && k < s->positions._length; k += 97) good = s->positions._buffer[k] == pattern(s->frame, k);
       if (!good) ++corrupt;
       ++received;
     }
   }
-  std::cout << nlohmann::json{{"received", received}, {"out_of_order", out_of_order}, {"corrupt", corrupt}}.dump()
+  std::cout << nlohmann::json{{"received", received}, {"skipped", skipped}, {"backwards", backwards}, {"corrupt", corrupt},
+                              {"newest_arrived", got_last}}
+                   .dump()
             << std::endl;
-  return received == o.count && out_of_order == 0 && corrupt == 0 ? 0 : 1;
+  return got_last && backwards == 0 && corrupt == 0 && skipped * 20 <= o.count ? 0 : 1;
 }
 
 int publish_topology(const Options& o, bus::Participant& dds) {

@@ -261,7 +261,15 @@ TEST(WaitingForPeers, ANodeWhosePeerDoesNotComeSaysSoEveryFewSeconds) {
   // Domain 128 has no simulator and no sensor: the viewer and the filter wait, and must say so.
   ChildProcess viewer({kBin + "/tachi-viewer", "--headless", "--domain", "128"});
   ChildProcess filter({kBin + "/tachi-filter", "--domain", "128"});
-  std::this_thread::sleep_for(4s);
+  // The viewer says it after 3 s without a cloth state, counted from its start, and loading its
+  // OpenCV/Qt libraries takes a second on a loaded machine: wait for the words (10 s at most).
+  const auto said = [](ChildProcess& p, const std::string& words) {
+    const auto deadline = std::chrono::steady_clock::now() + 10s;
+    while (p.err().find(words) == std::string::npos && std::chrono::steady_clock::now() < deadline)
+      p.wait_for_output("never printed", 50ms);
+  };
+  said(viewer, "is tachi-sim running on domain 128");
+  said(filter, "waiting for tachi-sensor on domain 128");
   viewer.signal(SIGINT);
   filter.signal(SIGINT);
   EXPECT_EQ(viewer.wait(10s), 0);

@@ -6,7 +6,8 @@
 #include <limits>
 #include <vector>
 
-#include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
+#include <Eigen/Geometry>
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -17,6 +18,38 @@ constexpr int kGridW = kDepthWidth / kStep;
 constexpr int kGridH = kDepthHeight / kStep;
 constexpr int kGridCells = kGridW * kGridH;
 constexpr std::uint16_t kUnknown = 0;  // background not seen yet (raw 0 is nearer than the Kinect's range)
+// A turned palm (measure_turned_palm).
+constexpr double kTurnedHandBandM = 0.025;   // the hand (palm, fingers, thumb) lies within ~2 cm of the palm's plane
+constexpr double kPalmBandM = 0.005;         // the palm within a few mm of it (depth noise ~1.5 mm across a turned palm at
+                                             // 1 m); the round sides of fingers curve away by up to their radius, ~8 mm
+constexpr double kPalmSquareM = 0.05;        // a square this wide fits in a palm (8 x 9 cm)
+constexpr double kMinPalmCover = 0.5;        // ... at least this share of it with flat readings
+constexpr int kPalmCandidates = 3;           // best-covered places compared (fingers, palm, wrist)
+constexpr double kPalmRefitBandM = 0.010;    // a candidate's plane: the readings this near the hand's plane ...
+constexpr double kPalmRefitRadiusM = 0.035;  // ... and this near the candidate
+constexpr int kPalmPlanePasses = 2;
+constexpr double kPalmSearchM = 0.07;        // the palm's circle is sought this near the palm found
+constexpr double kMinPalmViewCos = 0.407;    // cos 66 degrees: the most oblique palm (to the line of sight) reported
+constexpr double kCellM = 0.002;             // grid step in the palm's plane
+
+/// Sub-pixel centre of a distance transform's maximum `peak` at `at`: the centroid of its plateau
+/// (values within 1 px of the maximum), weighted by the height above it.
+cv::Point2d plateau_centre(const cv::Mat& dist, double peak, cv::Point at) {
+  double su = 0, sv = 0, sw = 0;
+  const float plateau = static_cast<float>(peak - 1.0);
+  const int r = static_cast<int>(std::ceil(peak));
+  for (int y = std::max(0, at.y - r); y < std::min(dist.rows, at.y + r + 1); ++y) {
+    const float* dr = dist.ptr<float>(y);
+    for (int x = std::max(0, at.x - r); x < std::min(dist.cols, at.x + r + 1); ++x)
+      if (dr[x] >= plateau) {
+        const double w = dr[x] - plateau;
+        su += w * x;
+        sv += w * y;
+        sw += w;
+      }
+  }
+  return {su / sw, sv / sw};
+}
 }  // namespace
 
 struct HandFinder::Impl {
@@ -84,10 +117,32 @@ struct HandFinder::Impl {
   bool measure_in_band(std::span<const std::uint16_t> raw, const cv::Rect& cells, std::uint16_t near_raw, std::uint16_t far_raw,
                        cv::Point seed_cell, Palm& palm);
   bool reaches_back(cv::Point seed, std::uint16_t near_raw);
-  bool turned_palm_stretch(std::span<const std::uint16_t> raw, int rx0, int ry0, int rx1, int ry1);
-  cv::Matx23d stretch, unstretch;  // turned_palm_stretch's ROI -> stretched image, and back
-  cv::Size stretched_size;
-  cv::Mat roi_stretched, stretched_dist;
+  /// A plane (camera frame, metres) through the readings under a mask.
+  struct Plane {
+    Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+    Eigen::Vector3d normal = -Eigen::Vector3d::UnitZ();  ///< unit, toward the sensor
+  };
+  struct Roi {
+    int x0, y0, x1, y1;  ///< [x0, x1) x [y0, y1) of the frame; roi_mask and its kin have a 1 px border around it
+  };
+  /// A metric grid in a plane: cell (i, j) is the point origin + kCellM (i e1 + j e2).
+  struct PlaneGrid {
+    Eigen::Vector3d origin = Eigen::Vector3d::Zero(), e1 = Eigen::Vector3d::UnitX(), e2 = Eigen::Vector3d::UnitY();
+    cv::Size size;
+    cv::Matx33d grid_to_roi;  ///< homography: grid cell -> ROI pixel
+    Eigen::Vector3d point(double i, double j) const { return origin + kCellM * (i * e1 + j * e2); }
+  };
+  bool fit_plane(std::span<const std::uint16_t> raw, const Roi& roi, Plane& plane, double* spread_m = nullptr);
+  static bool plane_through(const Eigen::Matrix3d& outer, const Eigen::Vector3d& sum, int count, Plane& plane,
+                            double* spread_m = nullptr);
+  void plane_band_mask(std::span<const std::uint16_t> raw, const Roi& roi, const Plane& plane, double band, const cv::Mat* within,
+                       const Eigen::Vector3d* centre = nullptr, double radius = 0.0);
+  bool make_plane_grid(std::span<const std::uint16_t> raw, const Roi& roi, const Plane& plane, PlaneGrid& out) const;
+  bool measure_turned_palm(std::span<const std::uint16_t> raw, int rx0, int ry0, int rx1, int ry1, cv::Point seed, Palm& palm);
+  cv::Mat rectified_closed, rectified_mask, rectified_dist, rectified_cover;  // measure_turned_palm's view of the palm plane
+  cv::Mat roi_hand;  // measure_turned_palm's hand region (a view of roi_hand_buffer)
+
+  cv::Mat roi_hand_buffer = cv::Mat(kDepthHeight + 2, kDepthWidth + 2, CV_8U);
   bool find_arm_end(std::span<const std::uint16_t> raw, Palm& palm, cv::Point& seed);
   bool palm_accepted(const Palm& palm) const;
   bool jumped(const Palm& palm) const;
@@ -231,73 +286,46 @@ bool HandFinder::Impl::measure_in_band(std::span<const std::uint16_t> raw, const
   cv::Point max_at;
   cv::minMaxLoc(roi_dist, nullptr, &max_dist, nullptr, &max_at);
   if (max_dist < 2.0) return false;
-  // Sub-pixel: centroid of the distance-transform plateau (within 1 px of the maximum).
-  const auto plateau_centre = [](const cv::Mat& dist, double peak, cv::Point at) {
-    double su = 0, sv = 0, sw = 0;
-    const float plateau = static_cast<float>(peak - 1.0);
-    const int r = static_cast<int>(std::ceil(peak));
-    for (int y = std::max(0, at.y - r); y < std::min(dist.rows, at.y + r + 1); ++y) {
-      const float* dr = dist.ptr<float>(y);
-      for (int x = std::max(0, at.x - r); x < std::min(dist.cols, at.x + r + 1); ++x)
-        if (dr[x] >= plateau) {
-          const double w = dr[x] - plateau;
-          su += w * x;
-          sv += w * y;
-          sw += w;
-        }
-    }
-    return cv::Point2d(su / sw, sv / sw);
-  };
   cv::Point2d centre = plateau_centre(roi_dist, max_dist, max_at);
-  double size_px = max_dist;  // the palm circle's radius, measured in the palm's plane
-  // A palm turned away from the sensor is foreshortened by cos(tilt) across the turn: its
-  // inscribed circle shrinks toward a forearm's (at 60 degrees to half a palm). Where the circle
-  // is too small, the palm plane is fitted to the mask's readings (least squares, z = a x + b y + c
-  // in metres) and the mask stretched by 1 / cos(tilt) along the depth gradient, undoing the
-  // foreshortening; the circle is then found in the stretched mask and mapped back.
+  // A palm turned away from the sensor is foreshortened across the turn, and its far side falls
+  // out of the depth band of the nearest reading (the thumb): its inscribed circle shrinks toward
+  // a forearm's. Where the circle is too small, the palm is measured in its own plane instead.
   const float z_near = model.metres(near_raw);
-  if (max_dist * z_near / k.fx < params.min_palm_radius_m && turned_palm_stretch(raw, rx0, ry0, rx1, ry1)) {
-    cv::warpAffine(roi_closed, roi_stretched, stretch, stretched_size, cv::INTER_NEAREST, cv::BORDER_CONSTANT, cv::Scalar(0));
-    cv::distanceTransform(roi_stretched, stretched_dist, cv::DIST_L2, cv::DIST_MASK_5);
-    double stretched_max = 0;
-    cv::minMaxLoc(stretched_dist, nullptr, &stretched_max, nullptr, &max_at);
-    if (stretched_max >= 2.0) {
-      const cv::Point2d c = plateau_centre(stretched_dist, stretched_max, max_at);
-      centre = {unstretch(0, 0) * c.x + unstretch(0, 1) * c.y + unstretch(0, 2),
-                unstretch(1, 0) * c.x + unstretch(1, 1) * c.y + unstretch(1, 2)};
-      size_px = stretched_max;
+  double circle_px = max_dist;  // radius in the image of the region whose readings give the depth
+  if (max_dist * z_near / k.fx < params.min_palm_radius_m && measure_turned_palm(raw, rx0, ry0, rx1, ry1, max_at, palm)) {
+    circle_px = palm.radius_m * k.fx / palm.z;
+  } else {
+    const double u = rx0 - 1 + centre.x, v = ry0 - 1 + centre.y;
+    // Palm depth: median reading inside the palm circle.
+    palm_raw.clear();
+    const double r2 = max_dist * max_dist;
+    int circle_pixels = 0;
+    for (int y = std::max(ry0, static_cast<int>(v - max_dist)); y <= std::min(ry1 - 1, static_cast<int>(v + max_dist)); ++y) {
+      const std::uint16_t* row = raw.data() + static_cast<std::size_t>(y) * kDepthWidth;
+      const auto* m = roi_mask.ptr<std::uint8_t>(y - ry0 + 1) + 1;
+      for (int x = std::max(rx0, static_cast<int>(u - max_dist)); x <= std::min(rx1 - 1, static_cast<int>(u + max_dist)); ++x) {
+        if ((x - u) * (x - u) + (y - v) * (y - v) > r2) continue;
+        ++circle_pixels;
+        if (m[x - rx0]) palm_raw.push_back(row[x]);
+      }
     }
+    if (palm_raw.size() < 8) return false;
+    const auto mid = palm_raw.begin() + static_cast<std::ptrdiff_t>(palm_raw.size() / 2);
+    std::nth_element(palm_raw.begin(), mid, palm_raw.end());
+    palm.z = model.metres(*mid);
+    if (palm.z <= 0) return false;
+    palm.u = u;
+    palm.v = v;
+    palm.radius_m = max_dist * palm.z / k.fx;
+    palm.valid_fraction = static_cast<double>(palm_raw.size()) / std::max(1, circle_pixels);
   }
-  const double u = rx0 - 1 + centre.x, v = ry0 - 1 + centre.y;
-
-  // Palm depth: median reading inside the palm circle.
-  palm_raw.clear();
-  const double r2 = max_dist * max_dist;
-  int circle_pixels = 0;
-  for (int y = std::max(ry0, static_cast<int>(v - max_dist)); y <= std::min(ry1 - 1, static_cast<int>(v + max_dist)); ++y) {
-    const std::uint16_t* row = raw.data() + static_cast<std::size_t>(y) * kDepthWidth;
-    const auto* m = roi_mask.ptr<std::uint8_t>(y - ry0 + 1) + 1;
-    for (int x = std::max(rx0, static_cast<int>(u - max_dist)); x <= std::min(rx1 - 1, static_cast<int>(u + max_dist)); ++x) {
-      if ((x - u) * (x - u) + (y - v) * (y - v) > r2) continue;
-      ++circle_pixels;
-      if (m[x - rx0]) palm_raw.push_back(row[x]);
-    }
-  }
-  if (palm_raw.size() < 8) return false;
-  const auto mid = palm_raw.begin() + static_cast<std::ptrdiff_t>(palm_raw.size() / 2);
-  std::nth_element(palm_raw.begin(), mid, palm_raw.end());
-  palm.z = model.metres(*mid);
-  if (palm.z <= 0) return false;
-  palm.u = u;
-  palm.v = v;
-  palm.radius_m = size_px * palm.z / k.fx;
-  palm.valid_fraction = static_cast<double>(palm_raw.size()) / std::max(1, circle_pixels);
+  const double u = palm.u, v = palm.v;
 
   // Cut by the border: what is left of a palm half out of view (fingers, the upper palm) still
   // holds a palm-sized circle, centred up to 5 cm inward of the real one. Such a hand crosses the
   // border near the circle over most of a palm's width (a forearm crossing below a whole palm is
   // narrower) and its circle is smaller than a whole palm's.
-  const double reach = max_dist + 2 * params.palm_radius_m * k.fx / palm.z;
+  const double reach = circle_px + 2 * params.palm_radius_m * k.fx / palm.z;
   const double reach2 = reach * reach;
   const auto on_hand = [&](int x, int y) {
     return roi_mask.at<std::uint8_t>(y - ry0 + 1, x - rx0 + 1) != 0 && (x - u) * (x - u) + (y - v) * (y - v) < reach2;
@@ -317,47 +345,208 @@ bool HandFinder::Impl::measure_in_band(std::span<const std::uint16_t> raw, const
   return true;
 }
 
-/// Fits the palm plane to the hand mask's readings (roi_mask, ROI [rx0, rx1) x [ry0, ry1)) and,
-/// when it is turned more than ~30 degrees from the sensor, sets `stretch` (ROI -> stretched
-/// image: 1 / cos(tilt) along the image direction of the depth gradient), its inverse and the
-/// stretched size. False for a palm facing the sensor or too few readings.
-bool HandFinder::Impl::turned_palm_stretch(std::span<const std::uint16_t> raw, int rx0, int ry0, int rx1, int ry1) {
-  const auto& k = model.intrinsics();
-  Eigen::Matrix3d ata = Eigen::Matrix3d::Zero();
-  Eigen::Vector3d atb = Eigen::Vector3d::Zero();
+/// The plane through the readings under roi_mask (ROI [rx0, rx1) x [ry0, ry1)) by total least
+/// squares: through their centroid, normal to the direction of least variance (the smallest
+/// eigenvector of their covariance; Pearson 1901). Unlike z = a X + b Y + c it does not favour
+/// depth residuals, which matters for a palm turned toward edge-on. `spread_m`: the RMS distance
+/// of the readings to the plane. False with too few readings.
+bool HandFinder::Impl::fit_plane(std::span<const std::uint16_t> raw, const Roi& roi, Plane& plane, double* spread_m) {
+  const int rx0 = roi.x0, ry0 = roi.y0, rx1 = roi.x1, ry1 = roi.y1;
+  Eigen::Matrix3d outer = Eigen::Matrix3d::Zero();
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
   int count = 0;
   for (int y = ry0; y < ry1; ++y) {
     const std::uint16_t* row = raw.data() + static_cast<std::size_t>(y) * kDepthWidth;
     const auto* m = roi_mask.ptr<std::uint8_t>(y - ry0 + 1) + 1;
     for (int x = rx0; x < rx1; ++x) {
       if (!m[x - rx0]) continue;
-      const double z = model.metres(row[x]);
-      const Eigen::Vector3d a((x - k.cx) * z / k.fx, (y - k.cy) * z / k.fy, 1.0);
-      ata += a * a.transpose();
-      atb += a * z;
+      const Eigen::Vector3d q = model.back_project(x, y, model.metres(row[x]));
+      outer += q * q.transpose();
+      sum += q;
       ++count;
     }
   }
+  return plane_through(outer, sum, count, plane, spread_m);
+}
+
+/// The total-least-squares plane of `count` points given their sum of outer products and their sum.
+bool HandFinder::Impl::plane_through(const Eigen::Matrix3d& outer, const Eigen::Vector3d& sum, int count, Plane& plane,
+                                     double* spread_m) {
   if (count < 50) return false;
-  const Eigen::Vector3d plane = ata.ldlt().solve(atb);  // z = a X + b Y + c
-  const double g = std::hypot(plane.x(), plane.y());    // tan(tilt)
-  if (!std::isfinite(g) || g < 0.6 || g > 4.0) return false;  // under ~30 or beyond ~76 degrees
-  const double s = std::sqrt(1.0 + g * g);                    // 1 / cos(tilt)
-  const double cx = plane.x() / g, cy = plane.y() / g;        // image direction of the gradient
-  // M = I + (s - 1) d d^T, about the ROI's origin, then shifted so that nothing is negative.
-  cv::Matx22d m(1 + (s - 1) * cx * cx, (s - 1) * cx * cy, (s - 1) * cx * cy, 1 + (s - 1) * cy * cy);
-  const int w = roi_mask.cols, h = roi_mask.rows;
-  double minx = 0, miny = 0, maxx = 0, maxy = 0;
-  for (const cv::Point2d p : {cv::Point2d(0, 0), cv::Point2d(w, 0), cv::Point2d(0, h), cv::Point2d(w, h)}) {
-    const cv::Vec2d q = m * cv::Vec2d(p.x, p.y);
-    minx = std::min(minx, q[0]);
-    miny = std::min(miny, q[1]);
-    maxx = std::max(maxx, q[0]);
-    maxy = std::max(maxy, q[1]);
+  plane.centroid = sum / count;
+  const Eigen::Matrix3d covariance = outer / count - plane.centroid * plane.centroid.transpose();
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(covariance);
+  if (eigen.info() != Eigen::Success) return false;
+  plane.normal = eigen.eigenvectors().col(0);  // eigenvalues in increasing order
+  if (spread_m) *spread_m = std::sqrt(std::max(0.0, eigen.eigenvalues()(0)));  // RMS distance to the plane
+  if (plane.normal.z() > 0) plane.normal = -plane.normal;  // toward the sensor
+  return plane.normal.allFinite();
+}
+
+/// roi_mask = the readings within `band` metres of `plane` (perpendicular distance), restricted to
+/// `within` when given, and to those within `radius` of `centre` in the plane when given.
+void HandFinder::Impl::plane_band_mask(std::span<const std::uint16_t> raw, const Roi& roi, const Plane& plane, double band,
+                                       const cv::Mat* within, const Eigen::Vector3d* centre, double radius) {
+  const auto& k = model.intrinsics();
+  const Eigen::Vector3d& nrm = plane.normal;
+  const double offset = plane.centroid.dot(nrm);
+  const double radius2 = radius * radius;
+  roi_mask.setTo(0);
+  for (int y = roi.y0; y < roi.y1; ++y) {
+    const std::uint16_t* row = raw.data() + static_cast<std::size_t>(y) * kDepthWidth;
+    auto* m = roi_mask.ptr<std::uint8_t>(y - roi.y0 + 1) + 1;
+    const auto* w = within ? within->ptr<std::uint8_t>(y - roi.y0 + 1) + 1 : nullptr;
+    const double ray_y = (y - k.cy) / k.fy;
+    for (int x = roi.x0; x < roi.x1; ++x) {
+      const std::uint16_t d = row[x];
+      if (d >= kNoReading || (w && !w[x - roi.x0])) continue;
+      const double z = model.metres(d);
+      const Eigen::Vector3d q(z * (x - k.cx) / k.fx, z * ray_y, z);
+      const double off = q.dot(nrm) - offset;  // signed distance in front of the plane
+      if (std::abs(off) > band) continue;
+      if (centre && ((q - off * nrm) - *centre).squaredNorm() > radius2) continue;
+      m[x - roi.x0] = 255;
+    }
   }
-  stretch = cv::Matx23d(m(0, 0), m(0, 1), -minx, m(1, 0), m(1, 1), -miny);
-  cv::invertAffineTransform(stretch, unstretch);
-  stretched_size = cv::Size(static_cast<int>(std::ceil(maxx - minx)) + 1, static_cast<int>(std::ceil(maxy - miny)) + 1);
+}
+
+/// The palm of a hand turned more than ~30 degrees from the sensor, measured in its own plane.
+/// The plane is fitted to the hand mask (least squares), the mask rebuilt as the readings within
+/// kPlaneBandM of that plane connected to `seed` (so the palm's far side counts, the forearm and
+/// the back of the hand behind it do not), the plane refitted, twice; the filled mask is then
+/// resampled on a metric grid in the plane (a homography, H = K [e1 e2 p0]: Hartley & Zisserman,
+/// Multiple View Geometry, 2nd ed., sec. 8.1.1, the plane-to-image map), which undoes the
+/// foreshortening for the viewing ray's real angle. The palm centre is the centre of the largest
+/// inscribed circle there, as for a palm facing the sensor, mapped back onto the plane in 3D.
+/// False for a palm facing the sensor (tilt under ~30 degrees), one seen edge-on (beyond ~76), or
+/// a mask that does not hold.
+bool HandFinder::Impl::measure_turned_palm(std::span<const std::uint16_t> raw, int rx0, int ry0, int rx1, int ry1,
+                                           cv::Point seed, Palm& palm) {
+  const Roi roi{rx0, ry0, rx1, ry1};
+  Plane plane;
+  if (!fit_plane(raw, roi, plane)) return false;
+  // Turned: the normal more than ~30 degrees off the optical axis, not beyond ~76 (edge-on).
+  const auto turned = [](const Plane& p) { return -p.normal.z() <= 0.86 && -p.normal.z() >= 0.24; };
+  if (!turned(plane)) return false;
+  roi_hand = roi_hand_buffer(cv::Rect(0, 0, roi_mask.cols, roi_mask.rows));
+  // The hand: readings within kTurnedHandBandM of the plane, connected to the seed.
+  plane_band_mask(raw, roi, plane, kTurnedHandBandM, nullptr);
+  if (roi_mask.at<std::uint8_t>(seed) != 255) return false;
+  cv::floodFill(roi_mask, seed, cv::Scalar(128));
+  cv::compare(roi_mask, 128, roi_hand, cv::CMP_EQ);
+  roi_hand.copyTo(roi_mask);
+  if (!fit_plane(raw, roi, plane)) return false;
+  // The palm is the flat part of the hand: where a palm-sized square in the plane is well covered
+  // by readings within kPalmBandM of it. Turned fingers overlap into a block as wide as the palm,
+  // so the best-covered places are compared by their flatness (the RMS distance of their readings
+  // to their own plane): the palm's is ~1-2 mm less than that of the round sides of the fingers
+  // or of the wrist. The plane is then refitted to that palm alone.
+  PlaneGrid hand_grid;
+  Eigen::Vector3d palm_at = Eigen::Vector3d::Zero();
+  const int side = static_cast<int>(std::lround(kPalmSquareM / kCellM));
+  for (int pass = 0; pass < kPalmPlanePasses; ++pass) {
+    plane_band_mask(raw, roi, plane, kPalmBandM, &roi_hand);
+    if (!make_plane_grid(raw, roi, plane, hand_grid)) return false;
+    cv::warpPerspective(roi_mask, rectified_mask, hand_grid.grid_to_roi, hand_grid.size, cv::INTER_NEAREST | cv::WARP_INVERSE_MAP,
+                        cv::BORDER_CONSTANT, cv::Scalar(0));
+    cv::boxFilter(rectified_mask, rectified_cover, CV_32F, cv::Size(side, side), cv::Point(-1, -1), true, cv::BORDER_CONSTANT);
+    Plane chosen;
+    double chosen_spread = std::numeric_limits<double>::infinity();
+    for (int candidate = 0; candidate < kPalmCandidates; ++candidate) {
+      double best = 0;
+      cv::Point best_at;
+      cv::minMaxLoc(rectified_cover, nullptr, &best, nullptr, &best_at);
+      if (best < kMinPalmCover * 255) break;
+      cv::rectangle(rectified_cover, cv::Rect(best_at.x - side / 2, best_at.y - side / 2, side, side), cv::Scalar(0), cv::FILLED);
+      const Eigen::Vector3d at = hand_grid.point(best_at.x, best_at.y);
+      plane_band_mask(raw, roi, plane, kPalmRefitBandM, &roi_hand, &at, kPalmRefitRadiusM);
+      Plane local;
+      double spread = 0;
+      if (fit_plane(raw, roi, local, &spread) && turned(local) && spread < chosen_spread) {
+        chosen = local;
+        chosen_spread = spread;
+        palm_at = at;
+      }
+    }
+    if (!std::isfinite(chosen_spread)) return false;
+    plane = chosen;
+  }
+  // Its centre: the largest inscribed circle of the flat readings (holes filled) in the plane.
+  PlaneGrid palm_grid;
+  plane_band_mask(raw, roi, plane, kPalmBandM, &roi_hand, &palm_at, kPalmSearchM);
+  roi_mask.copyTo(roi_closed);
+  cv::floodFill(roi_closed, cv::Point(0, 0), cv::Scalar(128));
+  cv::compare(roi_closed, 128, roi_closed, cv::CMP_NE);
+  if (!make_plane_grid(raw, roi, plane, palm_grid)) return false;
+  cv::warpPerspective(roi_closed, rectified_closed, palm_grid.grid_to_roi, palm_grid.size, cv::INTER_NEAREST | cv::WARP_INVERSE_MAP,
+                      cv::BORDER_CONSTANT, cv::Scalar(0));
+  cv::distanceTransform(rectified_closed, rectified_dist, cv::DIST_L2, cv::DIST_MASK_5);
+  double peak = 0;
+  cv::Point peak_at;
+  cv::minMaxLoc(rectified_dist, nullptr, &peak, nullptr, &peak_at);
+  if (peak < 2.0) return false;
+  const cv::Point2d c = plateau_centre(rectified_dist, peak, peak_at);
+  const Eigen::Vector3d centre = palm_grid.point(c.x, c.y);
+  if (centre.z() <= 0) return false;
+  // Seen more obliquely than this, the palm is a strip narrower than the overlapping fingers and
+  // the flattest place is among them (measured: 7 cm off at 67-77 degrees): not reported.
+  if (-plane.normal.dot(centre.normalized()) < kMinPalmViewCos) return false;
+  // Share of the circle with readings (before the holes were filled).
+  cv::warpPerspective(roi_mask, rectified_mask, palm_grid.grid_to_roi, palm_grid.size, cv::INTER_NEAREST | cv::WARP_INVERSE_MAP,
+                      cv::BORDER_CONSTANT, cv::Scalar(0));
+  int inside = 0, with_reading = 0;
+  const int r = static_cast<int>(std::ceil(peak));
+  for (int j = std::max(0, peak_at.y - r); j < std::min(palm_grid.size.height, peak_at.y + r + 1); ++j)
+    for (int i = std::max(0, peak_at.x - r); i < std::min(palm_grid.size.width, peak_at.x + r + 1); ++i) {
+      if ((i - c.x) * (i - c.x) + (j - c.y) * (j - c.y) > peak * peak) continue;
+      ++inside;
+      if (rectified_mask.at<std::uint8_t>(j, i)) ++with_reading;
+    }
+  const Eigen::Vector2d pixel = model.project(centre);
+  palm.u = pixel.x();
+  palm.v = pixel.y();
+  palm.z = static_cast<float>(centre.z());
+  palm.radius_m = peak * kCellM;
+  palm.valid_fraction = static_cast<double>(with_reading) / std::max(1, inside);
+  return true;
+}
+
+/// A metric grid (kCellM) in `plane` over the in-plane extent of roi_mask's readings, and the
+/// homography from its cells to ROI pixels: H = K [e1 e2 p0] (Hartley & Zisserman, Multiple View
+/// Geometry, 2nd ed., sec. 8.1.1, the map from a world plane to the image), shifted to the ROI.
+bool HandFinder::Impl::make_plane_grid(std::span<const std::uint16_t> raw, const Roi& roi, const Plane& plane, PlaneGrid& out) const {
+  constexpr double kHalfExtentM = 0.25;  // at most this around the plane's centroid
+  const auto& k = model.intrinsics();
+  // In-plane axes: e1 the camera's x projected on the plane, e2 = e1 x n (down in the image).
+  const Eigen::Vector3d& n = plane.normal;
+  out.e1 = (Eigen::Vector3d::UnitX() - n.x() * n).normalized();
+  out.e2 = out.e1.cross(n);
+  double s0 = 1e9, s1 = -1e9, t0 = 1e9, t1 = -1e9;
+  for (int y = roi.y0; y < roi.y1; ++y) {
+    const std::uint16_t* row = raw.data() + static_cast<std::size_t>(y) * kDepthWidth;
+    const auto* m = roi_mask.ptr<std::uint8_t>(y - roi.y0 + 1) + 1;
+    for (int x = roi.x0; x < roi.x1; ++x) {
+      if (!m[x - roi.x0]) continue;
+      const Eigen::Vector3d q = model.back_project(x, y, model.metres(row[x])) - plane.centroid;
+      s0 = std::min(s0, q.dot(out.e1));
+      s1 = std::max(s1, q.dot(out.e1));
+      t0 = std::min(t0, q.dot(out.e2));
+      t1 = std::max(t1, q.dot(out.e2));
+    }
+  }
+  s0 = std::max(s0 - 0.01, -kHalfExtentM);
+  t0 = std::max(t0 - 0.01, -kHalfExtentM);
+  s1 = std::min(s1 + 0.01, kHalfExtentM);
+  t1 = std::min(t1 + 0.01, kHalfExtentM);
+  if (s1 <= s0 || t1 <= t0) return false;
+  out.size = cv::Size(static_cast<int>(std::ceil((s1 - s0) / kCellM)) + 1, static_cast<int>(std::ceil((t1 - t0) / kCellM)) + 1);
+  out.origin = plane.centroid + s0 * out.e1 + t0 * out.e2;
+  Eigen::Matrix3d to_point;
+  to_point << kCellM * out.e1, kCellM * out.e2, out.origin;
+  Eigen::Matrix3d to_roi;
+  to_roi << k.fx, 0, k.cx - (roi.x0 - 1), 0, k.fy, k.cy - (roi.y0 - 1), 0, 0, 1;
+  const Eigen::Matrix3d h = to_roi * to_point;
+  out.grid_to_roi = cv::Matx33d(h(0, 0), h(0, 1), h(0, 2), h(1, 0), h(1, 1), h(1, 2), h(2, 0), h(2, 1), h(2, 2));
   return true;
 }
 

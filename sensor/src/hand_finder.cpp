@@ -135,12 +135,19 @@ struct HandFinder::Impl {
   bool fit_plane(std::span<const std::uint16_t> raw, const Roi& roi, Plane& plane, double* spread_m = nullptr);
   static bool plane_through(const Eigen::Matrix3d& outer, const Eigen::Vector3d& sum, int count, Plane& plane,
                             double* spread_m = nullptr);
-  void plane_band_mask(std::span<const std::uint16_t> raw, const Roi& roi, const Plane& plane, double band, const cv::Mat* within,
-                       const Eigen::Vector3d* centre = nullptr, double radius = 0.0);
-  bool make_plane_grid(std::span<const std::uint16_t> raw, const Roi& roi, const Plane& plane, PlaneGrid& out) const;
+  void plane_band_mask(std::span<const std::uint16_t> raw, const Roi& roi, const Plane& plane, double band);
+  void select_near_plane(const Plane& plane, double band, const Eigen::Vector3d* centre, double radius);
+  bool fit_selected(Plane& plane, double* spread_m = nullptr) const;
+  bool make_plane_grid(const Roi& roi, const Plane& plane, PlaneGrid& out) const;
   bool measure_turned_palm(std::span<const std::uint16_t> raw, int rx0, int ry0, int rx1, int ry1, cv::Point seed, Palm& palm);
   cv::Mat rectified_closed, rectified_mask, rectified_dist, rectified_cover;  // measure_turned_palm's view of the palm plane
   cv::Mat roi_hand;  // measure_turned_palm's hand region (a view of roi_hand_buffer)
+  struct HandPoint {
+    Eigen::Vector3d point;  ///< camera frame, metres
+    int mask_offset;        ///< its byte in roi_mask (and roi_hand)
+  };
+  std::vector<HandPoint> hand_points;  // the hand region's readings
+  std::vector<std::size_t> selected;   // select_near_plane's choice among them
 
   cv::Mat roi_hand_buffer = cv::Mat(kDepthHeight + 2, kDepthWidth + 2, CV_8U);
   bool find_arm_end(std::span<const std::uint16_t> raw, Palm& palm, cv::Point& seed);
@@ -248,17 +255,15 @@ bool HandFinder::Impl::measure_in_band(std::span<const std::uint16_t> raw, const
   // grown by a palm diameter.
   const auto& k = model.intrinsics();
   const int pad = static_cast<int>(std::ceil(2 * params.palm_radius_m * k.fx / std::max(0.3f, model.metres(near_raw)))) + 4;
-  const int rx0 = std::max(0, cells.x * kStep - pad), ry0 = std::max(0, cells.y * kStep - pad);
-  const int rx1 = std::min(kDepthWidth, (cells.x + cells.width) * kStep + pad);
-  const int ry1 = std::min(kDepthHeight, (cells.y + cells.height) * kStep + pad);
-  const int rw = rx1 - rx0, rh = ry1 - ry0;
+  const int px0 = std::max(0, cells.x * kStep - pad), py0 = std::max(0, cells.y * kStep - pad);
+  const int px1 = std::min(kDepthWidth, (cells.x + cells.width) * kStep + pad);
+  const int py1 = std::min(kDepthHeight, (cells.y + cells.height) * kStep + pad);
+  int rx0 = px0, ry0 = py0, rx1 = px1, ry1 = py1;  // the ROI; shrunk to the hand below
 
   // Full-resolution hand mask in the ROI, with a zero border so the image edge bounds the palm.
   // Views of full-frame buffers made once: a ROI of a new size allocates nothing.
-  const cv::Rect roi_rect(0, 0, rw + 2, rh + 2);
+  const cv::Rect roi_rect(0, 0, px1 - px0 + 2, py1 - py0 + 2);
   roi_mask = roi_mask_buffer(roi_rect);
-  roi_closed = roi_closed_buffer(roi_rect);
-  roi_dist = roi_dist_buffer(roi_rect);
   roi_mask.setTo(0);
   const std::uint16_t slack_raw = near_raw > 20 ? static_cast<std::uint16_t>(near_raw - 20) : 0;
   for (int y = ry0; y < ry1; ++y) {
@@ -273,8 +278,20 @@ bool HandFinder::Impl::measure_in_band(std::span<const std::uint16_t> raw, const
   // The hand: the band's region connected to the arm's nearest reading.
   const cv::Point seed = seed_cell * kStep + cv::Point(kStep / 2 - rx0 + 1, kStep / 2 - ry0 + 1);
   if (roi_mask.at<std::uint8_t>(seed) != 255) return false;
-  cv::floodFill(roi_mask, seed, cv::Scalar(128));
+  cv::Rect filled;
+  cv::floodFill(roi_mask, seed, cv::Scalar(128), &filled);
   cv::compare(roi_mask, 128, roi_mask, cv::CMP_EQ);
+  // From here on, the ROI is the hand's bounding box with a zero border (the filled region never
+  // touches the ROI's border): the hole filling and the distance transform, ~10% of tachi-sensor's
+  // time, then cover the hand rather than the padded ROI. A turned palm goes back to the whole ROI.
+  const cv::Rect hand_rect(filled.x - 1, filled.y - 1, filled.width + 2, filled.height + 2);
+  roi_mask = roi_mask(hand_rect);
+  rx0 = px0 - 1 + hand_rect.x + 1;
+  ry0 = py0 - 1 + hand_rect.y + 1;
+  rx1 = rx0 + filled.width;
+  ry1 = ry0 + filled.height;
+  roi_closed = roi_closed_buffer(cv::Rect(0, 0, hand_rect.width, hand_rect.height));
+  roi_dist = roi_dist_buffer(cv::Rect(0, 0, hand_rect.width, hand_rect.height));
   // Holes in the hand (dropouts with hand all around) count as hand: flood the outside from the
   // zero border; whatever it cannot reach is hand or hole. Gaps between fingers open to the
   // outside, so fingers stay apart and do not widen the palm.
@@ -292,7 +309,18 @@ bool HandFinder::Impl::measure_in_band(std::span<const std::uint16_t> raw, const
   // a forearm's. Where the circle is too small, the palm is measured in its own plane instead.
   const float z_near = model.metres(near_raw);
   double circle_px = max_dist;  // radius in the image of the region whose readings give the depth
-  if (max_dist * z_near / k.fx < params.min_palm_radius_m && measure_turned_palm(raw, rx0, ry0, rx1, ry1, max_at, palm)) {
+  const auto turned_palm = [&] {
+    roi_mask = roi_mask_buffer(roi_rect);
+    const bool measured = measure_turned_palm(raw, px0, py0, px1, py1, max_at + hand_rect.tl(), palm);
+    if (measured) {
+      rx0 = px0, ry0 = py0, rx1 = px1, ry1 = py1;
+    } else {
+      // Its masks may have replaced the band's region; no matter: a circle this small is no palm.
+      roi_mask = roi_mask_buffer(roi_rect)(hand_rect);
+    }
+    return measured;
+  };
+  if (max_dist * z_near / k.fx < params.min_palm_radius_m && turned_palm()) {
     circle_px = palm.radius_m * k.fx / palm.z;
   } else {
     const double u = rx0 - 1 + centre.x, v = ry0 - 1 + centre.y;
@@ -383,31 +411,53 @@ bool HandFinder::Impl::plane_through(const Eigen::Matrix3d& outer, const Eigen::
   return plane.normal.allFinite();
 }
 
-/// roi_mask = the readings within `band` metres of `plane` (perpendicular distance), restricted to
-/// `within` when given, and to those within `radius` of `centre` in the plane when given.
-void HandFinder::Impl::plane_band_mask(std::span<const std::uint16_t> raw, const Roi& roi, const Plane& plane, double band,
-                                       const cv::Mat* within, const Eigen::Vector3d* centre, double radius) {
+/// roi_mask = the ROI's readings within `band` metres of `plane` (perpendicular distance).
+void HandFinder::Impl::plane_band_mask(std::span<const std::uint16_t> raw, const Roi& roi, const Plane& plane, double band) {
   const auto& k = model.intrinsics();
   const Eigen::Vector3d& nrm = plane.normal;
   const double offset = plane.centroid.dot(nrm);
-  const double radius2 = radius * radius;
   roi_mask.setTo(0);
   for (int y = roi.y0; y < roi.y1; ++y) {
     const std::uint16_t* row = raw.data() + static_cast<std::size_t>(y) * kDepthWidth;
     auto* m = roi_mask.ptr<std::uint8_t>(y - roi.y0 + 1) + 1;
-    const auto* w = within ? within->ptr<std::uint8_t>(y - roi.y0 + 1) + 1 : nullptr;
     const double ray_y = (y - k.cy) / k.fy;
     for (int x = roi.x0; x < roi.x1; ++x) {
       const std::uint16_t d = row[x];
-      if (d >= kNoReading || (w && !w[x - roi.x0])) continue;
+      if (d >= kNoReading) continue;
       const double z = model.metres(d);
-      const Eigen::Vector3d q(z * (x - k.cx) / k.fx, z * ray_y, z);
-      const double off = q.dot(nrm) - offset;  // signed distance in front of the plane
-      if (std::abs(off) > band) continue;
-      if (centre && ((q - off * nrm) - *centre).squaredNorm() > radius2) continue;
-      m[x - roi.x0] = 255;
+      const double off = z * (nrm.x() * (x - k.cx) / k.fx + nrm.y() * ray_y + nrm.z()) - offset;  // in front of the plane
+      if (std::abs(off) <= band) m[x - roi.x0] = 255;
     }
   }
+}
+
+/// Selects the hand's readings within `band` metres of `plane`, and within `radius` of `centre` in
+/// the plane when given: their indices in `selected`, and roi_mask set at them (and only there).
+void HandFinder::Impl::select_near_plane(const Plane& plane, double band, const Eigen::Vector3d* centre, double radius) {
+  const double offset = plane.centroid.dot(plane.normal);
+  const double radius2 = radius * radius;
+  selected.clear();
+  roi_mask.setTo(0);
+  for (std::size_t i = 0; i < hand_points.size(); ++i) {
+    const Eigen::Vector3d& q = hand_points[i].point;
+    const double off = q.dot(plane.normal) - offset;
+    if (std::abs(off) > band) continue;
+    if (centre && ((q - off * plane.normal) - *centre).squaredNorm() > radius2) continue;
+    selected.push_back(i);
+    roi_mask.data[hand_points[i].mask_offset] = 255;
+  }
+}
+
+/// fit_plane over the selected hand readings.
+bool HandFinder::Impl::fit_selected(Plane& plane, double* spread_m) const {
+  Eigen::Matrix3d outer = Eigen::Matrix3d::Zero();
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  for (const std::size_t i : selected) {
+    const Eigen::Vector3d& q = hand_points[i].point;
+    outer += q * q.transpose();
+    sum += q;
+  }
+  return plane_through(outer, sum, static_cast<int>(selected.size()), plane, spread_m);
 }
 
 /// The palm of a hand turned more than ~30 degrees from the sensor, measured in its own plane.
@@ -430,12 +480,22 @@ bool HandFinder::Impl::measure_turned_palm(std::span<const std::uint16_t> raw, i
   if (!turned(plane)) return false;
   roi_hand = roi_hand_buffer(cv::Rect(0, 0, roi_mask.cols, roi_mask.rows));
   // The hand: readings within kTurnedHandBandM of the plane, connected to the seed.
-  plane_band_mask(raw, roi, plane, kTurnedHandBandM, nullptr);
+  plane_band_mask(raw, roi, plane, kTurnedHandBandM);
   if (roi_mask.at<std::uint8_t>(seed) != 255) return false;
   cv::floodFill(roi_mask, seed, cv::Scalar(128));
   cv::compare(roi_mask, 128, roi_hand, cv::CMP_EQ);
-  roi_hand.copyTo(roi_mask);
-  if (!fit_plane(raw, roi, plane)) return false;
+  // From here on only the hand's readings matter: kept as points, so that each refit or band
+  // below costs a pass over ~3k points rather than over the ROI.
+  hand_points.clear();
+  for (int y = ry0; y < ry1; ++y) {
+    const std::uint16_t* row = raw.data() + static_cast<std::size_t>(y) * kDepthWidth;
+    const auto* m = roi_hand.ptr<std::uint8_t>(y - ry0 + 1) + 1;
+    const int offset = (y - ry0 + 1) * static_cast<int>(roi_hand.step[0]) + 1 - rx0;
+    for (int x = rx0; x < rx1; ++x)
+      if (m[x - rx0]) hand_points.push_back({model.back_project(x, y, model.metres(row[x])), offset + x});
+  }
+  select_near_plane(plane, kTurnedHandBandM, nullptr, 0.0);
+  if (!fit_selected(plane)) return false;
   // The palm is the flat part of the hand: where a palm-sized square in the plane is well covered
   // by readings within kPalmBandM of it. Turned fingers overlap into a block as wide as the palm,
   // so the best-covered places are compared by their flatness (the RMS distance of their readings
@@ -445,8 +505,8 @@ bool HandFinder::Impl::measure_turned_palm(std::span<const std::uint16_t> raw, i
   Eigen::Vector3d palm_at = Eigen::Vector3d::Zero();
   const int side = static_cast<int>(std::lround(kPalmSquareM / kCellM));
   for (int pass = 0; pass < kPalmPlanePasses; ++pass) {
-    plane_band_mask(raw, roi, plane, kPalmBandM, &roi_hand);
-    if (!make_plane_grid(raw, roi, plane, hand_grid)) return false;
+    select_near_plane(plane, kPalmBandM, nullptr, 0.0);
+    if (!make_plane_grid(roi, plane, hand_grid)) return false;
     cv::warpPerspective(roi_mask, rectified_mask, hand_grid.grid_to_roi, hand_grid.size, cv::INTER_NEAREST | cv::WARP_INVERSE_MAP,
                         cv::BORDER_CONSTANT, cv::Scalar(0));
     cv::boxFilter(rectified_mask, rectified_cover, CV_32F, cv::Size(side, side), cv::Point(-1, -1), true, cv::BORDER_CONSTANT);
@@ -459,10 +519,10 @@ bool HandFinder::Impl::measure_turned_palm(std::span<const std::uint16_t> raw, i
       if (best < kMinPalmCover * 255) break;
       cv::rectangle(rectified_cover, cv::Rect(best_at.x - side / 2, best_at.y - side / 2, side, side), cv::Scalar(0), cv::FILLED);
       const Eigen::Vector3d at = hand_grid.point(best_at.x, best_at.y);
-      plane_band_mask(raw, roi, plane, kPalmRefitBandM, &roi_hand, &at, kPalmRefitRadiusM);
+      select_near_plane(plane, kPalmRefitBandM, &at, kPalmRefitRadiusM);
       Plane local;
       double spread = 0;
-      if (fit_plane(raw, roi, local, &spread) && turned(local) && spread < chosen_spread) {
+      if (fit_selected(local, &spread) && turned(local) && spread < chosen_spread) {
         chosen = local;
         chosen_spread = spread;
         palm_at = at;
@@ -473,11 +533,11 @@ bool HandFinder::Impl::measure_turned_palm(std::span<const std::uint16_t> raw, i
   }
   // Its centre: the largest inscribed circle of the flat readings (holes filled) in the plane.
   PlaneGrid palm_grid;
-  plane_band_mask(raw, roi, plane, kPalmBandM, &roi_hand, &palm_at, kPalmSearchM);
+  select_near_plane(plane, kPalmBandM, &palm_at, kPalmSearchM);
   roi_mask.copyTo(roi_closed);
   cv::floodFill(roi_closed, cv::Point(0, 0), cv::Scalar(128));
   cv::compare(roi_closed, 128, roi_closed, cv::CMP_NE);
-  if (!make_plane_grid(raw, roi, plane, palm_grid)) return false;
+  if (!make_plane_grid(roi, plane, palm_grid)) return false;
   cv::warpPerspective(roi_closed, rectified_closed, palm_grid.grid_to_roi, palm_grid.size, cv::INTER_NEAREST | cv::WARP_INVERSE_MAP,
                       cv::BORDER_CONSTANT, cv::Scalar(0));
   cv::distanceTransform(rectified_closed, rectified_dist, cv::DIST_L2, cv::DIST_MASK_5);
@@ -511,10 +571,10 @@ bool HandFinder::Impl::measure_turned_palm(std::span<const std::uint16_t> raw, i
   return true;
 }
 
-/// A metric grid (kCellM) in `plane` over the in-plane extent of roi_mask's readings, and the
+/// A metric grid (kCellM) in `plane` over the in-plane extent of the selected readings, and the
 /// homography from its cells to ROI pixels: H = K [e1 e2 p0] (Hartley & Zisserman, Multiple View
 /// Geometry, 2nd ed., sec. 8.1.1, the map from a world plane to the image), shifted to the ROI.
-bool HandFinder::Impl::make_plane_grid(std::span<const std::uint16_t> raw, const Roi& roi, const Plane& plane, PlaneGrid& out) const {
+bool HandFinder::Impl::make_plane_grid(const Roi& roi, const Plane& plane, PlaneGrid& out) const {
   constexpr double kHalfExtentM = 0.25;  // at most this around the plane's centroid
   const auto& k = model.intrinsics();
   // In-plane axes: e1 the camera's x projected on the plane, e2 = e1 x n (down in the image).
@@ -522,17 +582,12 @@ bool HandFinder::Impl::make_plane_grid(std::span<const std::uint16_t> raw, const
   out.e1 = (Eigen::Vector3d::UnitX() - n.x() * n).normalized();
   out.e2 = out.e1.cross(n);
   double s0 = 1e9, s1 = -1e9, t0 = 1e9, t1 = -1e9;
-  for (int y = roi.y0; y < roi.y1; ++y) {
-    const std::uint16_t* row = raw.data() + static_cast<std::size_t>(y) * kDepthWidth;
-    const auto* m = roi_mask.ptr<std::uint8_t>(y - roi.y0 + 1) + 1;
-    for (int x = roi.x0; x < roi.x1; ++x) {
-      if (!m[x - roi.x0]) continue;
-      const Eigen::Vector3d q = model.back_project(x, y, model.metres(row[x])) - plane.centroid;
-      s0 = std::min(s0, q.dot(out.e1));
-      s1 = std::max(s1, q.dot(out.e1));
-      t0 = std::min(t0, q.dot(out.e2));
-      t1 = std::max(t1, q.dot(out.e2));
-    }
+  for (const std::size_t i : selected) {
+    const Eigen::Vector3d q = hand_points[i].point - plane.centroid;
+    s0 = std::min(s0, q.dot(out.e1));
+    s1 = std::max(s1, q.dot(out.e1));
+    t0 = std::min(t0, q.dot(out.e2));
+    t1 = std::max(t1, q.dot(out.e2));
   }
   s0 = std::max(s0 - 0.01, -kHalfExtentM);
   t0 = std::max(t0 - 0.01, -kHalfExtentM);

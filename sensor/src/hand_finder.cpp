@@ -30,6 +30,7 @@ constexpr double kPalmRefitRadiusM = 0.035;  // ... and this near the candidate
 constexpr int kPalmPlanePasses = 2;
 constexpr double kPalmSearchM = 0.07;        // the palm's circle is sought this near the palm found
 constexpr double kMinPalmViewCos = 0.407;    // cos 66 degrees: the most oblique palm (to the line of sight) reported
+constexpr double kViewCosSlack = 0.1;         // ~6 degrees, for the first, rough plane
 constexpr double kCellM = 0.002;             // grid step in the palm's plane
 
 /// Sub-pixel centre of a distance transform's maximum `peak` at `at`: the centroid of its plateau
@@ -136,10 +137,10 @@ struct HandFinder::Impl {
   static bool plane_through(const Eigen::Matrix3d& outer, const Eigen::Vector3d& sum, int count, Plane& plane,
                             double* spread_m = nullptr);
   void plane_band_mask(std::span<const std::uint16_t> raw, const Roi& roi, const Plane& plane, double band);
-  void select_near_plane(const Plane& plane, double band, const Eigen::Vector3d* centre, double radius);
+  void select_near_plane(const Plane& plane, double band, const Eigen::Vector3d* centre, double radius, bool mark);
   bool fit_selected(Plane& plane, double* spread_m = nullptr) const;
   bool make_plane_grid(const Roi& roi, const Plane& plane, PlaneGrid& out) const;
-  bool measure_turned_palm(std::span<const std::uint16_t> raw, int rx0, int ry0, int rx1, int ry1, cv::Point seed, Palm& palm);
+  bool measure_turned_palm(std::span<const std::uint16_t> raw, const Roi& roi, cv::Point seed, Plane plane, Palm& palm);
   cv::Mat rectified_closed, rectified_mask, rectified_dist, rectified_cover;  // measure_turned_palm's view of the palm plane
   cv::Mat roi_hand;  // measure_turned_palm's hand region (a view of roi_hand_buffer)
   struct HandPoint {
@@ -264,28 +265,31 @@ bool HandFinder::Impl::measure_in_band(std::span<const std::uint16_t> raw, const
   // Views of full-frame buffers made once: a ROI of a new size allocates nothing.
   const cv::Rect roi_rect(0, 0, px1 - px0 + 2, py1 - py0 + 2);
   roi_mask = roi_mask_buffer(roi_rect);
-  roi_mask.setTo(0);
+  // The border rows and columns zero, every other pixel written: branch-free, so it vectorises (no
+  // reading, 2047, is beyond any far_raw).
+  roi_mask.row(0).setTo(0);
+  roi_mask.row(roi_mask.rows - 1).setTo(0);
   const std::uint16_t slack_raw = near_raw > 20 ? static_cast<std::uint16_t>(near_raw - 20) : 0;
+  const std::uint16_t band_far = std::min(far_raw, kMaxValidRaw);
   for (int y = ry0; y < ry1; ++y) {
-    const std::uint16_t* row = raw.data() + static_cast<std::size_t>(y) * kDepthWidth;
-    auto* m = roi_mask.ptr<std::uint8_t>(y - ry0 + 1) + 1;
-    for (int x = rx0; x < rx1; ++x) {
-      const std::uint16_t d = row[x];
-      if (d >= kNoReading) continue;
-      m[x - rx0] = (d <= far_raw && d >= slack_raw) ? 255 : 0;
-    }
+    const std::uint16_t* row = raw.data() + static_cast<std::size_t>(y) * kDepthWidth + rx0;
+    auto* m = roi_mask.ptr<std::uint8_t>(y - ry0 + 1);
+    m[0] = 0;
+    m[rx1 - rx0 + 1] = 0;
+    ++m;
+    for (int i = 0; i < rx1 - rx0; ++i) m[i] = (row[i] <= band_far && row[i] >= slack_raw) ? 255 : 0;
   }
   // The hand: the band's region connected to the arm's nearest reading.
   const cv::Point seed = seed_cell * kStep + cv::Point(kStep / 2 - rx0 + 1, kStep / 2 - ry0 + 1);
   if (roi_mask.at<std::uint8_t>(seed) != 255) return false;
   cv::Rect filled;
   cv::floodFill(roi_mask, seed, cv::Scalar(128), &filled);
-  cv::compare(roi_mask, 128, roi_mask, cv::CMP_EQ);
   // From here on, the ROI is the hand's bounding box with a zero border (the filled region never
   // touches the ROI's border): the hole filling and the distance transform, ~10% of tachi-sensor's
   // time, then cover the hand rather than the padded ROI. A turned palm goes back to the whole ROI.
   const cv::Rect hand_rect(filled.x - 1, filled.y - 1, filled.width + 2, filled.height + 2);
   roi_mask = roi_mask(hand_rect);
+  cv::compare(roi_mask, 128, roi_mask, cv::CMP_EQ);
   rx0 = px0 - 1 + hand_rect.x + 1;
   ry0 = py0 - 1 + hand_rect.y + 1;
   rx1 = rx0 + filled.width;
@@ -310,8 +314,10 @@ bool HandFinder::Impl::measure_in_band(std::span<const std::uint16_t> raw, const
   const float z_near = model.metres(near_raw);
   double circle_px = max_dist;  // radius in the image of the region whose readings give the depth
   const auto turned_palm = [&] {
+    Plane plane;  // of the band's region, a first guess at the palm's
+    if (!fit_plane(raw, Roi{rx0, ry0, rx1, ry1}, plane)) return false;
     roi_mask = roi_mask_buffer(roi_rect);
-    const bool measured = measure_turned_palm(raw, px0, py0, px1, py1, max_at + hand_rect.tl(), palm);
+    const bool measured = measure_turned_palm(raw, Roi{px0, py0, px1, py1}, max_at + hand_rect.tl(), plane, palm);
     if (measured) {
       rx0 = px0, ry0 = py0, rx1 = px1, ry1 = py1;
     } else {
@@ -432,19 +438,21 @@ void HandFinder::Impl::plane_band_mask(std::span<const std::uint16_t> raw, const
 }
 
 /// Selects the hand's readings within `band` metres of `plane`, and within `radius` of `centre` in
-/// the plane when given: their indices in `selected`, and roi_mask set at them (and only there).
-void HandFinder::Impl::select_near_plane(const Plane& plane, double band, const Eigen::Vector3d* centre, double radius) {
+/// the plane when given: their indices in `selected`, and with `mark`, roi_mask set at them (and
+/// only there).
+void HandFinder::Impl::select_near_plane(const Plane& plane, double band, const Eigen::Vector3d* centre, double radius,
+                                         bool mark) {
   const double offset = plane.centroid.dot(plane.normal);
   const double radius2 = radius * radius;
   selected.clear();
-  roi_mask.setTo(0);
+  if (mark) roi_mask.setTo(0);
   for (std::size_t i = 0; i < hand_points.size(); ++i) {
     const Eigen::Vector3d& q = hand_points[i].point;
     const double off = q.dot(plane.normal) - offset;
     if (std::abs(off) > band) continue;
     if (centre && ((q - off * plane.normal) - *centre).squaredNorm() > radius2) continue;
     selected.push_back(i);
-    roi_mask.data[hand_points[i].mask_offset] = 255;
+    if (mark) roi_mask.data[hand_points[i].mask_offset] = 255;
   }
 }
 
@@ -470,14 +478,15 @@ bool HandFinder::Impl::fit_selected(Plane& plane, double* spread_m) const {
 /// inscribed circle there, as for a palm facing the sensor, mapped back onto the plane in 3D.
 /// False for a palm facing the sensor (tilt under ~30 degrees), one seen edge-on (beyond ~76), or
 /// a mask that does not hold.
-bool HandFinder::Impl::measure_turned_palm(std::span<const std::uint16_t> raw, int rx0, int ry0, int rx1, int ry1,
-                                           cv::Point seed, Palm& palm) {
-  const Roi roi{rx0, ry0, rx1, ry1};
-  Plane plane;
-  if (!fit_plane(raw, roi, plane)) return false;
+bool HandFinder::Impl::measure_turned_palm(std::span<const std::uint16_t> raw, const Roi& roi, cv::Point seed, Plane plane,
+                                           Palm& palm) {
+  const int rx0 = roi.x0, ry0 = roi.y0, rx1 = roi.x1, ry1 = roi.y1;
   // Turned: the normal more than ~30 degrees off the optical axis, not beyond ~76 (edge-on).
   const auto turned = [](const Plane& p) { return -p.normal.z() <= 0.86 && -p.normal.z() >= 0.24; };
   if (!turned(plane)) return false;
+  // Already far beyond the most oblique palm reported (the fit of the band's region is within a
+  // few degrees of the palm's plane): spare the rest, which the arm's-end search would repeat.
+  if (-plane.normal.dot(plane.centroid.normalized()) < kMinPalmViewCos - kViewCosSlack) return false;
   roi_hand = roi_hand_buffer(cv::Rect(0, 0, roi_mask.cols, roi_mask.rows));
   // The hand: readings within kTurnedHandBandM of the plane, connected to the seed.
   plane_band_mask(raw, roi, plane, kTurnedHandBandM);
@@ -494,7 +503,7 @@ bool HandFinder::Impl::measure_turned_palm(std::span<const std::uint16_t> raw, i
     for (int x = rx0; x < rx1; ++x)
       if (m[x - rx0]) hand_points.push_back({model.back_project(x, y, model.metres(row[x])), offset + x});
   }
-  select_near_plane(plane, kTurnedHandBandM, nullptr, 0.0);
+  select_near_plane(plane, kTurnedHandBandM, nullptr, 0.0, false);
   if (!fit_selected(plane)) return false;
   // The palm is the flat part of the hand: where a palm-sized square in the plane is well covered
   // by readings within kPalmBandM of it. Turned fingers overlap into a block as wide as the palm,
@@ -505,7 +514,7 @@ bool HandFinder::Impl::measure_turned_palm(std::span<const std::uint16_t> raw, i
   Eigen::Vector3d palm_at = Eigen::Vector3d::Zero();
   const int side = static_cast<int>(std::lround(kPalmSquareM / kCellM));
   for (int pass = 0; pass < kPalmPlanePasses; ++pass) {
-    select_near_plane(plane, kPalmBandM, nullptr, 0.0);
+    select_near_plane(plane, kPalmBandM, nullptr, 0.0, true);
     if (!make_plane_grid(roi, plane, hand_grid)) return false;
     cv::warpPerspective(roi_mask, rectified_mask, hand_grid.grid_to_roi, hand_grid.size, cv::INTER_NEAREST | cv::WARP_INVERSE_MAP,
                         cv::BORDER_CONSTANT, cv::Scalar(0));
@@ -519,7 +528,7 @@ bool HandFinder::Impl::measure_turned_palm(std::span<const std::uint16_t> raw, i
       if (best < kMinPalmCover * 255) break;
       cv::rectangle(rectified_cover, cv::Rect(best_at.x - side / 2, best_at.y - side / 2, side, side), cv::Scalar(0), cv::FILLED);
       const Eigen::Vector3d at = hand_grid.point(best_at.x, best_at.y);
-      select_near_plane(plane, kPalmRefitBandM, &at, kPalmRefitRadiusM);
+      select_near_plane(plane, kPalmRefitBandM, &at, kPalmRefitRadiusM, false);
       Plane local;
       double spread = 0;
       if (fit_selected(local, &spread) && turned(local) && spread < chosen_spread) {
@@ -533,7 +542,7 @@ bool HandFinder::Impl::measure_turned_palm(std::span<const std::uint16_t> raw, i
   }
   // Its centre: the largest inscribed circle of the flat readings (holes filled) in the plane.
   PlaneGrid palm_grid;
-  select_near_plane(plane, kPalmBandM, &palm_at, kPalmSearchM);
+  select_near_plane(plane, kPalmBandM, &palm_at, kPalmSearchM, true);
   roi_mask.copyTo(roi_closed);
   cv::floodFill(roi_closed, cv::Point(0, 0), cv::Scalar(128));
   cv::compare(roi_closed, 128, roi_closed, cv::CMP_NE);

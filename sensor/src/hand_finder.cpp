@@ -69,10 +69,11 @@ struct HandFinder::Impl {
   bool excluded = false;  // `arm` holds this frame's followed arm (grid cells, dilated)
   cv::Mat grid = cv::Mat(kGridH, kGridW, CV_16U);
   cv::Mat fg = cv::Mat(kGridH, kGridW, CV_8U);
-  cv::Mat fg_open, labels, stats, centroids, arm;
+  cv::Mat fg_open, labels, arm;
   cv::Mat candidate_mask, band_cells, band_region;  // find_arm_end's candidates
   std::vector<std::uint16_t> nearest;  // per component: nearest reading, and where
   std::vector<cv::Point> nearest_at;
+  std::vector<int> area;  // per component: cells
   std::vector<std::uint32_t> visited = std::vector<std::uint32_t>(kGridCells, 0);  // reaches_back's BFS
   std::uint32_t visit_generation = 0;
   std::vector<cv::Point> queue;
@@ -727,19 +728,26 @@ HandObservation HandFinder::Impl::find(std::span<const std::uint16_t> raw) {
     }
   }
   cv::morphologyEx(fg, fg_open, cv::MORPH_OPEN, kernel3);
-  const int n = cv::connectedComponentsWithStats(fg_open, labels, stats, centroids, 8, CV_32S);
+  // Labels only: OpenCV's statistics cost 3x the labelling (65 against 22 us here); the one used,
+  // the area, is counted below with the nearest reading.
+  const int n = cv::connectedComponents(fg_open, labels, 8, CV_32S);
 
   // 2. Per component: nearest reading; the component under the previous hand, else the nearest.
   nearest.assign(static_cast<std::size_t>(n), kNoReading);
   nearest_at.assign(static_cast<std::size_t>(n), cv::Point());
+  area.assign(static_cast<std::size_t>(n), 0);
   for (int gy = 0; gy < kGridH; ++gy) {
     const int* l = labels.ptr<int>(gy);
     const auto* g = grid.ptr<std::uint16_t>(gy);
-    for (int gx = 0; gx < kGridW; ++gx)
-      if (l[gx] > 0 && g[gx] < nearest[static_cast<std::size_t>(l[gx])]) {
-        nearest[static_cast<std::size_t>(l[gx])] = g[gx];
-        nearest_at[static_cast<std::size_t>(l[gx])] = {gx, gy};
+    for (int gx = 0; gx < kGridW; ++gx) {
+      if (l[gx] == 0) continue;
+      const auto c = static_cast<std::size_t>(l[gx]);
+      ++area[c];
+      if (g[gx] < nearest[c]) {
+        nearest[c] = g[gx];
+        nearest_at[c] = {gx, gy};
       }
+    }
   }
   int chosen = 0;
   const bool continuing = tracking;
@@ -749,7 +757,7 @@ HandObservation HandFinder::Impl::find(std::span<const std::uint16_t> raw) {
     for (int gy = std::max(0, previous_cell.y - 12); gy < std::min(kGridH, previous_cell.y + 13); ++gy) {
       const int* l = labels.ptr<int>(gy);
       for (int gx = std::max(0, previous_cell.x - 12); gx < std::min(kGridW, previous_cell.x + 13); ++gx) {
-        if (l[gx] == 0 || stats.at<int>(l[gx], cv::CC_STAT_AREA) < params.min_component_cells) continue;
+        if (l[gx] == 0 || area[static_cast<std::size_t>(l[gx])] < params.min_component_cells) continue;
         const double d2 = (gx - previous_cell.x) * (gx - previous_cell.x) + (gy - previous_cell.y) * (gy - previous_cell.y);
         if (d2 < best) {
           best = d2;
@@ -761,7 +769,7 @@ HandObservation HandFinder::Impl::find(std::span<const std::uint16_t> raw) {
   if (chosen == 0) {
     std::uint16_t best = kNoReading;
     for (int c = 1; c < n; ++c)
-      if (stats.at<int>(c, cv::CC_STAT_AREA) >= params.min_component_cells && nearest[static_cast<std::size_t>(c)] < best) {
+      if (area[static_cast<std::size_t>(c)] >= params.min_component_cells && nearest[static_cast<std::size_t>(c)] < best) {
         best = nearest[static_cast<std::size_t>(c)];
         chosen = c;
       }

@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <vector>
 
@@ -85,6 +87,43 @@ void learn_background_row(const std::uint16_t* __restrict grid_row, const std::u
                                 ((mask(length >= kSteadyFrames) & nearer) | mask(length >= kLongSteadyFrames));
     stable[gx] = static_cast<std::uint16_t>((learn & value) | (inv(learn) & s));
   }
+}
+
+/// The smallest reading in a grid row among the cells with a reading other than 0 and not marked
+/// in `tried`; kNoReading when there is none.
+std::uint16_t untried_row_minimum(const std::uint16_t* __restrict grid_row, const std::uint8_t* __restrict tried) {
+  std::uint16_t best = kNoReading;
+  for (int gx = 0; gx < kGridW; ++gx) {
+    const std::uint16_t candidate = (tried[gx] != 0) | (grid_row[gx] == 0) ? kNoReading : grid_row[gx];
+    best = std::min(best, candidate);
+  }
+  return best;
+}
+
+/// The maximum of a distance transform (CV_32F, >= 0) and its first place in row order, as
+/// cv::minMaxLoc gives it, for a third of its work: non-negative floats order as their bit
+/// patterns do, so each row's maximum is an integer reduction, which vectorises.
+void distance_peak(const cv::Mat& dist, double& peak, cv::Point& at) {
+  std::int32_t best = -1;
+  int best_row = 0;
+  for (int y = 0; y < dist.rows; ++y) {
+    const float* __restrict row = dist.ptr<float>(y);
+    std::int32_t row_max = -1;
+    for (int x = 0; x < dist.cols; ++x) {
+      std::int32_t bits = 0;
+      std::memcpy(&bits, row + x, sizeof bits);
+      row_max = std::max(row_max, bits);
+    }
+    if (row_max > best) {
+      best = row_max;
+      best_row = y;
+    }
+  }
+  const float* row = dist.ptr<float>(best_row);
+  int x = 0;
+  while (x + 1 < dist.cols && std::bit_cast<std::int32_t>(row[x]) != best) ++x;
+  at = {x, best_row};
+  peak = row[x];
 }
 }  // namespace
 
@@ -330,7 +369,7 @@ bool HandFinder::Impl::measure_in_band(std::span<const std::uint16_t> raw, const
   cv::distanceTransform(roi_closed, roi_dist, cv::DIST_L2, cv::DIST_MASK_5);
   double max_dist = 0;
   cv::Point max_at;
-  cv::minMaxLoc(roi_dist, nullptr, &max_dist, nullptr, &max_at);
+  distance_peak(roi_dist, max_dist, max_at);
   if (max_dist < 2.0) return false;
   cv::Point2d centre = plateau_centre(roi_dist, max_dist, max_at);
   // A palm turned away from the sensor is foreshortened across the turn, and its far side falls
@@ -577,7 +616,7 @@ bool HandFinder::Impl::measure_turned_palm(std::span<const std::uint16_t> raw, c
   cv::distanceTransform(rectified_closed, rectified_dist, cv::DIST_L2, cv::DIST_MASK_5);
   double peak = 0;
   cv::Point peak_at;
-  cv::minMaxLoc(rectified_dist, nullptr, &peak, nullptr, &peak_at);
+  distance_peak(rectified_dist, peak, peak_at);
   if (peak < 2.0) return false;
   const cv::Point2d c = plateau_centre(rectified_dist, peak, peak_at);
   const Eigen::Vector3d centre = palm_grid.point(c.x, c.y);
@@ -685,18 +724,21 @@ bool HandFinder::Impl::find_arm_end(std::span<const std::uint16_t> raw, Palm& pa
   candidate_mask.setTo(0);
   const auto& k = model.intrinsics();
   for (int attempt = 0; attempt < kCandidates; ++attempt) {
+    // The nearest reading not tried yet, the first in row order among equals: each row's minimum
+    // by masks (it vectorises), then the place of the best one.
     std::uint16_t near_raw = kNoReading;
-    cv::Point seed{-1, -1};
+    int seed_row = -1;
     for (int gy = 0; gy < kGridH; ++gy) {
-      const auto* g = grid.ptr<std::uint16_t>(gy);
-      const auto* c = candidate_mask.ptr<std::uint8_t>(gy);
-      for (int gx = 0; gx < kGridW; ++gx)
-        if (g[gx] < near_raw && !c[gx] && g[gx] > 0) {
-          near_raw = g[gx];
-          seed = {gx, gy};
-        }
+      const std::uint16_t row_min = untried_row_minimum(grid.ptr<std::uint16_t>(gy), candidate_mask.ptr<std::uint8_t>(gy));
+      if (row_min < near_raw) {
+        near_raw = row_min;
+        seed_row = gy;
+      }
     }
-    if (seed.x < 0) return false;
+    if (seed_row < 0) return false;
+    cv::Point seed{0, seed_row};
+    for (const auto* g = grid.ptr<std::uint16_t>(seed_row); g[seed.x] != near_raw || candidate_mask.at<std::uint8_t>(seed); ++seed.x) {
+    }
     // The candidate: the grid cells within the depth band connected to the seed.
     const std::uint16_t far_raw = band_limit[near_raw];
     cv::compare(grid, far_raw, band_cells, cv::CMP_LE);

@@ -190,8 +190,13 @@ struct HandFinder::Impl {
   HandObservation find(std::span<const std::uint16_t> raw);
   void update_background(const cv::Mat* exclude);
   bool measure(std::span<const std::uint16_t> raw, const cv::Rect& cells, std::uint16_t near_raw, cv::Point seed_cell, Palm& palm);
+  /// Sides of the ROI (for measure_in_band's `grow` and `touched`).
+  enum Side : int { kLeft = 1, kTop = 2, kRight = 4, kBottom = 8 };
+  /// Steps 3-4 in the depth band [near_raw, far_raw]: the ROI is the cells' box padded by a palm
+  /// diameter, twice that on the sides in `grow`; `touched` says where the band's region met it.
   bool measure_in_band(std::span<const std::uint16_t> raw, const cv::Rect& cells, std::uint16_t near_raw, std::uint16_t far_raw,
-                       cv::Point seed_cell, Palm& palm);
+                       cv::Point seed_cell, Palm& palm, int grow);
+  int touched = 0;
   bool reaches_back(cv::Point seed, std::uint16_t near_raw);
   /// A plane (camera frame, metres) through the readings under a mask.
   struct Plane {
@@ -300,29 +305,37 @@ void HandFinder::reset() {
 /// `near_raw` at grid cell `seed_cell`. Fills `palm`; false when no palm-like region is there.
 bool HandFinder::Impl::measure(std::span<const std::uint16_t> raw, const cv::Rect& cells, std::uint16_t near_raw,
                                cv::Point seed_cell, Palm& palm) {
-  if (!measure_in_band(raw, cells, near_raw, band_limit[near_raw], seed_cell, palm)) return false;
+  if (!measure_in_band(raw, cells, near_raw, band_limit[near_raw], seed_cell, palm, 0)) return false;
+  // No palm, and the band's region was cut by the ROI (made from the foreground's cells, which may
+  // hold only part of the hand: one rising through where the arm rested is less than foreground_m
+  // in front of it there): measured again with the ROI grown by a palm diameter on those sides.
+  if (!palm_sized(palm) && touched != 0) {
+    Palm grown;
+    if (measure_in_band(raw, cells, near_raw, band_limit[near_raw], seed_cell, grown, touched) && palm_sized(grown)) palm = grown;
+  }
   // A circle much larger than a palm: the band reached something just behind the hand (a hand
   // against the chest, the torso 5-8 cm behind). A flat palm and its fingers lie within a few cm.
   // Halved again (1.75 cm) where the torso is nearer still.
   const double z_near = model.metres(near_raw);
   for (double band = params.narrow_band_m; palm.radius_m > params.narrow_band_above_m && band >= 0.015; band /= 2) {
     Palm narrow;
-    if (!measure_in_band(raw, cells, near_raw, raw_limit(z_near + band, true), seed_cell, narrow)) break;
+    if (!measure_in_band(raw, cells, near_raw, raw_limit(z_near + band, true), seed_cell, narrow, 0)) break;
     palm = narrow;
   }
   return true;
 }
 
 bool HandFinder::Impl::measure_in_band(std::span<const std::uint16_t> raw, const cv::Rect& cells, std::uint16_t near_raw,
-                                       std::uint16_t far_raw, cv::Point seed_cell, Palm& palm) {
+                                       std::uint16_t far_raw, cv::Point seed_cell, Palm& palm, int grow) {
   // Near the body part of the palm may be less than foreground_m in front of what was there
   // before, so at full resolution the depth band and connectivity bound the hand, in a ROI
   // grown by a palm diameter.
   const auto& k = model.intrinsics();
   const int pad = static_cast<int>(std::ceil(2 * params.palm_radius_m * k.fx / std::max(0.3f, model.metres(near_raw)))) + 4;
-  const int px0 = std::max(0, cells.x * kStep - pad), py0 = std::max(0, cells.y * kStep - pad);
-  const int px1 = std::min(kDepthWidth, (cells.x + cells.width) * kStep + pad);
-  const int py1 = std::min(kDepthHeight, (cells.y + cells.height) * kStep + pad);
+  const int px0 = std::max(0, cells.x * kStep - pad * ((grow & kLeft) ? 2 : 1));
+  const int py0 = std::max(0, cells.y * kStep - pad * ((grow & kTop) ? 2 : 1));
+  const int px1 = std::min(kDepthWidth, (cells.x + cells.width) * kStep + pad * ((grow & kRight) ? 2 : 1));
+  const int py1 = std::min(kDepthHeight, (cells.y + cells.height) * kStep + pad * ((grow & kBottom) ? 2 : 1));
   int rx0 = px0, ry0 = py0, rx1 = px1, ry1 = py1;  // the ROI; shrunk to the hand below
 
   // Full-resolution hand mask in the ROI, with a zero border so the image edge bounds the palm.
@@ -348,6 +361,10 @@ bool HandFinder::Impl::measure_in_band(std::span<const std::uint16_t> raw, const
   if (roi_mask.at<std::uint8_t>(seed) != 255) return false;
   cv::Rect filled;
   cv::floodFill(roi_mask, seed, cv::Scalar(128), &filled);
+  // Where the band's region reaches the ROI's edge inside the image (measure grows the ROI there).
+  touched = (filled.x == 1 && px0 > 0 ? kLeft : 0) | (filled.y == 1 && py0 > 0 ? kTop : 0) |
+            (filled.x + filled.width == roi_rect.width - 1 && px1 < kDepthWidth ? kRight : 0) |
+            (filled.y + filled.height == roi_rect.height - 1 && py1 < kDepthHeight ? kBottom : 0);
   // From here on, the ROI is the hand's bounding box with a zero border (the filled region never
   // touches the ROI's border): the hole filling and the distance transform, ~10% of tachi-sensor's
   // time, then cover the hand rather than the padded ROI. A turned palm goes back to the whole ROI.

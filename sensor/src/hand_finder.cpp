@@ -31,7 +31,7 @@ constexpr double kPalmRefitBandM = 0.010;    // a candidate's plane: the reading
 constexpr double kPalmRefitRadiusM = 0.035;  // ... and this near the candidate
 constexpr int kPalmPlanePasses = 2;
 constexpr double kPalmSearchM = 0.07;        // the palm's circle is sought this near the palm found
-constexpr double kMinPalmViewCos = 0.407;    // cos 66 degrees: the most oblique palm (to the line of sight) reported
+constexpr double kMinPalmViewCos = 0.454;    // cos 63 degrees: the most oblique palm (to the line of sight) reported
 constexpr double kViewCosSlack = 0.1;         // ~6 degrees, for the first, rough plane
 constexpr double kCellM = 0.002;             // grid step in the palm's plane
 
@@ -639,7 +639,7 @@ bool HandFinder::Impl::measure_turned_palm(std::span<const std::uint16_t> raw, c
   const Eigen::Vector3d centre = palm_grid.point(c.x, c.y);
   if (centre.z() <= 0) return false;
   // Seen more obliquely than this, the palm is a strip narrower than the overlapping fingers and
-  // the flattest place is among them (measured: 7 cm off at 67-77 degrees): not reported.
+  // the flattest place may be among them (measured: 6-7 cm off at 63-77 degrees): not reported.
   if (-plane.normal.dot(centre.normalized()) < kMinPalmViewCos) return false;
   // Share of the circle with readings (before the holes were filled).
   cv::warpPerspective(roi_mask, rectified_mask, palm_grid.grid_to_roi, palm_grid.size, cv::INTER_NEAREST | cv::WARP_INVERSE_MAP,

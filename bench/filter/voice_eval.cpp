@@ -66,11 +66,16 @@ int main(int argc, char** argv) try {
   app.name("tachi-voice-eval");
   VoiceConfig commands;
   std::optional<double> threshold;
+  std::optional<double> phone_loop;
+  app.add_option("--phone-loop-probability", phone_loop, "pocketsphinx's -kws_plp, e.g. 1e-6 (default: the config's, 0.1)")
+      ->check(CLI::Range(1e-300, 1.0));
   app.add_option("threshold", threshold, "kws threshold for both default phrases, e.g. 1e-30 (default: the config's)")
       ->check(CLI::Range(1e-100, 1.0));
   if (const int rc = tachi::common::parse(app, argc, argv); rc >= 0) return rc;
   if (threshold) for (auto& p : commands.phrases) p.threshold = *threshold;
-  std::printf("default phrases at thresholds %g / %g\n", commands.phrases[0].threshold, commands.phrases[1].threshold);
+  if (phone_loop) commands.phone_loop_probability = *phone_loop;
+  std::printf("default phrases at thresholds %g / %g, phone-loop probability %g\n", commands.phrases[0].threshold,
+              commands.phrases[1].threshold, commands.phone_loop_probability);
   const auto t0 = std::chrono::steady_clock::now();
   std::printf("%-58s %5s %8s %8s %6s %7s %8s\n", "group", "cmds", "detected", "rate", "wrong", "f.alarm", "audio_s");
 

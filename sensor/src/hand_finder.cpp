@@ -2,11 +2,14 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <vector>
 
-#include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
+#include <Eigen/Geometry>
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -17,6 +20,111 @@ constexpr int kGridW = kDepthWidth / kStep;
 constexpr int kGridH = kDepthHeight / kStep;
 constexpr int kGridCells = kGridW * kGridH;
 constexpr std::uint16_t kUnknown = 0;  // background not seen yet (raw 0 is nearer than the Kinect's range)
+// A turned palm (measure_turned_palm).
+constexpr double kTurnedHandBandM = 0.025;   // the hand (palm, fingers, thumb) lies within ~2 cm of the palm's plane
+constexpr double kPalmBandM = 0.005;         // the palm within a few mm of it (depth noise ~1.5 mm across a turned palm at
+                                             // 1 m); the round sides of fingers curve away by up to their radius, ~8 mm
+constexpr double kPalmSquareM = 0.05;        // a square this wide fits in a palm (8 x 9 cm)
+constexpr double kMinPalmCover = 0.5;        // ... at least this share of it with flat readings
+constexpr int kPalmCandidates = 3;           // best-covered places compared (fingers, palm, wrist)
+constexpr double kPalmRefitBandM = 0.010;    // a candidate's plane: the readings this near the hand's plane ...
+constexpr double kPalmRefitRadiusM = 0.035;  // ... and this near the candidate
+constexpr int kPalmPlanePasses = 2;
+constexpr double kPalmSearchM = 0.07;        // the palm's circle is sought this near the palm found
+constexpr double kMinPalmViewCos = 0.454;    // cos 63 degrees: the most oblique palm (to the line of sight) reported
+constexpr double kViewCosSlack = 0.1;         // ~6 degrees, for the first, rough plane
+constexpr double kCellM = 0.002;             // grid step in the palm's plane
+
+/// Sub-pixel centre of a distance transform's maximum `peak` at `at`: the centroid of its plateau
+/// (values within 1 px of the maximum), weighted by the height above it.
+cv::Point2d plateau_centre(const cv::Mat& dist, double peak, cv::Point at) {
+  double su = 0, sv = 0, sw = 0;
+  const float plateau = static_cast<float>(peak - 1.0);
+  const int r = static_cast<int>(std::ceil(peak));
+  for (int y = std::max(0, at.y - r); y < std::min(dist.rows, at.y + r + 1); ++y) {
+    const float* dr = dist.ptr<float>(y);
+    for (int x = std::max(0, at.x - r); x < std::min(dist.cols, at.x + r + 1); ++x)
+      if (dr[x] >= plateau) {
+        const double w = dr[x] - plateau;
+        su += w * x;
+        sv += w * y;
+        sw += w;
+      }
+  }
+  return {su / sw, sv / sw};
+}
+
+/// One grid row of HandFinder's background learning (update_background): a reading steady for
+/// kSteadyFrames becomes the background where it is nearer than the current one (a resting arm,
+/// an object put down later); a steady one replaces it whatever its depth after kLongSteadyFrames
+/// (an object removed); cells marked in `exclude` (the followed arm) keep their background.
+/// Written with masks rather than branches, so that it vectorises: noise makes "steady"
+/// unpredictable, and with branches this was 46 instructions a cell (7x the time).
+void learn_background_row(const std::uint16_t* __restrict grid_row, const std::uint8_t* __restrict exclude,
+                          std::uint16_t* __restrict stable, std::uint16_t* __restrict farthest, std::uint16_t* __restrict run_value,
+                          std::uint16_t* __restrict run_length) {
+  constexpr std::uint16_t kSteadyFrames = 10;
+  constexpr std::uint16_t kLongSteadyFrames = 300;
+  const auto mask = [](bool b) { return static_cast<std::uint16_t>(-static_cast<int>(b)); };  // 0xffff or 0
+  const auto inv = [](std::uint16_t m) { return static_cast<std::uint16_t>(~m); };
+  for (int gx = 0; gx < kGridW; ++gx) {
+    const std::uint16_t d = grid_row[gx], v = run_value[gx], l = run_length[gx], s = stable[gx], f = farthest[gx];
+    const std::uint16_t valid = mask(d < kNoReading);
+    // Steady: within ~1 cm (a few raw units, more at long range where noise is larger).
+    const auto tolerance = static_cast<std::uint16_t>(2 + (v >> 8));
+    const auto difference = static_cast<std::uint16_t>(std::max(d, v) - std::min(d, v));
+    const std::uint16_t steady = mask(difference <= tolerance);
+    const auto grown = static_cast<std::uint16_t>(l + (l != 0xffff));
+    const std::uint16_t moved = valid & inv(steady);
+    const auto length = static_cast<std::uint16_t>((valid & steady & grown) | (moved & 1) | (inv(valid) & l));
+    const auto value = static_cast<std::uint16_t>((moved & d) | (inv(moved) & v));
+    const std::uint16_t further = valid & mask(d > f);
+    farthest[gx] = static_cast<std::uint16_t>((further & d) | (inv(further) & f));
+    run_length[gx] = length;
+    run_value[gx] = value;
+    const std::uint16_t nearer = mask((s == kUnknown) | (value < s));
+    const std::uint16_t learn = valid & inv(mask(exclude[gx] != 0)) &
+                                ((mask(length >= kSteadyFrames) & nearer) | mask(length >= kLongSteadyFrames));
+    stable[gx] = static_cast<std::uint16_t>((learn & value) | (inv(learn) & s));
+  }
+}
+
+/// The smallest reading in a grid row among the cells with a reading other than 0 and not marked
+/// in `tried`; kNoReading when there is none.
+std::uint16_t untried_row_minimum(const std::uint16_t* __restrict grid_row, const std::uint8_t* __restrict tried) {
+  std::uint16_t best = kNoReading;
+  for (int gx = 0; gx < kGridW; ++gx) {
+    const std::uint16_t candidate = (tried[gx] != 0) | (grid_row[gx] == 0) ? kNoReading : grid_row[gx];
+    best = std::min(best, candidate);
+  }
+  return best;
+}
+
+/// The maximum of a distance transform (CV_32F, >= 0) and its first place in row order, as
+/// cv::minMaxLoc gives it, for a third of its work: non-negative floats order as their bit
+/// patterns do, so each row's maximum is an integer reduction, which vectorises.
+void distance_peak(const cv::Mat& dist, double& peak, cv::Point& at) {
+  std::int32_t best = -1;
+  int best_row = 0;
+  for (int y = 0; y < dist.rows; ++y) {
+    const float* __restrict row = dist.ptr<float>(y);
+    std::int32_t row_max = -1;
+    for (int x = 0; x < dist.cols; ++x) {
+      std::int32_t bits = 0;
+      std::memcpy(&bits, row + x, sizeof bits);
+      row_max = std::max(row_max, bits);
+    }
+    if (row_max > best) {
+      best = row_max;
+      best_row = y;
+    }
+  }
+  const float* row = dist.ptr<float>(best_row);
+  int x = 0;
+  while (x + 1 < dist.cols && std::bit_cast<std::int32_t>(row[x]) != best) ++x;
+  at = {x, best_row};
+  peak = row[x];
+}
 }  // namespace
 
 struct HandFinder::Impl {
@@ -35,10 +143,11 @@ struct HandFinder::Impl {
   bool excluded = false;  // `arm` holds this frame's followed arm (grid cells, dilated)
   cv::Mat grid = cv::Mat(kGridH, kGridW, CV_16U);
   cv::Mat fg = cv::Mat(kGridH, kGridW, CV_8U);
-  cv::Mat fg_open, labels, stats, centroids, arm;
+  cv::Mat fg_open, labels, arm;
   cv::Mat candidate_mask, band_cells, band_region;  // find_arm_end's candidates
   std::vector<std::uint16_t> nearest;  // per component: nearest reading, and where
   std::vector<cv::Point> nearest_at;
+  std::vector<int> area;  // per component: cells
   std::vector<std::uint32_t> visited = std::vector<std::uint32_t>(kGridCells, 0);  // reaches_back's BFS
   std::uint32_t visit_generation = 0;
   std::vector<cv::Point> queue;
@@ -81,13 +190,47 @@ struct HandFinder::Impl {
   HandObservation find(std::span<const std::uint16_t> raw);
   void update_background(const cv::Mat* exclude);
   bool measure(std::span<const std::uint16_t> raw, const cv::Rect& cells, std::uint16_t near_raw, cv::Point seed_cell, Palm& palm);
+  /// Sides of the ROI (for measure_in_band's `grow` and `touched`).
+  enum Side : int { kLeft = 1, kTop = 2, kRight = 4, kBottom = 8 };
+  /// Steps 3-4 in the depth band [near_raw, far_raw]: the ROI is the cells' box padded by a palm
+  /// diameter, twice that on the sides in `grow`; `touched` says where the band's region met it.
   bool measure_in_band(std::span<const std::uint16_t> raw, const cv::Rect& cells, std::uint16_t near_raw, std::uint16_t far_raw,
-                       cv::Point seed_cell, Palm& palm);
+                       cv::Point seed_cell, Palm& palm, int grow);
+  int touched = 0;
   bool reaches_back(cv::Point seed, std::uint16_t near_raw);
-  bool turned_palm_stretch(std::span<const std::uint16_t> raw, int rx0, int ry0, int rx1, int ry1);
-  cv::Matx23d stretch, unstretch;  // turned_palm_stretch's ROI -> stretched image, and back
-  cv::Size stretched_size;
-  cv::Mat roi_stretched, stretched_dist;
+  /// A plane (camera frame, metres) through the readings under a mask.
+  struct Plane {
+    Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+    Eigen::Vector3d normal = -Eigen::Vector3d::UnitZ();  ///< unit, toward the sensor
+  };
+  struct Roi {
+    int x0, y0, x1, y1;  ///< [x0, x1) x [y0, y1) of the frame; roi_mask and its kin have a 1 px border around it
+  };
+  /// A metric grid in a plane: cell (i, j) is the point origin + kCellM (i e1 + j e2).
+  struct PlaneGrid {
+    Eigen::Vector3d origin = Eigen::Vector3d::Zero(), e1 = Eigen::Vector3d::UnitX(), e2 = Eigen::Vector3d::UnitY();
+    cv::Size size;
+    cv::Matx33d grid_to_roi;  ///< homography: grid cell -> ROI pixel
+    Eigen::Vector3d point(double i, double j) const { return origin + kCellM * (i * e1 + j * e2); }
+  };
+  bool fit_plane(std::span<const std::uint16_t> raw, const Roi& roi, Plane& plane, double* spread_m = nullptr);
+  static bool plane_through(const Eigen::Matrix3d& outer, const Eigen::Vector3d& sum, int count, Plane& plane,
+                            double* spread_m = nullptr);
+  void plane_band_mask(std::span<const std::uint16_t> raw, const Roi& roi, const Plane& plane, double band);
+  void select_near_plane(const Plane& plane, double band, const Eigen::Vector3d* centre, double radius, bool mark);
+  bool fit_selected(Plane& plane, double* spread_m = nullptr) const;
+  bool make_plane_grid(const Roi& roi, const Plane& plane, PlaneGrid& out) const;
+  bool measure_turned_palm(std::span<const std::uint16_t> raw, const Roi& roi, cv::Point seed, Plane plane, Palm& palm);
+  cv::Mat rectified_closed, rectified_mask, rectified_dist, rectified_cover;  // measure_turned_palm's view of the palm plane
+  cv::Mat roi_hand;  // measure_turned_palm's hand region (a view of roi_hand_buffer)
+  struct HandPoint {
+    Eigen::Vector3d point;  ///< camera frame, metres
+    int mask_offset;        ///< its byte in roi_mask (and roi_hand)
+  };
+  std::vector<HandPoint> hand_points;  // the hand region's readings
+  std::vector<std::size_t> selected;   // select_near_plane's choice among them
+
+  cv::Mat roi_hand_buffer = cv::Mat(kDepthHeight + 2, kDepthWidth + 2, CV_8U);
   bool find_arm_end(std::span<const std::uint16_t> raw, Palm& palm, cv::Point& seed);
   bool palm_accepted(const Palm& palm) const;
   bool jumped(const Palm& palm) const;
@@ -113,38 +256,27 @@ struct HandFinder::Impl {
 /// object removed). Cells of the arm being followed are left alone, so a pausing hand stays
 /// foreground. The first frame is taken as background at once.
 void HandFinder::Impl::update_background(const cv::Mat* exclude) {
-  constexpr std::uint16_t kSteadyFrames = 10;
-  constexpr std::uint16_t kLongSteadyFrames = 300;
-  for (int gy = 0; gy < kGridH; ++gy) {
-    const auto* g = grid.ptr<std::uint16_t>(gy);
-    const std::uint8_t* ex = exclude ? exclude->ptr<std::uint8_t>(gy) : nullptr;
-    const std::size_t base = static_cast<std::size_t>(gy) * kGridW;
-    for (int gx = 0; gx < kGridW; ++gx) {
-      const std::uint16_t d = g[gx];
-      if (d >= kNoReading) continue;
-      const std::size_t i = base + gx;
-      if (d > farthest[i]) farthest[i] = d;
-      if (first_frame) {
-        stable[i] = d;
-        run_value[i] = d;
-        run_length[i] = 1;
-        continue;
-      }
-      // Steady: within ~1 cm (a few raw units, more at long range where noise is larger).
-      const int tolerance = 2 + run_value[i] / 256;
-      if (std::abs(static_cast<int>(d) - static_cast<int>(run_value[i])) <= tolerance) {
-        if (run_length[i] < 65535) ++run_length[i];
-      } else {
-        run_value[i] = d;
+  if (first_frame) {
+    for (int gy = 0; gy < kGridH; ++gy) {
+      const auto* g = grid.ptr<std::uint16_t>(gy);
+      for (int gx = 0; gx < kGridW; ++gx) {
+        const std::uint16_t d = g[gx];
+        if (d >= kNoReading) continue;
+        const std::size_t i = static_cast<std::size_t>(gy) * kGridW + gx;
+        farthest[i] = std::max(farthest[i], d);
+        stable[i] = run_value[i] = d;
         run_length[i] = 1;
       }
-      if (ex && ex[gx]) continue;
-      if ((run_length[i] >= kSteadyFrames && (stable[i] == kUnknown || run_value[i] < stable[i])) ||
-          run_length[i] >= kLongSteadyFrames)
-        stable[i] = run_value[i];
     }
+    first_frame = false;
+    return;
   }
-  first_frame = false;
+  static const std::array<std::uint8_t, kGridW> kNoExclusion{};
+  for (int gy = 0; gy < kGridH; ++gy) {
+    const std::size_t base = static_cast<std::size_t>(gy) * kGridW;
+    learn_background_row(grid.ptr<std::uint16_t>(gy), exclude ? exclude->ptr<std::uint8_t>(gy) : kNoExclusion.data(),
+                         stable.data() + base, farthest.data() + base, run_value.data() + base, run_length.data() + base);
+  }
 }
 
 void use_one_opencv_thread() { cv::setNumThreads(0); }  // 0: no pool, everything in the caller
@@ -173,53 +305,78 @@ void HandFinder::reset() {
 /// `near_raw` at grid cell `seed_cell`. Fills `palm`; false when no palm-like region is there.
 bool HandFinder::Impl::measure(std::span<const std::uint16_t> raw, const cv::Rect& cells, std::uint16_t near_raw,
                                cv::Point seed_cell, Palm& palm) {
-  if (!measure_in_band(raw, cells, near_raw, band_limit[near_raw], seed_cell, palm)) return false;
+  if (!measure_in_band(raw, cells, near_raw, band_limit[near_raw], seed_cell, palm, 0)) return false;
+  // No palm, and the band's region was cut by the ROI (made from the foreground's cells, which may
+  // hold only part of the hand: one rising through where the arm rested is less than foreground_m
+  // in front of it there): measured again with the ROI grown by a palm diameter on those sides.
+  if (!palm_sized(palm) && touched != 0) {
+    Palm grown;
+    if (measure_in_band(raw, cells, near_raw, band_limit[near_raw], seed_cell, grown, touched) && palm_sized(grown)) palm = grown;
+  }
   // A circle much larger than a palm: the band reached something just behind the hand (a hand
   // against the chest, the torso 5-8 cm behind). A flat palm and its fingers lie within a few cm.
   // Halved again (1.75 cm) where the torso is nearer still.
   const double z_near = model.metres(near_raw);
   for (double band = params.narrow_band_m; palm.radius_m > params.narrow_band_above_m && band >= 0.015; band /= 2) {
     Palm narrow;
-    if (!measure_in_band(raw, cells, near_raw, raw_limit(z_near + band, true), seed_cell, narrow)) break;
+    if (!measure_in_band(raw, cells, near_raw, raw_limit(z_near + band, true), seed_cell, narrow, 0)) break;
     palm = narrow;
   }
   return true;
 }
 
 bool HandFinder::Impl::measure_in_band(std::span<const std::uint16_t> raw, const cv::Rect& cells, std::uint16_t near_raw,
-                                       std::uint16_t far_raw, cv::Point seed_cell, Palm& palm) {
+                                       std::uint16_t far_raw, cv::Point seed_cell, Palm& palm, int grow) {
   // Near the body part of the palm may be less than foreground_m in front of what was there
   // before, so at full resolution the depth band and connectivity bound the hand, in a ROI
   // grown by a palm diameter.
   const auto& k = model.intrinsics();
   const int pad = static_cast<int>(std::ceil(2 * params.palm_radius_m * k.fx / std::max(0.3f, model.metres(near_raw)))) + 4;
-  const int rx0 = std::max(0, cells.x * kStep - pad), ry0 = std::max(0, cells.y * kStep - pad);
-  const int rx1 = std::min(kDepthWidth, (cells.x + cells.width) * kStep + pad);
-  const int ry1 = std::min(kDepthHeight, (cells.y + cells.height) * kStep + pad);
-  const int rw = rx1 - rx0, rh = ry1 - ry0;
+  const int px0 = std::max(0, cells.x * kStep - pad * ((grow & kLeft) ? 2 : 1));
+  const int py0 = std::max(0, cells.y * kStep - pad * ((grow & kTop) ? 2 : 1));
+  const int px1 = std::min(kDepthWidth, (cells.x + cells.width) * kStep + pad * ((grow & kRight) ? 2 : 1));
+  const int py1 = std::min(kDepthHeight, (cells.y + cells.height) * kStep + pad * ((grow & kBottom) ? 2 : 1));
+  int rx0 = px0, ry0 = py0, rx1 = px1, ry1 = py1;  // the ROI; shrunk to the hand below
 
   // Full-resolution hand mask in the ROI, with a zero border so the image edge bounds the palm.
   // Views of full-frame buffers made once: a ROI of a new size allocates nothing.
-  const cv::Rect roi_rect(0, 0, rw + 2, rh + 2);
+  const cv::Rect roi_rect(0, 0, px1 - px0 + 2, py1 - py0 + 2);
   roi_mask = roi_mask_buffer(roi_rect);
-  roi_closed = roi_closed_buffer(roi_rect);
-  roi_dist = roi_dist_buffer(roi_rect);
-  roi_mask.setTo(0);
+  // The border rows and columns zero, every other pixel written: branch-free, so it vectorises (no
+  // reading, 2047, is beyond any far_raw).
+  roi_mask.row(0).setTo(0);
+  roi_mask.row(roi_mask.rows - 1).setTo(0);
   const std::uint16_t slack_raw = near_raw > 20 ? static_cast<std::uint16_t>(near_raw - 20) : 0;
+  const std::uint16_t band_far = std::min(far_raw, kMaxValidRaw);
   for (int y = ry0; y < ry1; ++y) {
-    const std::uint16_t* row = raw.data() + static_cast<std::size_t>(y) * kDepthWidth;
-    auto* m = roi_mask.ptr<std::uint8_t>(y - ry0 + 1) + 1;
-    for (int x = rx0; x < rx1; ++x) {
-      const std::uint16_t d = row[x];
-      if (d >= kNoReading) continue;
-      m[x - rx0] = (d <= far_raw && d >= slack_raw) ? 255 : 0;
-    }
+    const std::uint16_t* row = raw.data() + static_cast<std::size_t>(y) * kDepthWidth + rx0;
+    auto* m = roi_mask.ptr<std::uint8_t>(y - ry0 + 1);
+    m[0] = 0;
+    m[rx1 - rx0 + 1] = 0;
+    ++m;
+    for (int i = 0; i < rx1 - rx0; ++i) m[i] = (row[i] <= band_far && row[i] >= slack_raw) ? 255 : 0;
   }
   // The hand: the band's region connected to the arm's nearest reading.
   const cv::Point seed = seed_cell * kStep + cv::Point(kStep / 2 - rx0 + 1, kStep / 2 - ry0 + 1);
   if (roi_mask.at<std::uint8_t>(seed) != 255) return false;
-  cv::floodFill(roi_mask, seed, cv::Scalar(128));
+  cv::Rect filled;
+  cv::floodFill(roi_mask, seed, cv::Scalar(128), &filled);
+  // Where the band's region reaches the ROI's edge inside the image (measure grows the ROI there).
+  touched = (filled.x == 1 && px0 > 0 ? kLeft : 0) | (filled.y == 1 && py0 > 0 ? kTop : 0) |
+            (filled.x + filled.width == roi_rect.width - 1 && px1 < kDepthWidth ? kRight : 0) |
+            (filled.y + filled.height == roi_rect.height - 1 && py1 < kDepthHeight ? kBottom : 0);
+  // From here on, the ROI is the hand's bounding box with a zero border (the filled region never
+  // touches the ROI's border): the hole filling and the distance transform, ~10% of tachi-sensor's
+  // time, then cover the hand rather than the padded ROI. A turned palm goes back to the whole ROI.
+  const cv::Rect hand_rect(filled.x - 1, filled.y - 1, filled.width + 2, filled.height + 2);
+  roi_mask = roi_mask(hand_rect);
   cv::compare(roi_mask, 128, roi_mask, cv::CMP_EQ);
+  rx0 = px0 - 1 + hand_rect.x + 1;
+  ry0 = py0 - 1 + hand_rect.y + 1;
+  rx1 = rx0 + filled.width;
+  ry1 = ry0 + filled.height;
+  roi_closed = roi_closed_buffer(cv::Rect(0, 0, hand_rect.width, hand_rect.height));
+  roi_dist = roi_dist_buffer(cv::Rect(0, 0, hand_rect.width, hand_rect.height));
   // Holes in the hand (dropouts with hand all around) count as hand: flood the outside from the
   // zero border; whatever it cannot reach is hand or hole. Gaps between fingers open to the
   // outside, so fingers stay apart and do not widen the palm.
@@ -229,75 +386,61 @@ bool HandFinder::Impl::measure_in_band(std::span<const std::uint16_t> raw, const
   cv::distanceTransform(roi_closed, roi_dist, cv::DIST_L2, cv::DIST_MASK_5);
   double max_dist = 0;
   cv::Point max_at;
-  cv::minMaxLoc(roi_dist, nullptr, &max_dist, nullptr, &max_at);
+  distance_peak(roi_dist, max_dist, max_at);
   if (max_dist < 2.0) return false;
-  // Sub-pixel: centroid of the distance-transform plateau (within 1 px of the maximum).
-  const auto plateau_centre = [](const cv::Mat& dist, double peak, cv::Point at) {
-    double su = 0, sv = 0, sw = 0;
-    const float plateau = static_cast<float>(peak - 1.0);
-    const int r = static_cast<int>(std::ceil(peak));
-    for (int y = std::max(0, at.y - r); y < std::min(dist.rows, at.y + r + 1); ++y) {
-      const float* dr = dist.ptr<float>(y);
-      for (int x = std::max(0, at.x - r); x < std::min(dist.cols, at.x + r + 1); ++x)
-        if (dr[x] >= plateau) {
-          const double w = dr[x] - plateau;
-          su += w * x;
-          sv += w * y;
-          sw += w;
-        }
-    }
-    return cv::Point2d(su / sw, sv / sw);
-  };
   cv::Point2d centre = plateau_centre(roi_dist, max_dist, max_at);
-  double size_px = max_dist;  // the palm circle's radius, measured in the palm's plane
-  // A palm turned away from the sensor is foreshortened by cos(tilt) across the turn: its
-  // inscribed circle shrinks toward a forearm's (at 60 degrees to half a palm). Where the circle
-  // is too small, the palm plane is fitted to the mask's readings (least squares, z = a x + b y + c
-  // in metres) and the mask stretched by 1 / cos(tilt) along the depth gradient, undoing the
-  // foreshortening; the circle is then found in the stretched mask and mapped back.
+  // A palm turned away from the sensor is foreshortened across the turn, and its far side falls
+  // out of the depth band of the nearest reading (the thumb): its inscribed circle shrinks toward
+  // a forearm's. Where the circle is too small, the palm is measured in its own plane instead.
   const float z_near = model.metres(near_raw);
-  if (max_dist * z_near / k.fx < params.min_palm_radius_m && turned_palm_stretch(raw, rx0, ry0, rx1, ry1)) {
-    cv::warpAffine(roi_closed, roi_stretched, stretch, stretched_size, cv::INTER_NEAREST, cv::BORDER_CONSTANT, cv::Scalar(0));
-    cv::distanceTransform(roi_stretched, stretched_dist, cv::DIST_L2, cv::DIST_MASK_5);
-    double stretched_max = 0;
-    cv::minMaxLoc(stretched_dist, nullptr, &stretched_max, nullptr, &max_at);
-    if (stretched_max >= 2.0) {
-      const cv::Point2d c = plateau_centre(stretched_dist, stretched_max, max_at);
-      centre = {unstretch(0, 0) * c.x + unstretch(0, 1) * c.y + unstretch(0, 2),
-                unstretch(1, 0) * c.x + unstretch(1, 1) * c.y + unstretch(1, 2)};
-      size_px = stretched_max;
+  double circle_px = max_dist;  // radius in the image of the region whose readings give the depth
+  const auto turned_palm = [&] {
+    Plane plane;  // of the band's region, a first guess at the palm's
+    if (!fit_plane(raw, Roi{rx0, ry0, rx1, ry1}, plane)) return false;
+    roi_mask = roi_mask_buffer(roi_rect);
+    const bool measured = measure_turned_palm(raw, Roi{px0, py0, px1, py1}, max_at + hand_rect.tl(), plane, palm);
+    if (measured) {
+      rx0 = px0, ry0 = py0, rx1 = px1, ry1 = py1;
+    } else {
+      // Its masks may have replaced the band's region; no matter: a circle this small is no palm.
+      roi_mask = roi_mask_buffer(roi_rect)(hand_rect);
     }
-  }
-  const double u = rx0 - 1 + centre.x, v = ry0 - 1 + centre.y;
-
-  // Palm depth: median reading inside the palm circle.
-  palm_raw.clear();
-  const double r2 = max_dist * max_dist;
-  int circle_pixels = 0;
-  for (int y = std::max(ry0, static_cast<int>(v - max_dist)); y <= std::min(ry1 - 1, static_cast<int>(v + max_dist)); ++y) {
-    const std::uint16_t* row = raw.data() + static_cast<std::size_t>(y) * kDepthWidth;
-    const auto* m = roi_mask.ptr<std::uint8_t>(y - ry0 + 1) + 1;
-    for (int x = std::max(rx0, static_cast<int>(u - max_dist)); x <= std::min(rx1 - 1, static_cast<int>(u + max_dist)); ++x) {
-      if ((x - u) * (x - u) + (y - v) * (y - v) > r2) continue;
-      ++circle_pixels;
-      if (m[x - rx0]) palm_raw.push_back(row[x]);
+    return measured;
+  };
+  if (max_dist * z_near / k.fx < params.min_palm_radius_m && turned_palm()) {
+    circle_px = palm.radius_m * k.fx / palm.z;
+  } else {
+    const double u = rx0 - 1 + centre.x, v = ry0 - 1 + centre.y;
+    // Palm depth: median reading inside the palm circle.
+    palm_raw.clear();
+    const double r2 = max_dist * max_dist;
+    int circle_pixels = 0;
+    for (int y = std::max(ry0, static_cast<int>(v - max_dist)); y <= std::min(ry1 - 1, static_cast<int>(v + max_dist)); ++y) {
+      const std::uint16_t* row = raw.data() + static_cast<std::size_t>(y) * kDepthWidth;
+      const auto* m = roi_mask.ptr<std::uint8_t>(y - ry0 + 1) + 1;
+      for (int x = std::max(rx0, static_cast<int>(u - max_dist)); x <= std::min(rx1 - 1, static_cast<int>(u + max_dist)); ++x) {
+        if ((x - u) * (x - u) + (y - v) * (y - v) > r2) continue;
+        ++circle_pixels;
+        if (m[x - rx0]) palm_raw.push_back(row[x]);
+      }
     }
+    if (palm_raw.size() < 8) return false;
+    const auto mid = palm_raw.begin() + static_cast<std::ptrdiff_t>(palm_raw.size() / 2);
+    std::nth_element(palm_raw.begin(), mid, palm_raw.end());
+    palm.z = model.metres(*mid);
+    if (palm.z <= 0) return false;
+    palm.u = u;
+    palm.v = v;
+    palm.radius_m = max_dist * palm.z / k.fx;
+    palm.valid_fraction = static_cast<double>(palm_raw.size()) / std::max(1, circle_pixels);
   }
-  if (palm_raw.size() < 8) return false;
-  const auto mid = palm_raw.begin() + static_cast<std::ptrdiff_t>(palm_raw.size() / 2);
-  std::nth_element(palm_raw.begin(), mid, palm_raw.end());
-  palm.z = model.metres(*mid);
-  if (palm.z <= 0) return false;
-  palm.u = u;
-  palm.v = v;
-  palm.radius_m = size_px * palm.z / k.fx;
-  palm.valid_fraction = static_cast<double>(palm_raw.size()) / std::max(1, circle_pixels);
+  const double u = palm.u, v = palm.v;
 
   // Cut by the border: what is left of a palm half out of view (fingers, the upper palm) still
   // holds a palm-sized circle, centred up to 5 cm inward of the real one. Such a hand crosses the
   // border near the circle over most of a palm's width (a forearm crossing below a whole palm is
   // narrower) and its circle is smaller than a whole palm's.
-  const double reach = max_dist + 2 * params.palm_radius_m * k.fx / palm.z;
+  const double reach = circle_px + 2 * params.palm_radius_m * k.fx / palm.z;
   const double reach2 = reach * reach;
   const auto on_hand = [&](int x, int y) {
     return roi_mask.at<std::uint8_t>(y - ry0 + 1, x - rx0 + 1) != 0 && (x - u) * (x - u) + (y - v) * (y - v) < reach2;
@@ -317,47 +460,238 @@ bool HandFinder::Impl::measure_in_band(std::span<const std::uint16_t> raw, const
   return true;
 }
 
-/// Fits the palm plane to the hand mask's readings (roi_mask, ROI [rx0, rx1) x [ry0, ry1)) and,
-/// when it is turned more than ~30 degrees from the sensor, sets `stretch` (ROI -> stretched
-/// image: 1 / cos(tilt) along the image direction of the depth gradient), its inverse and the
-/// stretched size. False for a palm facing the sensor or too few readings.
-bool HandFinder::Impl::turned_palm_stretch(std::span<const std::uint16_t> raw, int rx0, int ry0, int rx1, int ry1) {
-  const auto& k = model.intrinsics();
-  Eigen::Matrix3d ata = Eigen::Matrix3d::Zero();
-  Eigen::Vector3d atb = Eigen::Vector3d::Zero();
+/// The plane through the readings under roi_mask (ROI [rx0, rx1) x [ry0, ry1)) by total least
+/// squares: through their centroid, normal to the direction of least variance (the smallest
+/// eigenvector of their covariance; Pearson 1901). Unlike z = a X + b Y + c it does not favour
+/// depth residuals, which matters for a palm turned toward edge-on. `spread_m`: the RMS distance
+/// of the readings to the plane. False with too few readings.
+bool HandFinder::Impl::fit_plane(std::span<const std::uint16_t> raw, const Roi& roi, Plane& plane, double* spread_m) {
+  const int rx0 = roi.x0, ry0 = roi.y0, rx1 = roi.x1, ry1 = roi.y1;
+  Eigen::Matrix3d outer = Eigen::Matrix3d::Zero();
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
   int count = 0;
   for (int y = ry0; y < ry1; ++y) {
     const std::uint16_t* row = raw.data() + static_cast<std::size_t>(y) * kDepthWidth;
     const auto* m = roi_mask.ptr<std::uint8_t>(y - ry0 + 1) + 1;
     for (int x = rx0; x < rx1; ++x) {
       if (!m[x - rx0]) continue;
-      const double z = model.metres(row[x]);
-      const Eigen::Vector3d a((x - k.cx) * z / k.fx, (y - k.cy) * z / k.fy, 1.0);
-      ata += a * a.transpose();
-      atb += a * z;
+      const Eigen::Vector3d q = model.back_project(x, y, model.metres(row[x]));
+      outer += q * q.transpose();
+      sum += q;
       ++count;
     }
   }
+  return plane_through(outer, sum, count, plane, spread_m);
+}
+
+/// The total-least-squares plane of `count` points given their sum of outer products and their sum.
+bool HandFinder::Impl::plane_through(const Eigen::Matrix3d& outer, const Eigen::Vector3d& sum, int count, Plane& plane,
+                                     double* spread_m) {
   if (count < 50) return false;
-  const Eigen::Vector3d plane = ata.ldlt().solve(atb);  // z = a X + b Y + c
-  const double g = std::hypot(plane.x(), plane.y());    // tan(tilt)
-  if (!std::isfinite(g) || g < 0.6 || g > 4.0) return false;  // under ~30 or beyond ~76 degrees
-  const double s = std::sqrt(1.0 + g * g);                    // 1 / cos(tilt)
-  const double cx = plane.x() / g, cy = plane.y() / g;        // image direction of the gradient
-  // M = I + (s - 1) d d^T, about the ROI's origin, then shifted so that nothing is negative.
-  cv::Matx22d m(1 + (s - 1) * cx * cx, (s - 1) * cx * cy, (s - 1) * cx * cy, 1 + (s - 1) * cy * cy);
-  const int w = roi_mask.cols, h = roi_mask.rows;
-  double minx = 0, miny = 0, maxx = 0, maxy = 0;
-  for (const cv::Point2d p : {cv::Point2d(0, 0), cv::Point2d(w, 0), cv::Point2d(0, h), cv::Point2d(w, h)}) {
-    const cv::Vec2d q = m * cv::Vec2d(p.x, p.y);
-    minx = std::min(minx, q[0]);
-    miny = std::min(miny, q[1]);
-    maxx = std::max(maxx, q[0]);
-    maxy = std::max(maxy, q[1]);
+  plane.centroid = sum / count;
+  const Eigen::Matrix3d covariance = outer / count - plane.centroid * plane.centroid.transpose();
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(covariance);
+  if (eigen.info() != Eigen::Success) return false;
+  plane.normal = eigen.eigenvectors().col(0);  // eigenvalues in increasing order
+  if (spread_m) *spread_m = std::sqrt(std::max(0.0, eigen.eigenvalues()(0)));  // RMS distance to the plane
+  if (plane.normal.z() > 0) plane.normal = -plane.normal;  // toward the sensor
+  return plane.normal.allFinite();
+}
+
+/// roi_mask = the ROI's readings within `band` metres of `plane` (perpendicular distance).
+void HandFinder::Impl::plane_band_mask(std::span<const std::uint16_t> raw, const Roi& roi, const Plane& plane, double band) {
+  const auto& k = model.intrinsics();
+  const Eigen::Vector3d& nrm = plane.normal;
+  const double offset = plane.centroid.dot(nrm);
+  roi_mask.setTo(0);
+  for (int y = roi.y0; y < roi.y1; ++y) {
+    const std::uint16_t* row = raw.data() + static_cast<std::size_t>(y) * kDepthWidth;
+    auto* m = roi_mask.ptr<std::uint8_t>(y - roi.y0 + 1) + 1;
+    const double ray_y = (y - k.cy) / k.fy;
+    for (int x = roi.x0; x < roi.x1; ++x) {
+      const std::uint16_t d = row[x];
+      if (d >= kNoReading) continue;
+      const double z = model.metres(d);
+      const double off = z * (nrm.x() * (x - k.cx) / k.fx + nrm.y() * ray_y + nrm.z()) - offset;  // in front of the plane
+      if (std::abs(off) <= band) m[x - roi.x0] = 255;
+    }
   }
-  stretch = cv::Matx23d(m(0, 0), m(0, 1), -minx, m(1, 0), m(1, 1), -miny);
-  cv::invertAffineTransform(stretch, unstretch);
-  stretched_size = cv::Size(static_cast<int>(std::ceil(maxx - minx)) + 1, static_cast<int>(std::ceil(maxy - miny)) + 1);
+}
+
+/// Selects the hand's readings within `band` metres of `plane`, and within `radius` of `centre` in
+/// the plane when given: their indices in `selected`, and with `mark`, roi_mask set at them (and
+/// only there).
+void HandFinder::Impl::select_near_plane(const Plane& plane, double band, const Eigen::Vector3d* centre, double radius,
+                                         bool mark) {
+  const double offset = plane.centroid.dot(plane.normal);
+  const double radius2 = radius * radius;
+  selected.clear();
+  if (mark) roi_mask.setTo(0);
+  for (std::size_t i = 0; i < hand_points.size(); ++i) {
+    const Eigen::Vector3d& q = hand_points[i].point;
+    const double off = q.dot(plane.normal) - offset;
+    if (std::abs(off) > band) continue;
+    if (centre && ((q - off * plane.normal) - *centre).squaredNorm() > radius2) continue;
+    selected.push_back(i);
+    if (mark) roi_mask.data[hand_points[i].mask_offset] = 255;
+  }
+}
+
+/// fit_plane over the selected hand readings.
+bool HandFinder::Impl::fit_selected(Plane& plane, double* spread_m) const {
+  Eigen::Matrix3d outer = Eigen::Matrix3d::Zero();
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  for (const std::size_t i : selected) {
+    const Eigen::Vector3d& q = hand_points[i].point;
+    outer += q * q.transpose();
+    sum += q;
+  }
+  return plane_through(outer, sum, static_cast<int>(selected.size()), plane, spread_m);
+}
+
+/// The palm of a hand turned more than ~30 degrees from the sensor, measured in its own plane.
+/// The plane is fitted to the hand mask (least squares), the mask rebuilt as the readings within
+/// kPlaneBandM of that plane connected to `seed` (so the palm's far side counts, the forearm and
+/// the back of the hand behind it do not), the plane refitted, twice; the filled mask is then
+/// resampled on a metric grid in the plane (a homography, H = K [e1 e2 p0]: Hartley & Zisserman,
+/// Multiple View Geometry, 2nd ed., sec. 8.1.1, the plane-to-image map), which undoes the
+/// foreshortening for the viewing ray's real angle. The palm centre is the centre of the largest
+/// inscribed circle there, as for a palm facing the sensor, mapped back onto the plane in 3D.
+/// False for a palm facing the sensor (tilt under ~30 degrees), one seen edge-on (beyond ~76), or
+/// a mask that does not hold.
+bool HandFinder::Impl::measure_turned_palm(std::span<const std::uint16_t> raw, const Roi& roi, cv::Point seed, Plane plane,
+                                           Palm& palm) {
+  const int rx0 = roi.x0, ry0 = roi.y0, rx1 = roi.x1, ry1 = roi.y1;
+  // Turned: the normal more than ~30 degrees off the optical axis, not beyond ~76 (edge-on).
+  const auto turned = [](const Plane& p) { return -p.normal.z() <= 0.86 && -p.normal.z() >= 0.24; };
+  if (!turned(plane)) return false;
+  // Already far beyond the most oblique palm reported (the fit of the band's region is within a
+  // few degrees of the palm's plane): spare the rest, which the arm's-end search would repeat.
+  if (-plane.normal.dot(plane.centroid.normalized()) < kMinPalmViewCos - kViewCosSlack) return false;
+  roi_hand = roi_hand_buffer(cv::Rect(0, 0, roi_mask.cols, roi_mask.rows));
+  // The hand: readings within kTurnedHandBandM of the plane, connected to the seed.
+  plane_band_mask(raw, roi, plane, kTurnedHandBandM);
+  if (roi_mask.at<std::uint8_t>(seed) != 255) return false;
+  cv::floodFill(roi_mask, seed, cv::Scalar(128));
+  cv::compare(roi_mask, 128, roi_hand, cv::CMP_EQ);
+  // From here on only the hand's readings matter: kept as points, so that each refit or band
+  // below costs a pass over ~3k points rather than over the ROI.
+  hand_points.clear();
+  for (int y = ry0; y < ry1; ++y) {
+    const std::uint16_t* row = raw.data() + static_cast<std::size_t>(y) * kDepthWidth;
+    const auto* m = roi_hand.ptr<std::uint8_t>(y - ry0 + 1) + 1;
+    const int offset = (y - ry0 + 1) * static_cast<int>(roi_hand.step[0]) + 1 - rx0;
+    for (int x = rx0; x < rx1; ++x)
+      if (m[x - rx0]) hand_points.push_back({model.back_project(x, y, model.metres(row[x])), offset + x});
+  }
+  select_near_plane(plane, kTurnedHandBandM, nullptr, 0.0, false);
+  if (!fit_selected(plane)) return false;
+  // The palm is the flat part of the hand: where a palm-sized square in the plane is well covered
+  // by readings within kPalmBandM of it. Turned fingers overlap into a block as wide as the palm,
+  // so the best-covered places are compared by their flatness (the RMS distance of their readings
+  // to their own plane): the palm's is ~1-2 mm less than that of the round sides of the fingers
+  // or of the wrist. The plane is then refitted to that palm alone.
+  PlaneGrid hand_grid;
+  Eigen::Vector3d palm_at = Eigen::Vector3d::Zero();
+  const int side = static_cast<int>(std::lround(kPalmSquareM / kCellM));
+  for (int pass = 0; pass < kPalmPlanePasses; ++pass) {
+    select_near_plane(plane, kPalmBandM, nullptr, 0.0, true);
+    if (!make_plane_grid(roi, plane, hand_grid)) return false;
+    cv::warpPerspective(roi_mask, rectified_mask, hand_grid.grid_to_roi, hand_grid.size, cv::INTER_NEAREST | cv::WARP_INVERSE_MAP,
+                        cv::BORDER_CONSTANT, cv::Scalar(0));
+    cv::boxFilter(rectified_mask, rectified_cover, CV_32F, cv::Size(side, side), cv::Point(-1, -1), true, cv::BORDER_CONSTANT);
+    Plane chosen;
+    double chosen_spread = std::numeric_limits<double>::infinity();
+    for (int candidate = 0; candidate < kPalmCandidates; ++candidate) {
+      double best = 0;
+      cv::Point best_at;
+      cv::minMaxLoc(rectified_cover, nullptr, &best, nullptr, &best_at);
+      if (best < kMinPalmCover * 255) break;
+      cv::rectangle(rectified_cover, cv::Rect(best_at.x - side / 2, best_at.y - side / 2, side, side), cv::Scalar(0), cv::FILLED);
+      const Eigen::Vector3d at = hand_grid.point(best_at.x, best_at.y);
+      select_near_plane(plane, kPalmRefitBandM, &at, kPalmRefitRadiusM, false);
+      Plane local;
+      double spread = 0;
+      if (fit_selected(local, &spread) && turned(local) && spread < chosen_spread) {
+        chosen = local;
+        chosen_spread = spread;
+        palm_at = at;
+      }
+    }
+    if (!std::isfinite(chosen_spread)) return false;
+    plane = chosen;
+  }
+  // Its centre: the largest inscribed circle of the flat readings (holes filled) in the plane.
+  PlaneGrid palm_grid;
+  select_near_plane(plane, kPalmBandM, &palm_at, kPalmSearchM, true);
+  roi_mask.copyTo(roi_closed);
+  cv::floodFill(roi_closed, cv::Point(0, 0), cv::Scalar(128));
+  cv::compare(roi_closed, 128, roi_closed, cv::CMP_NE);
+  if (!make_plane_grid(roi, plane, palm_grid)) return false;
+  cv::warpPerspective(roi_closed, rectified_closed, palm_grid.grid_to_roi, palm_grid.size, cv::INTER_NEAREST | cv::WARP_INVERSE_MAP,
+                      cv::BORDER_CONSTANT, cv::Scalar(0));
+  cv::distanceTransform(rectified_closed, rectified_dist, cv::DIST_L2, cv::DIST_MASK_5);
+  double peak = 0;
+  cv::Point peak_at;
+  distance_peak(rectified_dist, peak, peak_at);
+  if (peak < 2.0) return false;
+  const cv::Point2d c = plateau_centre(rectified_dist, peak, peak_at);
+  const Eigen::Vector3d centre = palm_grid.point(c.x, c.y);
+  if (centre.z() <= 0) return false;
+  // Seen more obliquely than this, the palm is a strip narrower than the overlapping fingers and
+  // the flattest place may be among them (measured: 6-7 cm off at 63-77 degrees): not reported.
+  if (-plane.normal.dot(centre.normalized()) < kMinPalmViewCos) return false;
+  // Share of the circle with readings (before the holes were filled).
+  cv::warpPerspective(roi_mask, rectified_mask, palm_grid.grid_to_roi, palm_grid.size, cv::INTER_NEAREST | cv::WARP_INVERSE_MAP,
+                      cv::BORDER_CONSTANT, cv::Scalar(0));
+  int inside = 0, with_reading = 0;
+  const int r = static_cast<int>(std::ceil(peak));
+  for (int j = std::max(0, peak_at.y - r); j < std::min(palm_grid.size.height, peak_at.y + r + 1); ++j)
+    for (int i = std::max(0, peak_at.x - r); i < std::min(palm_grid.size.width, peak_at.x + r + 1); ++i) {
+      if ((i - c.x) * (i - c.x) + (j - c.y) * (j - c.y) > peak * peak) continue;
+      ++inside;
+      if (rectified_mask.at<std::uint8_t>(j, i)) ++with_reading;
+    }
+  const Eigen::Vector2d pixel = model.project(centre);
+  palm.u = pixel.x();
+  palm.v = pixel.y();
+  palm.z = static_cast<float>(centre.z());
+  palm.radius_m = peak * kCellM;
+  palm.valid_fraction = static_cast<double>(with_reading) / std::max(1, inside);
+  return true;
+}
+
+/// A metric grid (kCellM) in `plane` over the in-plane extent of the selected readings, and the
+/// homography from its cells to ROI pixels: H = K [e1 e2 p0] (Hartley & Zisserman, Multiple View
+/// Geometry, 2nd ed., sec. 8.1.1, the map from a world plane to the image), shifted to the ROI.
+bool HandFinder::Impl::make_plane_grid(const Roi& roi, const Plane& plane, PlaneGrid& out) const {
+  constexpr double kHalfExtentM = 0.25;  // at most this around the plane's centroid
+  const auto& k = model.intrinsics();
+  // In-plane axes: e1 the camera's x projected on the plane, e2 = e1 x n (down in the image).
+  const Eigen::Vector3d& n = plane.normal;
+  out.e1 = (Eigen::Vector3d::UnitX() - n.x() * n).normalized();
+  out.e2 = out.e1.cross(n);
+  double s0 = 1e9, s1 = -1e9, t0 = 1e9, t1 = -1e9;
+  for (const std::size_t i : selected) {
+    const Eigen::Vector3d q = hand_points[i].point - plane.centroid;
+    s0 = std::min(s0, q.dot(out.e1));
+    s1 = std::max(s1, q.dot(out.e1));
+    t0 = std::min(t0, q.dot(out.e2));
+    t1 = std::max(t1, q.dot(out.e2));
+  }
+  s0 = std::max(s0 - 0.01, -kHalfExtentM);
+  t0 = std::max(t0 - 0.01, -kHalfExtentM);
+  s1 = std::min(s1 + 0.01, kHalfExtentM);
+  t1 = std::min(t1 + 0.01, kHalfExtentM);
+  if (s1 <= s0 || t1 <= t0) return false;
+  out.size = cv::Size(static_cast<int>(std::ceil((s1 - s0) / kCellM)) + 1, static_cast<int>(std::ceil((t1 - t0) / kCellM)) + 1);
+  out.origin = plane.centroid + s0 * out.e1 + t0 * out.e2;
+  Eigen::Matrix3d to_point;
+  to_point << kCellM * out.e1, kCellM * out.e2, out.origin;
+  Eigen::Matrix3d to_roi;
+  to_roi << k.fx, 0, k.cx - (roi.x0 - 1), 0, k.fy, k.cy - (roi.y0 - 1), 0, 0, 1;
+  const Eigen::Matrix3d h = to_roi * to_point;
+  out.grid_to_roi = cv::Matx33d(h(0, 0), h(0, 1), h(0, 2), h(1, 0), h(1, 1), h(1, 2), h(2, 0), h(2, 1), h(2, 2));
   return true;
 }
 
@@ -407,18 +741,21 @@ bool HandFinder::Impl::find_arm_end(std::span<const std::uint16_t> raw, Palm& pa
   candidate_mask.setTo(0);
   const auto& k = model.intrinsics();
   for (int attempt = 0; attempt < kCandidates; ++attempt) {
+    // The nearest reading not tried yet, the first in row order among equals: each row's minimum
+    // by masks (it vectorises), then the place of the best one.
     std::uint16_t near_raw = kNoReading;
-    cv::Point seed{-1, -1};
+    int seed_row = -1;
     for (int gy = 0; gy < kGridH; ++gy) {
-      const auto* g = grid.ptr<std::uint16_t>(gy);
-      const auto* c = candidate_mask.ptr<std::uint8_t>(gy);
-      for (int gx = 0; gx < kGridW; ++gx)
-        if (g[gx] < near_raw && !c[gx] && g[gx] > 0) {
-          near_raw = g[gx];
-          seed = {gx, gy};
-        }
+      const std::uint16_t row_min = untried_row_minimum(grid.ptr<std::uint16_t>(gy), candidate_mask.ptr<std::uint8_t>(gy));
+      if (row_min < near_raw) {
+        near_raw = row_min;
+        seed_row = gy;
+      }
     }
-    if (seed.x < 0) return false;
+    if (seed_row < 0) return false;
+    cv::Point seed{0, seed_row};
+    for (const auto* g = grid.ptr<std::uint16_t>(seed_row); g[seed.x] != near_raw || candidate_mask.at<std::uint8_t>(seed); ++seed.x) {
+    }
     // The candidate: the grid cells within the depth band connected to the seed.
     const std::uint16_t far_raw = band_limit[near_raw];
     cv::compare(grid, far_raw, band_cells, cv::CMP_LE);
@@ -474,19 +811,26 @@ HandObservation HandFinder::Impl::find(std::span<const std::uint16_t> raw) {
     }
   }
   cv::morphologyEx(fg, fg_open, cv::MORPH_OPEN, kernel3);
-  const int n = cv::connectedComponentsWithStats(fg_open, labels, stats, centroids, 8, CV_32S);
+  // Labels only: OpenCV's statistics cost 3x the labelling (65 against 22 us here); the one used,
+  // the area, is counted below with the nearest reading.
+  const int n = cv::connectedComponents(fg_open, labels, 8, CV_32S);
 
   // 2. Per component: nearest reading; the component under the previous hand, else the nearest.
   nearest.assign(static_cast<std::size_t>(n), kNoReading);
   nearest_at.assign(static_cast<std::size_t>(n), cv::Point());
+  area.assign(static_cast<std::size_t>(n), 0);
   for (int gy = 0; gy < kGridH; ++gy) {
     const int* l = labels.ptr<int>(gy);
     const auto* g = grid.ptr<std::uint16_t>(gy);
-    for (int gx = 0; gx < kGridW; ++gx)
-      if (l[gx] > 0 && g[gx] < nearest[static_cast<std::size_t>(l[gx])]) {
-        nearest[static_cast<std::size_t>(l[gx])] = g[gx];
-        nearest_at[static_cast<std::size_t>(l[gx])] = {gx, gy};
+    for (int gx = 0; gx < kGridW; ++gx) {
+      if (l[gx] == 0) continue;
+      const auto c = static_cast<std::size_t>(l[gx]);
+      ++area[c];
+      if (g[gx] < nearest[c]) {
+        nearest[c] = g[gx];
+        nearest_at[c] = {gx, gy};
       }
+    }
   }
   int chosen = 0;
   const bool continuing = tracking;
@@ -496,7 +840,7 @@ HandObservation HandFinder::Impl::find(std::span<const std::uint16_t> raw) {
     for (int gy = std::max(0, previous_cell.y - 12); gy < std::min(kGridH, previous_cell.y + 13); ++gy) {
       const int* l = labels.ptr<int>(gy);
       for (int gx = std::max(0, previous_cell.x - 12); gx < std::min(kGridW, previous_cell.x + 13); ++gx) {
-        if (l[gx] == 0 || stats.at<int>(l[gx], cv::CC_STAT_AREA) < params.min_component_cells) continue;
+        if (l[gx] == 0 || area[static_cast<std::size_t>(l[gx])] < params.min_component_cells) continue;
         const double d2 = (gx - previous_cell.x) * (gx - previous_cell.x) + (gy - previous_cell.y) * (gy - previous_cell.y);
         if (d2 < best) {
           best = d2;
@@ -508,7 +852,7 @@ HandObservation HandFinder::Impl::find(std::span<const std::uint16_t> raw) {
   if (chosen == 0) {
     std::uint16_t best = kNoReading;
     for (int c = 1; c < n; ++c)
-      if (stats.at<int>(c, cv::CC_STAT_AREA) >= params.min_component_cells && nearest[static_cast<std::size_t>(c)] < best) {
+      if (area[static_cast<std::size_t>(c)] >= params.min_component_cells && nearest[static_cast<std::size_t>(c)] < best) {
         best = nearest[static_cast<std::size_t>(c)];
         chosen = c;
       }

@@ -59,6 +59,8 @@ std::optional<std::string> validate(const VoiceConfig& config) {
     stop = stop || p.command == VoiceCommand::Stop;
   }
   if (!start || !stop) return "phrases: need at least one start and one stop phrase";
+  if (!std::isfinite(config.phone_loop_probability) || config.phone_loop_probability <= 0.0 || config.phone_loop_probability > 1.0)
+    return "phone_loop_probability must be in (0, 1] (e.g. 0.1, or 1e-6 in noise)";
   return std::nullopt;
 }
 
@@ -77,10 +79,12 @@ VoiceConfig parse_voice_config(const std::string& json_text) {
   if (!root.is_object()) fail("the document must be a JSON object");
   VoiceConfig c;
   for (const auto& item : root.items())
-    if (item.key() != "model_dir" && item.key() != "dictionary" && item.key() != "phrases") fail("unknown key " + item.key());
+    if (item.key() != "model_dir" && item.key() != "dictionary" && item.key() != "phrases" && item.key() != "phone_loop_probability")
+      fail("unknown key " + item.key());
   try {
     if (root.contains("model_dir")) c.model_dir = root.at("model_dir").get<std::string>();
     if (root.contains("dictionary")) c.dictionary = root.at("dictionary").get<std::string>();
+    if (root.contains("phone_loop_probability")) c.phone_loop_probability = root.at("phone_loop_probability").get<double>();
     if (root.contains("phrases")) {
       c.phrases.clear();
       for (const auto& p : root.at("phrases")) {

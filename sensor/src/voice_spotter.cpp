@@ -59,8 +59,10 @@ KeywordSpotter::KeywordSpotter(const VoiceConfig& config) : impl_(std::make_uniq
   if (!fs::is_regular_file(config.dictionary))
     throw std::runtime_error("pronunciation dictionary " + config.dictionary + " not found (install pocketsphinx-en-us)");
   impl_->config = config;
+  char phone_loop[32];
+  std::snprintf(phone_loop, sizeof phone_loop, "%g", config.phone_loop_probability);
   impl_->cmdln = cmd_ln_init(nullptr, ps_args(), TRUE, "-hmm", config.model_dir.c_str(), "-dict", config.dictionary.c_str(),
-                             "-logfn", "/dev/null", nullptr);
+                             "-kws_plp", phone_loop, "-logfn", "/dev/null", nullptr);
   if (impl_->cmdln == nullptr) throw std::runtime_error("pocketsphinx rejected its arguments");
   impl_->decoder = ps_init(impl_->cmdln);
   if (impl_->decoder == nullptr) throw std::runtime_error("pocketsphinx could not load " + config.model_dir);

@@ -75,6 +75,10 @@ TEST(VoiceCommands, ConfigParsesAndRejectsBadValuesByName) {
   EXPECT_NE(error_of(R"({"phrases": [{"phrase": "a1", "command": "start"}, {"phrase": "b", "command": "stop"}]})")
                 .find("letters"), std::string::npos);
   EXPECT_NE(error_of(R"({"model": "x"})").find("unknown key model"), std::string::npos);
+  EXPECT_EQ(c.phone_loop_probability, 0.1);  // pocketsphinx's own when the key is missing
+  EXPECT_EQ(parse_voice_config(R"({"phone_loop_probability": 1e-6})").phone_loop_probability, 1e-6);
+  EXPECT_NE(error_of(R"({"phone_loop_probability": 0})").find("phone_loop_probability"), std::string::npos);
+  EXPECT_NE(error_of(R"({"phone_loop_probability": 2})").find("phone_loop_probability"), std::string::npos);
   EXPECT_NE(error_of("nope").find("JSON"), std::string::npos);
 }
 

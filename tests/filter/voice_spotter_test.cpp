@@ -5,6 +5,9 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
+#include <cmath>
+
 namespace tachi::sensor {
 namespace {
 
@@ -83,6 +86,53 @@ TEST(VoiceSpotter, SynthesisedCommandsAreSpottedInOrderBetweenPausesAndNoise) {
   }
   EXPECT_EQ(found[0].command, VoiceCommand::Start);
   EXPECT_EQ(found[1].command, VoiceCommand::Stop);
+}
+
+TEST(VoiceSpotter, ASmallerPhoneLoopProbabilityFindsCommandsInWhiteNoiseAndNoneInReading) {
+  // Six commands at 20 dB SNR (white noise against the voice at full gain, the phrases at 0.5-1 of
+  // it): at pocketsphinx's phone-loop probability (0.1) few are found; at 1e-6 with thresholds 1e-15
+  // (docs/voice.md) most, with no false alarm there nor in the LibriVox reading.
+  const auto start = testing::flite_say("start cutting");
+  const auto stop = testing::flite_say("stop cutting");
+  double sum = 0;
+  for (auto v : start) sum += static_cast<double>(v) * v;
+  const double speech_rms = std::sqrt(sum / static_cast<double>(start.size()));
+  testing::Sequence seq{7};
+  const std::array<double, 6> gains{0.9, 0.6, 1.0, 0.7, 0.8, 0.55};
+  seq.pause(0.8);
+  for (std::size_t i = 0; i < gains.size(); ++i) {
+    seq.say(i % 2 == 0 ? "start cutting" : "stop cutting", i % 2 == 0 ? start : stop, gains[i]);
+    seq.pause(1.0);
+  }
+  seq.noise(speech_rms * std::pow(10.0, -20.0 / 20.0));
+  // A detection counts for an utterance when it names its phrase between its start and 0.6 s after
+  // its end (as tachi-voice-eval scores); any other detection is a false alarm.
+  const auto count_right = [&](const std::vector<VoiceDetection>& found) {
+    std::size_t right = 0;
+    std::vector<bool> used(found.size(), false);
+    for (const auto& utterance : seq.placed())
+      for (std::size_t i = 0; i < found.size(); ++i)
+        if (!used[i] && found[i].phrase == utterance.phrase && found[i].time_s > utterance.begin_s &&
+            found[i].time_s < utterance.end_s + 0.6) {
+          used[i] = true;
+          ++right;
+          break;
+        }
+    for (std::size_t i = 0; i < found.size(); ++i)
+      EXPECT_TRUE(used[i]) << "false alarm: " << found[i].phrase << " at " << found[i].time_s << " s";
+    return right;
+  };
+  VoiceConfig noisy;
+  noisy.phone_loop_probability = 1e-6;
+  for (auto& p : noisy.phrases) p.threshold = 1e-15;
+  const std::size_t by_default = count_right(spot_commands(VoiceConfig{}, seq.samples()));
+  const std::size_t tuned = count_right(spot_commands(noisy, seq.samples()));
+  RecordProperty("found_by_default", static_cast<int>(by_default));
+  RecordProperty("found_tuned", static_cast<int>(tuned));
+  // Measured: 4 of 6 against 1 of 6 (docs/voice.md has the 48-command figures).
+  EXPECT_GE(tuned, 4U) << "by default " << by_default;
+  EXPECT_GE(tuned, by_default + 2) << "tuned " << tuned;
+  for (const auto& clip : testing::librivox_clips()) EXPECT_TRUE(spot_commands(noisy, read_wav_file(clip).samples).empty()) << clip;
 }
 
 TEST(VoiceSpotter, UnknownWordsAndMissingModelsAreClearErrors) {

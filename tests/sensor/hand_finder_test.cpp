@@ -3,7 +3,9 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <map>
+#include <numbers>
 #include <string>
 
 #include "tachi/sensor/depth_source.hpp"
@@ -39,14 +41,14 @@ ScenarioRun run_scenario(const std::string& name) {
 }
 
 /// Scenarios that miss a target (docs/sensor.md, "Known limits"), held to what they reach so that a
-/// regression still fails: a palm turned 60 degrees (7.8% tracked, 3.8 cm RMS), and the one frame in
-/// which the hand rises from below the image while a person walks behind.
+/// regression still fails: a palm turned 60 degrees (52% tracked at 5.5 mm RMS: the frames seen more
+/// obliquely than 63 degrees from the line of sight are not reported).
 struct Floor {
   double max_rms_m;
   double min_tracked_ratio;
 };
 const std::map<std::string, Floor> kKnownMisses = {
-    {"turned_palm", {0.05, 0.05}}, {"second_person", {0.010, 0.98}}};
+    {"turned_palm", {0.010, 0.50}}};
 
 class ScenarioAccuracy : public ::testing::TestWithParam<std::string> {};
 
@@ -68,6 +70,34 @@ TEST_P(ScenarioAccuracy, MeetsTheTargets) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Bundled, ScenarioAccuracy, ::testing::ValuesIn(test::scenario_names()));
+
+TEST(HandFinder, APalmTurnedUpTo60DegreesFromTheLineOfSightIsTrackedWithin1Cm) {
+  // turned_palm: yaw 60 degrees about y, so along its path the palm is seen 49-77 degrees from the
+  // line of sight. Up to 60 degrees, every visible frame is tracked and within 1 cm.
+  const auto run = run_scenario("turned_palm");
+  const Eigen::Vector3d normal(-std::sin(60.0 * std::numbers::pi / 180), 0.0, -std::cos(60.0 * std::numbers::pi / 180));  // toward the sensor
+  int checked = 0;
+  for (std::size_t i = 0; i < run.truth.size(); ++i) {
+    const auto& truth = run.truth[i];
+    if (!truth.visible || -normal.dot(truth.position.normalized()) < std::cos(60.0 * std::numbers::pi / 180)) continue;
+    ++checked;
+    ASSERT_TRUE(run.hands[i].tracked) << "frame " << truth.frame;
+    EXPECT_LE((run.hands[i].position - truth.position).norm(), 0.01) << "frame " << truth.frame;
+  }
+  EXPECT_GE(checked, 20);
+}
+
+TEST(HandFinder, AHandRisingThroughWhereTheArmRestedIsFoundInItsFirstVisibleFrame) {
+  // second_person: the hand rises from below the image, through where the arm hung; there it is
+  // less than foreground_m in front of the learnt background, so the foreground holds only its
+  // fingers. The palm is measured in a ROI grown beyond them.
+  const auto run = run_scenario("second_person");
+  const auto first = std::find_if(run.truth.begin(), run.truth.end(), [](const TruthRow& t) { return t.visible; });
+  ASSERT_NE(first, run.truth.end());
+  const auto i = static_cast<std::size_t>(first - run.truth.begin());
+  ASSERT_TRUE(run.hands[i].tracked) << "frame " << first->frame;
+  EXPECT_LE((run.hands[i].position - first->position).norm(), 0.01);
+}
 
 TEST(HandFinder, AHandHeldStillFromTheFirstFrameIsFoundInThatFrame) {
   // Without a background that lacks the hand and without motion: found as an arm's end.

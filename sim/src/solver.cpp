@@ -391,10 +391,13 @@ void Solver::build_attachments(const Cloth& cloth) {
   // A few pins (corners): every particle is tethered to each of them. Many pins (an edge): Kim et al. tether
   // to the nearest only, but below a cut a particle held through one tip alone swings down around it and
   // tears the cloth between it and a neighbour held through the other tip (a slit at 64 x 64 rested at 15 %,
-  // 28 % in exact mode). So the pins are split into four groups along the pinned line and each particle is
-  // tethered to the nearest pin of each: the paths of different groups pass different tips, and the cloth
-  // below a slit hangs from both (64 x 64: <= 10 % in every mode; four tethers per particle instead of one).
+  // 28 % in exact mode). So the pins are split into two groups along the pinned line (left and right half
+  // of the top edge) and each particle is tethered to the nearest pin of each: the two paths pass different
+  // tips, and the cloth below a slit hangs from both (64 x 64: <= 10 % in every mode). Two tethers per
+  // particle instead of one: +25 % per step at 128 x 128 (docs/benchmarks.md); four groups tie the cloth
+  // tighter still (128 x 128 grid mode 20 % instead of 33 %) for another +30 %.
   constexpr std::size_t kAllPinsUpTo = 4;
+  constexpr std::size_t kPinGroups = 2;
   if (cached_pins_.size() <= kAllPinsUpTo) {
     for (const std::uint32_t pin : cached_pins_) searches_.emplace_back().sources = {pin};
   } else {
@@ -404,10 +407,10 @@ void Solver::build_attachments(const Cloth& cloth) {
       const auto& ub = cloth.rest_uv[b];
       return ua.x() != ub.x() ? ua.x() < ub.x() : ua.y() < ub.y();
     });
-    for (std::size_t g = 0; g < kAllPinsUpTo; ++g) {
+    for (std::size_t g = 0; g < kPinGroups; ++g) {
       searches_.emplace_back().sources.assign(
-          sorted.begin() + static_cast<std::ptrdiff_t>(g * sorted.size() / kAllPinsUpTo),
-          sorted.begin() + static_cast<std::ptrdiff_t>((g + 1) * sorted.size() / kAllPinsUpTo));
+          sorted.begin() + static_cast<std::ptrdiff_t>(g * sorted.size() / kPinGroups),
+          sorted.begin() + static_cast<std::ptrdiff_t>((g + 1) * sorted.size() / kPinGroups));
     }
   }
   for (Search& search : searches_) {

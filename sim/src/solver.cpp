@@ -145,6 +145,15 @@ void Solver::refresh_caches(const Cloth& cloth) {
 void Solver::full_build(const Cloth& cloth, std::vector<std::uint32_t> pins) {
   ++full_builds_;
   for (auto& g : groups_) g.clear();
+  // As much room as the cloth reserved for its cuts (Cloth::reserve): the first cut then grows the solver's
+  // per-particle arrays in place instead of reallocating (and faulting in) every one of them at once, which
+  // made the step of the first cut at 256 x 256 take ~50 ms.
+  const std::size_t particle_room = cloth.position.capacity() + 1;
+  nearest_.reserve(particle_room);
+  affected_.reserve(particle_room);
+  work_.reserve(particle_room);
+  old_work_.reserve(particle_room);
+  slot_.reserve(cloth.spring_a.capacity());
   slot_.assign(cloth.spring_count(), Slot{});
   lanes_ = 0;
   blanked_ = 0;
@@ -158,7 +167,10 @@ void Solver::full_build(const Cloth& cloth, std::vector<std::uint32_t> pins) {
   append_springs(cloth, all);
   order_strain_limit(cloth);
   lanes_ = 0;
-  for (const auto& g : groups_) lanes_ += 4 * g.size();
+  for (auto& g : groups_) {
+    lanes_ += 4 * g.size();
+    g.reserve(g.size() + g.size() / 4);  // the cuts' springs are appended (compacted past half blanked)
+  }
 }
 
 void Solver::append_springs(const Cloth& cloth, const std::vector<std::uint32_t>& springs) {
@@ -413,7 +425,17 @@ void Solver::build_attachments(const Cloth& cloth) {
           sorted.begin() + static_cast<std::ptrdiff_t>((g + 1) * sorted.size() / kPinGroups));
     }
   }
+  const std::size_t particle_room = cloth.position.capacity();
+  attachments_.reserve(searches_.size() * particle_room);
+  tether_order_.reserve(searches_.size() * particle_room);
   for (Search& search : searches_) {
+    search.dist.reserve(particle_room);
+    search.parent.reserve(particle_room);
+    search.owner.reserve(particle_room);
+    search.attachment.reserve(particle_room);
+    search.anchor.reserve(particle_room);
+    search.bends.reserve(particle_room);
+    search.open.reserve(particle_room);
     search.dist.assign(n, kInf);
     search.parent.assign(n, kNone);
     search.owner.assign(n, kNone);
@@ -448,8 +470,7 @@ void Solver::update_attachments(const Cloth& cloth, const std::vector<std::uint3
   };
   std::vector<std::uint32_t> stack;
   std::vector<std::uint32_t> all_affected(touched);
-  std::vector<std::uint32_t> child_start;
-  std::vector<std::uint32_t> children;
+  std::vector<std::uint32_t> affected_list;
   for (Search& search : searches_) {
     const std::size_t old_n = search.dist.size();
     search.dist.resize(n, kInf);
@@ -470,27 +491,18 @@ void Solver::update_attachments(const Cloth& cloth, const std::vector<std::uint3
       }
     }
     if (stack.empty()) continue;
-    // Children lists of the tree (CSR), then everything below the affected particles.
-    child_start.assign(n + 1, 0);
-    for (std::size_t i = 0; i < n; ++i) {
-      if (search.parent[i] != kNone) ++child_start[search.parent[i] + 1];
-    }
-    for (std::size_t i = 0; i < n; ++i) child_start[i + 1] += child_start[i];
-    children.resize(child_start[n]);
-    {
-      std::vector<std::uint32_t> fill(child_start.begin(), child_start.end() - 1);
-      for (std::uint32_t i = 0; i < n; ++i) {
-        if (search.parent[i] != kNone) children[fill[search.parent[i]]++] = i;
-      }
-    }
-    std::vector<std::uint32_t> affected_list;
+    // Everything below them on the tree: a particle's children are among its spring neighbours (the tree's
+    // edges are springs), so the subtree is found from the springs, in time proportional to its size rather
+    // than to the cloth (building children lists of the whole tree cost O(n) per search and cut).
+    affected_list.clear();
     while (!stack.empty()) {
       const std::uint32_t i = stack.back();
       stack.pop_back();
       affected_list.push_back(i);
-      for (std::uint32_t c = child_start[i]; c < child_start[i + 1]; ++c) {
-        const std::uint32_t j = children[c];
-        if (affected_[j] == 0) {
+      for (const std::uint32_t k : cloth.springs_of(i)) {
+        if (cloth.kind[k] == SpringKind::Bend) continue;
+        const std::uint32_t j = cloth.spring_a[k] == i ? cloth.spring_b[k] : cloth.spring_a[k];
+        if (affected_[j] == 0 && search.parent[j] == i) {
           affected_[j] = 1;
           stack.push_back(j);
         }

@@ -234,12 +234,15 @@ void Solver::order_strain_limit(const Cloth& cloth) {
   }
   for (std::size_t l = 1; l < start.size(); ++l) start[l] += start[l - 1];
   strain_limit_.resize(level.size());
+  limit_slot_.assign(cloth.spring_count(), kNone);
   for (const auto& [l, k] : level) {
     std::uint32_t na = cloth.spring_a[k];
     std::uint32_t nb = cloth.spring_b[k];
     if (nearest_[nb] < nearest_[na]) std::swap(na, nb);
+    limit_slot_[k] = start[l];
     strain_limit_[start[l]++] = {na, nb, cloth.rest_length[k]};
   }
+  limit_order_stale_ = false;
 }
 
 void Solver::update_incrementally(const Cloth& cloth) {
@@ -273,7 +276,26 @@ void Solver::update_incrementally(const Cloth& cloth) {
   touched.erase(std::unique(touched.begin(), touched.end()), touched.end());
   update_attachments(cloth, touched);
   append_springs(cloth, edited);
-  order_strain_limit(cloth);
+  // The strain limit: the cut's springs leave their places (never over the limit: skipped) and its new
+  // ones go last. Re-ordering outwards from the pins (the distances behind a cut grow) is linear in the
+  // springs, so it waits for the attachments' repair to settle (continue_searches) or the next compaction.
+  limit_slot_.resize(cloth.spring_count(), kNone);
+  for (const std::uint32_t k : edited) {
+    if (limit_slot_[k] != kNone) {
+      strain_limit_[limit_slot_[k]].rest = kInf;
+      limit_slot_[k] = kNone;
+    }
+    if (cloth.alive[k] == 0 || cloth.kind[k] != SpringKind::Structural) continue;
+    std::uint32_t na = cloth.spring_a[k];
+    std::uint32_t nb = cloth.spring_b[k];
+    if (nearest_[nb] < nearest_[na]) std::swap(na, nb);
+    limit_slot_[k] = static_cast<std::uint32_t>(strain_limit_.size());
+    strain_limit_.push_back({na, nb, cloth.rest_length[k]});
+  }
+  limit_order_stale_ = true;
+  bool repairing = false;
+  for (const Search& search : searches_) repairing = repairing || !search.heap.empty() || !search.open_list.empty();
+  if (!repairing) pending_limit_order_ = true;
 }
 
 bool Solver::run_search(const Cloth& cloth, Search& search, bool repair, std::size_t budget) {
@@ -334,7 +356,10 @@ void Solver::continue_searches(const Cloth& cloth) {
     pending = !run_search(cloth, search, true, kSettledPerStep) || pending;
   }
   // Settled particles change the strain limit's order (their distance to the pins): redo it once done.
-  if (progressed && !pending) order_strain_limit(cloth);
+  if ((progressed && !pending) || (pending_limit_order_ && !pending)) {
+    pending_limit_order_ = false;
+    if (limit_order_stale_) order_strain_limit(cloth);
+  }
 }
 
 void Solver::attach(const Cloth& cloth, Search& search, std::uint32_t i) {

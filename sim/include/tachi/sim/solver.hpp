@@ -130,8 +130,13 @@ class Solver {
   std::vector<Slot> slot_;                    ///< per spring
   std::size_t lanes_ = 0;                     ///< lanes in use when last fully built, and blanked since
   std::size_t blanked_ = 0;
-  // Structural springs again, ordered outwards from the pins, for the strain limit.
+  // Structural springs again, ordered outwards from the pins, for the strain limit; per spring its place
+  // there (none for other kinds); whether a cut appended to it since it was last ordered, and whether it is
+  // to be re-ordered on a step with no cut (the cut's repair finished within its own step).
   std::vector<PackedSpring> strain_limit_;
+  std::vector<std::uint32_t> limit_slot_;
+  bool limit_order_stale_ = false;
+  bool pending_limit_order_ = false;
   std::vector<std::pair<std::uint32_t, std::uint32_t>> limit_level_;  // scratch: (level, spring)
   std::vector<std::uint32_t> limit_start_;
   // Long-range attachments: particle, anchor (a pin, or a particle at a bend of the shortest path around

@@ -276,9 +276,7 @@ void StrokeCutter::commit(GridCoord g, const Eigen::Vector2d& uv, const Eigen::V
   // cloth's edge (a cut across the cloth must get there to separate it).
   if (follows_path() && path_end_) {
     const bool on_edge = to.x() <= 0.0 || to.y() <= 0.0 || to.x() >= cloth_->columns - 1 || to.y() >= cloth_->rows - 1;
-    const double min_step =
-        std::max(options_.exact_min_step_cells,
-                 options_.exact_min_step_m / static_cast<double>(std::min(cloth_->spacing_x(), cloth_->spacing_y())));
+    const double min_step = at_least(options_.exact_min_step_cells, options_.exact_min_step_m);
     if (!on_edge && (to - *path_end_).norm() < min_step) return;
   }
   const bool moved = !path_end_ || (to - *path_end_).norm() > 1e-9;
@@ -321,12 +319,14 @@ void StrokeCutter::commit(GridCoord g, const Eigen::Vector2d& uv, const Eigen::V
   change.merge(cut);
 }
 
+double StrokeCutter::at_least(double cells, double metres) const {
+  return std::max(cells, metres / static_cast<double>(std::min(cloth_->spacing_x(), cloth_->spacing_y())));
+}
+
 bool StrokeCutter::closes_small_loop(const Eigen::Vector2d& from, const Eigen::Vector2d& to) const {
   if (paths_.empty() || paths_.back().size() < 3) return false;
   const auto& path = paths_.back();
-  const double min_perimeter =
-      std::max(options_.exact_min_loop_cells,
-               options_.exact_min_loop_m / static_cast<double>(std::min(cloth_->spacing_x(), cloth_->spacing_y())));
+  const double min_perimeter = at_least(options_.exact_min_loop_cells, options_.exact_min_loop_m);
   // Walking back along the path from its end (`from`), the loop closed by the new segment at an earlier
   // segment is that walk plus the new segment's part up to the meeting point. Segments closer than twice
   // the snap distance meet (the exact cut joins them there). Only the last min_perimeter of the path can

@@ -165,6 +165,8 @@ class StrokeCutter {
   /// Whether the cut from `from` to `to` would meet the current line's path and close a loop shorter than
   /// the options' minimum.
   [[nodiscard]] bool closes_small_loop(const Eigen::Vector2d& from, const Eigen::Vector2d& to) const;
+  /// A length in cells: `cells`, or `metres` on this cloth if that is more.
+  [[nodiscard]] double at_least(double cells, double metres) const;
   void add_line_to_report(const std::vector<GridCoord>& line);
   [[nodiscard]] GridCoord boundary_point(const Eigen::Vector2d& uv) const;
   [[nodiscard]] Eigen::Vector2d clamp_uv(const Eigen::Vector2d& uv) const;

@@ -215,6 +215,32 @@ TEST(ExactCut, ASlitEndsWhereTheStrokeEnds) {
   EXPECT_GT(cloth.particle_count(), 400U + 16U);
 }
 
+TEST(ExactCut, TheParticlesACutMakesGetBendsAcrossTheirTrianglesEdgesAndNoneAcrossTheCut) {
+  // A slanted slit: its new particles lie on crossed edges. Bends come from the new triangles: across each
+  // edge two of them share, between their far corners, a cell or longer (expect_invariants checks that no
+  // bend crosses a cut edge and that springs connect only what triangles connect).
+  Cloth cloth = make_cloth(20, 20);
+  ExactCutter cutter{cloth};
+  cut_path(cloth, cutter, {{3.3, 6.6}, {15.7, 12.2}});
+  ASSERT_FALSE(HasFatalFailure());
+  const auto grid_particles = static_cast<std::uint32_t>(20 * 20);
+  std::set<std::uint32_t> bent;
+  for (std::uint32_t k = 0; k < cloth.spring_count(); ++k) {
+    if (cloth.alive[k] == 0 || cloth.kind[k] != SpringKind::Bend) continue;
+    const std::uint32_t a = cloth.spring_a[k];
+    const std::uint32_t b = cloth.spring_b[k];
+    if (a < grid_particles && b < grid_particles) continue;
+    EXPECT_TRUE(across_quad(cloth, a, b)) << "bend " << k << " is not across an edge two triangles share";
+    EXPECT_GE(cloth.rest_length[k], 0.999F * std::min(cloth.spacing_x(), cloth.spacing_y())) << "bend " << k;
+    bent.insert(a >= grid_particles ? a : b);
+  }
+  std::size_t made = 0;
+  for (std::uint32_t i = grid_particles; i < cloth.particle_count(); ++i) made += cloth.triangles_of(i).empty() ? 0U : 1U;
+  ASSERT_GT(made, 20U);
+  // Most of them (a particle on the cut whose triangles on its side are all slivers gets none).
+  EXPECT_GT(bent.size(), made / 2) << bent.size() << " of " << made << " new particles have bends";
+}
+
 TEST(ExactCut, ALoopCutsOutAFallingPatchAndCrossingCutsGiveFourPieces) {
   {
     Cloth cloth = make_cloth(20, 20);

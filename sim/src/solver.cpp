@@ -428,13 +428,14 @@ void Solver::build_attachments(const Cloth& cloth) {
   // A few pins (corners): every particle is tethered to each of them. Many pins (an edge): Kim et al. tether
   // to the nearest only, but below a cut a particle held through one tip alone swings down around it and
   // tears the cloth between it and a neighbour held through the other tip (a slit at 64 x 64 rested at 15 %,
-  // 28 % in exact mode). So the pins are split into two groups along the pinned line (left and right half
-  // of the top edge) and each particle is tethered to the nearest pin of each: the two paths pass different
-  // tips, and the cloth below a slit hangs from both (64 x 64: <= 10 % in every mode). Two tethers per
-  // particle instead of one: +25 % per step at 128 x 128 (docs/benchmarks.md); four groups tie the cloth
-  // tighter still (128 x 128 grid mode 20 % instead of 33 %) for another +30 %.
+  // 28 % in exact mode). So the pins are split into four groups along the pinned line and each particle is
+  // tethered to the nearest pin of each: the paths of different groups pass different tips, and the cloth
+  // below a slit hangs from both (64 x 64, in the plane: <= 10 % in every mode). Two groups did that in the
+  // plane too, but with the out-of-plane jitter of tachi-sim the cloth below the slit never came to rest
+  // (grid 11-15 %, exact 70 %; four groups: grid rests at 10.8 %, exact 12-19 %). Four tethers per particle
+  // instead of one: the plain step costs +90 % at 128 x 128 (docs/benchmarks.md).
   constexpr std::size_t kAllPinsUpTo = 4;
-  constexpr std::size_t kPinGroups = 2;
+  constexpr std::size_t kPinGroups = 4;
   if (cached_pins_.size() <= kAllPinsUpTo) {
     for (const std::uint32_t pin : cached_pins_) searches_.emplace_back().sources = {pin};
   } else {

@@ -487,8 +487,9 @@ void ExactCutter::add_bends(std::uint32_t p, TopologyChange& change) {
   // that its structural springs take the load (a flap cut rested at 22 % instead of 10 %).
   constexpr double kMinBendCells = 1.0;
   // The grid's bends span two cells along a row or column; around a cut the triangles are no longer a grid,
-  // so a bend goes across each edge two triangles share, between their far corners (the bending springs of
-  // mass-spring cloth on triangle meshes across each interior edge, e.g. Choi and Ko 2002, section 3).
+  // so a bend goes across each edge two triangles share, between their far corners: Provot's flexion spring
+  // (Provot 1995, section 2: it resists folding along the line between two particles) in the form it takes
+  // on a triangle mesh, one across each interior edge.
   // Only where those corners lie on opposite sides of the shared edge and the edge's ends on opposite sides
   // of the bend: the bend then stays inside the two triangles, so it crosses no cut.
   Cloth& cloth = *cloth_;

@@ -488,7 +488,7 @@ void ExactCutter::add_bends(std::uint32_t p, TopologyChange& change) {
   constexpr double kMinBendCells = 1.0;
   // The grid's bends span two cells along a row or column; around a cut the triangles are no longer a grid,
   // so a bend goes across each edge two triangles share, between their far corners: Provot's flexion spring
-  // (Provot 1995, section 2: it resists folding along the line between two particles) in the form it takes
+  // (Provot 1995; seed 001 section 2.1, Figure 3: it resists folding between the two particles) in the form it takes
   // on a triangle mesh, one across each interior edge.
   // Only where those corners lie on opposite sides of the shared edge and the edge's ends on opposite sides
   // of the bend: the bend then stays inside the two triangles, so it crosses no cut.

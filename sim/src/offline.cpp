@@ -248,9 +248,8 @@ void add_offline_flags(CLI::App& app, OfflineOptions& o) {
            o.cut_mode = *mode;
          },
          "How strokes cut: exact (along the stroke's own path, splitting triangles), grid (seed 000: along grid "
-         "lines, eqs. 1-4) or delete (seed 001: the crossed triangles are deleted, completeCUT). Default grid: exact "
-         "is exact on a still cloth but still splits a live stroke into slivers (docs/cutting.md section 8)")
-      ->default_str("grid");
+         "lines, eqs. 1-4, for reproducing it) or delete (seed 001: the crossed triangles are deleted, completeCUT)")
+      ->default_str("exact");
   app.add_option_function<float>(
          "--blade-force",
          [&o](float n) {

@@ -135,6 +135,51 @@ std::uint32_t scan_nearest(const Cloth& cloth, const Eigen::Vector3f& point) {
   return best;
 }
 
+/// The closest points of segments p1-p2 and q1-q2 and their distance (Ericson 2005, "Real-Time Collision
+/// Detection", section 5.1.9).
+struct SegmentMeeting {
+  Eigen::Vector2d on_first;
+  Eigen::Vector2d on_second;
+  double distance;
+};
+SegmentMeeting closest_points(const Eigen::Vector2d& p1, const Eigen::Vector2d& p2, const Eigen::Vector2d& q1,
+                              const Eigen::Vector2d& q2) {
+  const Eigen::Vector2d d1 = p2 - p1;
+  const Eigen::Vector2d d2 = q2 - q1;
+  const Eigen::Vector2d r = p1 - q1;
+  const double a = d1.squaredNorm();
+  const double e = d2.squaredNorm();
+  const double f = d2.dot(r);
+  double s = 0.0;
+  double t = 0.0;
+  constexpr double kTiny = 1e-18;
+  if (a <= kTiny && e <= kTiny) {
+    s = t = 0.0;
+  } else if (a <= kTiny) {
+    t = std::clamp(f / e, 0.0, 1.0);
+  } else {
+    const double c = d1.dot(r);
+    if (e <= kTiny) {
+      s = std::clamp(-c / a, 0.0, 1.0);
+    } else {
+      const double b = d1.dot(d2);
+      const double denominator = a * e - b * b;
+      s = denominator > kTiny ? std::clamp((b * f - c * e) / denominator, 0.0, 1.0) : 0.0;
+      t = (b * s + f) / e;
+      if (t < 0.0) {
+        t = 0.0;
+        s = std::clamp(-c / a, 0.0, 1.0);
+      } else if (t > 1.0) {
+        t = 1.0;
+        s = std::clamp((b - c) / a, 0.0, 1.0);
+      }
+    }
+  }
+  const Eigen::Vector2d on_first = p1 + s * d1;
+  const Eigen::Vector2d on_second = q1 + t * d2;
+  return {on_first, on_second, (on_first - on_second).norm()};
+}
+
 }  // namespace
 
 ClothPoint ClothLocator::locate(const Cloth& cloth, const Eigen::Vector3f& point) {
@@ -223,6 +268,17 @@ void StrokeCutter::commit(GridCoord g, const Eigen::Vector2d& uv, const Eigen::V
                           TopologyChange& change) {
   // The stroke's path on the cloth as the cut took it, in every mode (pattern.svg, cut_deviation_cells_max).
   const Eigen::Vector2d to = clamp_uv(uv);
+  // A hand slowing down at the end of a stroke wobbles around one spot; along the path that is a small
+  // knot, and each of its loops would cut out an island (the straight_cut recording: 3-10 pieces instead
+  // of one slit). Such a point does not join the cut; the next one goes on from where the cut ends.
+  if (follows_path() && path_end_ && closes_small_loop(*path_end_, to)) return;
+  // For the same reason a step shorter than the wobble does not join the cut either, unless it reaches the
+  // cloth's edge (a cut across the cloth must get there to separate it).
+  if (follows_path() && path_end_) {
+    const bool on_edge = to.x() <= 0.0 || to.y() <= 0.0 || to.x() >= cloth_->columns - 1 || to.y() >= cloth_->rows - 1;
+    const double min_step = at_least(options_.exact_min_step_cells, options_.exact_min_step_m);
+    if (!on_edge && (to - *path_end_).norm() < min_step) return;
+  }
   const bool moved = !path_end_ || (to - *path_end_).norm() > 1e-9;
   if (!path_end_) paths_.emplace_back();
   if (moved) paths_.back().push_back(to.cast<float>());
@@ -263,6 +319,32 @@ void StrokeCutter::commit(GridCoord g, const Eigen::Vector2d& uv, const Eigen::V
   change.merge(cut);
 }
 
+double StrokeCutter::at_least(double cells, double metres) const {
+  return std::max(cells, metres / static_cast<double>(std::min(cloth_->spacing_x(), cloth_->spacing_y())));
+}
+
+bool StrokeCutter::closes_small_loop(const Eigen::Vector2d& from, const Eigen::Vector2d& to) const {
+  if (paths_.empty() || paths_.back().size() < 3) return false;
+  const auto& path = paths_.back();
+  const double min_perimeter = at_least(options_.exact_min_loop_cells, options_.exact_min_loop_m);
+  // Walking back along the path from its end (`from`), the loop closed by the new segment at an earlier
+  // segment is that walk plus the new segment's part up to the meeting point. Segments closer than twice
+  // the snap distance meet (the exact cut joins them there). Only the last min_perimeter of the path can
+  // close a small loop.
+  constexpr double kMeet = 2.0 * kExactSnapCells;
+  double walked = 0.0;
+  for (std::size_t k = path.size() - 1; k >= 2 && walked < min_perimeter; --k) {
+    const Eigen::Vector2d b = path[k - 1].cast<double>();
+    const Eigen::Vector2d a = path[k - 2].cast<double>();
+    walked += (path[k].cast<double>() - b).norm();
+    const auto meet = closest_points(from, to, a, b);
+    if (meet.distance > kMeet) continue;
+    const double perimeter = walked + (b - meet.on_second).norm() + (meet.on_first - from).norm();
+    if (perimeter < min_perimeter) return true;
+  }
+  return false;
+}
+
 void StrokeCutter::start_line(GridCoord g, const Eigen::Vector2d& uv, const Eigen::Vector3f& direction,
                               TopologyChange& change) {
   line_.emplace(cloth_->columns, cloth_->rows);
@@ -295,6 +377,17 @@ TopologyChange StrokeCutter::add_sample(const StrokeSample& sample) {
   if (!open_) change.merge(begin_stroke());
   const ClothPoint at = locator_.locate(*cloth_, sample.position);
   const Point point{at.uv, at.grid, sample.position, at.inside};
+  if (follows_path() && line_ && previous_ && previous_->inside && point.inside) {
+    // The nearest particle can be on another layer of a folded or swinging cloth: the point then jumps
+    // across the cloth and back on the next sample, and a cut that followed it would cut out a sliver
+    // (the straight_cut recording at 128 x 128: a 17-cell spike, 8 pieces). On the cloth the blade moves
+    // about as far as the hand does; a jump far beyond that is the locator's, not the hand's.
+    const Eigen::Vector2d jump = point.uv - previous_->uv;
+    const double jump_m = std::hypot(jump.x() * cloth_->spacing_x(), jump.y() * cloth_->spacing_y());
+    const double hand_m = static_cast<double>((sample.position - previous_->world).norm());
+    const double slack_m = options_.exact_max_jump_cells * std::min(cloth_->spacing_x(), cloth_->spacing_y());
+    if (jump_m > options_.exact_max_jump_ratio * hand_m + slack_m) return change;
+  }
   const Eigen::Vector3f direction = previous_ ? Eigen::Vector3f{sample.position - previous_->world}
                                               : Eigen::Vector3f::Zero();
   if (direction.squaredNorm() > 0.0F) last_direction_ = direction;

@@ -87,6 +87,7 @@ class ExactCutter {
   void separate(std::uint32_t c, TopologyChange& change);
   void remove_triangle(std::uint32_t t, TopologyChange& change);
   void rederive_springs(std::uint32_t p, TopologyChange& change);
+  void add_bends(std::uint32_t p, TopologyChange& change);
   [[nodiscard]] bool is_cut(std::uint32_t a, std::uint32_t b) const;
   void mark_cut(std::uint32_t a, std::uint32_t b);
   std::uint32_t particle_on_edge(std::uint32_t a, std::uint32_t b, double t, TopologyChange& change);

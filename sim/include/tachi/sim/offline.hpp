@@ -35,7 +35,7 @@ struct OfflineOptions {
   std::optional<GroundPlane> ground;    ///< --ground Y
   std::filesystem::path stroke_file;    ///< --stroke: CSV t,x,y,z cut while stepping (t = seconds from the start)
   Blade blade = Blade::Scalpel;         ///< --blade
-  CutMode cut_mode = CutMode::Grid;     ///< --cut-mode (grid until exact holds live: docs/cutting.md section 8)
+  CutMode cut_mode = CutMode::Exact;    ///< --cut-mode (the product's default; grid reproduces seed 000)
   std::optional<float> blade_force_n;   ///< --blade-force: overrides the blade's sharpness force
   SolverKind solver_kind = SolverKind::Pbd;  ///< --solver
   bool substeps_given = false;          ///< --substeps was given (else each solver's own default)

@@ -1,6 +1,7 @@
 // Time step of the cloth: position-based dynamics with Provot's deformation constraint. Per sub-step:
 //   1. predict  v = v (1 - damping h) + h (g + a_repulsion), x* = x + h v       (Mueller et al. 2007, eq. 1-3)
 //   2. long-range attachments: |x - x_pin| <= rest distance to the pin          (Kim, Chentanez, Mueller 2012)
+//      (behind a cut: to the particle where the shortest path to the pin bends around the cut's tip)
 //   3. shear and bend springs as soft constraints, compliance alpha / h^2        (XPBD, Macklin et al. 2016, eq. 18)
 //   4. Gauss-Seidel projection of structural springs, C = |xa - xb| - L          (Mueller et al. 2007, sec. 3.3)
 //   5. Provot's deformation constraint: structural springs over (1 + max_strain) L pulled back (Provot 1995, sec. 4)
@@ -31,10 +32,7 @@ struct SolverParams {
   float bend_compliance = 2.0F;    ///< XPBD compliance, m/N
   float structural_compliance = 0.0F;  ///< XPBD compliance of the structural springs, m/N (0: hard; materials set 1/k)
   float max_strain = 0.10F;        ///< Provot's critical deformation rate (10%)
-  int strain_limit_passes = 4;     ///< at most this many strain-limit sweeps per sub-step (stops when clean)
-  /// The last strain-limit sweep (and every sweep after the first next to a cut) moves only the end
-  /// farther from the pins (follow the leader).
-  bool strain_limit_follow = true;
+  int strain_limit_passes = 6;     ///< at most this many strain-limit sweeps per sub-step (stops when clean)
   bool long_range_attachments = true;
   bool soft_every_substep = true;  ///< shear/bend in every sub-step (false: cheaper, but never fully at rest)
 };
@@ -92,6 +90,10 @@ class Solver {
     std::vector<std::uint32_t> parent;     ///< previous particle on the shortest path (none at a source)
     std::vector<std::uint32_t> owner;      ///< the pin the path starts at
     std::vector<std::uint32_t> attachment; ///< per particle: its attachment in attachments_, or none
+    /// Per particle: what its tether holds it to (the pin, or the last particle before the shortest path
+    /// bends around a cut), and how many bends that is from the pin (0: held by the pin itself).
+    std::vector<std::uint32_t> anchor;
+    std::vector<std::uint32_t> bends;
     // A repair after a cut, possibly spread over several steps: its heap, the particles whose distance is
     // not final yet (their tethers are off meanwhile), and the same as a list.
     std::vector<std::pair<float, std::uint32_t>> heap;
@@ -128,25 +130,27 @@ class Solver {
   std::vector<Slot> slot_;                    ///< per spring
   std::size_t lanes_ = 0;                     ///< lanes in use when last fully built, and blanked since
   std::size_t blanked_ = 0;
-  // Structural springs again, ordered outwards from the pins, for the strain limit; the end nearer to a
-  // pin is `a`, and when it is strictly nearer only `b` moves (follow the leader).
-  enum class LimitFollow : std::uint8_t { Never, LastSweep, Always };
-  struct LimitSpring {
-    std::uint32_t a;
-    std::uint32_t b;
-    float rest;
-    LimitFollow follow;
-  };
-  std::vector<LimitSpring> strain_limit_;
+  // Structural springs again, ordered outwards from the pins, for the strain limit; per spring its place
+  // there (none for other kinds); whether a cut appended to it since it was last ordered, and whether it is
+  // to be re-ordered on a step with no cut (the cut's repair finished within its own step).
+  std::vector<PackedSpring> strain_limit_;
+  std::vector<std::uint32_t> limit_slot_;
+  bool limit_order_stale_ = false;
+  bool pending_limit_order_ = false;
   std::vector<std::pair<std::uint32_t, std::uint32_t>> limit_level_;  // scratch: (level, spring)
   std::vector<std::uint32_t> limit_start_;
-  // Long-range attachments: particle, pin, maximal distance.
+  // Long-range attachments: particle, anchor (a pin, or a particle at a bend of the shortest path around
+  // a cut), maximal distance.
   struct Attachment {
     std::uint32_t particle;
-    std::uint32_t pin;
+    std::uint32_t anchor;
     float length2;  ///< squared maximal distance (+inf: disabled, the pin no longer reaches it)
+    std::uint32_t bends;  ///< applied after every attachment with fewer bends (its anchor's own tether)
   };
   std::vector<Attachment> attachments_;
+  std::vector<std::uint32_t> tether_order_;  ///< attachments by bends; empty while none bends
+  bool tether_order_stale_ = false;
+  void order_tethers();
   std::vector<Search> searches_;
   std::vector<float> nearest_;  ///< per particle: rest distance to the nearest pin (+inf: no pin reaches it)
   std::vector<std::uint8_t> affected_;  ///< scratch of the incremental searches

@@ -86,8 +86,8 @@ enum class CutMode : std::uint8_t { Exact, Grid, Delete };
 [[nodiscard]] std::string_view to_string(CutMode mode);
 
 struct StrokeOptions {
-  /// Grid here so that the library reproduces seed 000 unless asked; tachi-sim's --cut-mode defaults to
-  /// grid too until exact mode holds in the live pipeline (docs/cutting.md section 8).
+  /// Grid here so that the library reproduces seed 000 unless asked; the product (tachi-sim's --cut-mode,
+  /// offline and live) defaults to exact.
   CutMode mode = CutMode::Grid;
   Blade blade = Blade::Scalpel;
   BladeDrag drag;
@@ -99,6 +99,21 @@ struct StrokeOptions {
   /// a path crossing itself cuts out slivers (measured on the straight_cut recording: a hand slowing down
   /// at the end of its stroke, cut with 0.02 cells, left 17 pieces instead of one slit).
   double exact_backtrack_cells = 0.75;
+  /// Exact and delete modes: a point of the path that would close a loop shorter than this around (in cells,
+  /// and at least exact_min_loop_m) does not join the cut: a hand wobbling at the end of its stroke would
+  /// cut out islands (straight_cut recording at 64 x 64: 3 pieces instead of one slit). Larger loops cut out
+  /// their patch as drawn.
+  double exact_min_loop_cells = 4.0;
+  double exact_min_loop_m = 0.06;
+  /// ... and a point closer than this to where the cut ends (cells, and at least exact_min_step_m) waits for
+  /// the hand to move on, unless it is on the cloth's edge.
+  double exact_min_step_cells = 1.0;
+  double exact_min_step_m = 0.01;
+  /// Exact and delete modes: a sample whose point on the cloth moved more than ratio x the hand's motion +
+  /// this many cells since the previous sample is the locator's mistake (another layer of a folded cloth),
+  /// and is skipped.
+  double exact_max_jump_ratio = 2.0;
+  double exact_max_jump_cells = 3.0;
   double max_lag_cells = 2.0;     ///< simplification: longest chord before it joins the cut
   double inside_margin_cells = 0.5;
 };
@@ -147,6 +162,11 @@ class StrokeCutter {
   void commit(GridCoord g, const Eigen::Vector2d& uv, const Eigen::Vector3f& direction, TopologyChange& change);
   void start_line(GridCoord g, const Eigen::Vector2d& uv, const Eigen::Vector3f& direction, TopologyChange& change);
   void close_line();
+  /// Whether the cut from `from` to `to` would meet the current line's path and close a loop shorter than
+  /// the options' minimum.
+  [[nodiscard]] bool closes_small_loop(const Eigen::Vector2d& from, const Eigen::Vector2d& to) const;
+  /// A length in cells: `cells`, or `metres` on this cloth if that is more.
+  [[nodiscard]] double at_least(double cells, double metres) const;
   void add_line_to_report(const std::vector<GridCoord>& line);
   [[nodiscard]] GridCoord boundary_point(const Eigen::Vector2d& uv) const;
   [[nodiscard]] Eigen::Vector2d clamp_uv(const Eigen::Vector2d& uv) const;

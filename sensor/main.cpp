@@ -182,8 +182,8 @@ int main(int argc, char** argv) try {
   }
   if (csv.is_open() && !csv.flush()) throw std::runtime_error("cannot write " + o.csv);
   if (recorder) recorder->flush();
-  // Best-effort samples still in flight: give matched readers a moment before the writer goes.
-  if (writer && writer->matched_readers() > 0) std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  // Samples still in flight: the matched readers acknowledge them before the writer goes (300 ms at most).
+  if (writer && writer->matched_readers() > 0) writer->wait_for_acks(std::chrono::milliseconds(300));
   spdlog::info("{} depth frames, hand tracked in {}", frames, tracked);
   return tachi::common::kExitOk;
 } catch (const std::exception& e) {

@@ -57,7 +57,7 @@ TEST(FilterBus, PushRecordingBecomesOneStrokeOnTheBus) {
   const auto hands = tachi::filter::testing::push_and_back(4);
   for (const auto& h : hands) {
     bus.hands.write(to_raw(h));
-    std::this_thread::sleep_for(3ms);  // hand samples are best effort: pace them like a sensor would
+    std::this_thread::sleep_for(3ms);  // the raw topic keeps the last 64: pace them like a sensor would
   }
   const auto got = bus.collect(hands.size());
   filter.signal(SIGINT);

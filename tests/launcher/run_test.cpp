@@ -119,7 +119,7 @@ TEST(TachiRun, PlaysARecordingAndTheCutFollowsTheStroke) {
     EXPECT_TRUE(fs::exists(out / file)) << file;
   EXPECT_NE(read_text(out / "cloth.obj").find("\nv "), std::string::npos) << "the simulator's exported mesh";
   EXPECT_GT(fs::file_size(out / "video.mp4"), 10'000u) << "the viewer's render of the run";
-  // The trace saw the run's raw hand samples (best effort: one may drop under load).
+  // The trace saw the run's raw hand samples (keep-last 64: one may be overwritten if the launcher stalls).
   EXPECT_LE(count_lines(out / "trace" / "hands.csv"), depth_frames("straight_cut") + 1);
   EXPECT_GE(count_lines(out / "trace" / "hands.csv"), depth_frames("straight_cut") * 9 / 10);
 }
@@ -134,8 +134,8 @@ TEST(TachiRun, TwoRunsOnDifferentDomainsDoNotSeeEachOther) {
   // Each saw exactly its own recording's frames: none of the other run's samples crossed over.
   EXPECT_EQ(sa["frames"], depth_frames("straight_cut"));
   EXPECT_EQ(sb["frames"], depth_frames("push"));
-  // Neither launcher's trace holds more raw samples than its own recording has frames (best effort: a
-  // sample may drop under load, never appear from the other domain).
+  // Neither launcher's trace holds more raw samples than its own recording has frames (keep-last: a
+  // sample may be overwritten under load, never appear from the other domain).
   EXPECT_LE(count_lines(a / "trace" / "hands.csv"), depth_frames("straight_cut") + 1);
   EXPECT_LE(count_lines(b / "trace" / "hands.csv"), depth_frames("push") + 1);
   EXPECT_GE(count_lines(b / "trace" / "hands.csv"), depth_frames("push") * 9 / 10);

@@ -81,7 +81,7 @@ TEST(Boundary, TheFilterRefusesAndCountsBadHandSamples) {
   bus::Reader<tachi_msg_NodeStatus> status{dds, bus::topics::node_status};
   bus::Reader<tachi_msg_StrokeSample> strokes{dds, bus::topics::stroke};
   ASSERT_TRUE(hands.wait_for_readers(1, 20s)) << filter.err();
-  // Raw hands are best effort: paced like a sensor, so a loaded machine does not drop a burst.
+  // Raw hands are keep-last 64: paced like a sensor, so a burst does not overwrite unread samples.
   for (const auto& h : {hand(0, 1'000'000'000, 0.1F), hand(1, 1'033'000'000, std::numeric_limits<float>::quiet_NaN()),
                         hand(2, 1'066'000'000, 1e30F),
                         hand(3, 950'000'000, 0.2F),  // 50 ms before the last good sample

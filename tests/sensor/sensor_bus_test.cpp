@@ -38,7 +38,7 @@ TEST(SensorProcess, PublishesOneRawHandSamplePerDepthFrameAndExitsAtTheEnd) {
 
   const auto rows = read_hand_csv(csv);
   ASSERT_EQ(rows.size(), 145u);
-  EXPECT_GE(received.size(), rows.size() * 95 / 100);  // best effort, but loopback loses next to nothing
+  EXPECT_GE(received.size(), rows.size() * 95 / 100);  // keep-last 64: a stalled reader may miss some
   EXPECT_TRUE(received.count(rows.back().frame)) << "the last sample was not flushed before exit";
   std::size_t tracked = 0;
   for (const auto& row : rows) {

@@ -95,7 +95,10 @@ FilterJournal::FilterJournal(std::filesystem::path path, const FilterConfig& con
 
 bool ProcessedSamples::contains(std::uint32_t sensor_id, std::int64_t stamp_ns) const {
   const auto it = stamps_.find(sensor_id);
-  return it != stamps_.end() && std::find(it->second.rbegin(), it->second.rend(), stamp_ns) != it->second.rend();
+  if (it == stamps_.end() || it->second.empty()) return false;
+  // The usual case, a new sample newer than every one processed, is answered without a search.
+  if (stamp_ns > it->second.back()) return false;
+  return std::find(it->second.rbegin(), it->second.rend(), stamp_ns) != it->second.rend();
 }
 
 void ProcessedSamples::add(std::uint32_t sensor_id, std::int64_t stamp_ns) {

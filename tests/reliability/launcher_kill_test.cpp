@@ -65,6 +65,11 @@ RunResult run(unsigned domain, const std::string& victim) {
   }
   r.exit_code = launcher.wait(120s);
   r.log = launcher.err();
+  if (victim == "viewer") {
+    // The killed viewer's unfinished video is kept aside; the restarted viewer writes the run's video.
+    EXPECT_TRUE(fs::exists(out / "video.before-restart-1.mp4")) << r.log;
+    EXPECT_TRUE(fs::exists(out / "video.mp4")) << r.log;
+  }
   std::ifstream in(out / "summary.json");
   r.summary = in ? nlohmann::json::parse(in, nullptr, false) : nlohmann::json();
   if (!victim.empty())

@@ -108,21 +108,6 @@ std::size_t Cloth::alive_triangle_count() const {
   return static_cast<std::size_t>(std::count(triangle_alive.begin(), triangle_alive.end(), std::uint8_t{1}));
 }
 
-namespace {
-
-/// Reserves and touches the room (grow, then shrink back: capacity stays), so the pages are mapped now
-/// and not faulted in one by one by later push_backs.
-template <typename T>
-void reserve_touched(std::vector<T>& v, std::size_t n) {
-  if (n <= v.capacity()) return;
-  const std::size_t size = v.size();
-  v.reserve(n);
-  v.resize(n);
-  v.resize(size);
-}
-
-}  // namespace
-
 void Cloth::reserve(std::size_t particles, std::size_t springs, std::size_t triangle_slots) {
   reserve_touched(triangles, triangle_slots);
   reserve_touched(triangle_alive, triangle_slots);

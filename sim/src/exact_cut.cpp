@@ -98,8 +98,13 @@ ExactCutter::ExactCutter(Cloth& cloth, double snap_cells)
   const std::size_t cells = static_cast<std::size_t>(cell_columns_) * static_cast<std::size_t>(cell_rows_);
   cloth.reserve(cloth.particle_count() + cells / 2, cloth.spring_count() + 2 * cells,
                 cloth.triangle_count() + 2 * cells);
-  triangle_stamp_.reserve(cloth.triangle_count() + 2 * cells);
-  triangle_cell_.reserve(cloth.triangle_count() + 2 * cells);
+  reserve_touched(triangle_stamp_, cloth.triangle_count() + 2 * cells);
+  reserve_touched(triangle_cell_, cloth.triangle_count() + 2 * cells);
+  const std::size_t particle_room = cloth.particle_count() + cells / 2;
+  reserve_touched(particle_stamp_, particle_room);
+  reserve_touched(side_, particle_room);
+  reserve_touched(snapped_, particle_room);
+  reserve_touched(cut_partners_, particle_room);
   cell_triangles_.resize(cells);
   for (std::uint32_t t = 0; t < cloth.triangle_count(); ++t) {
     if (cloth.triangle_alive[t] != 0) register_triangle(t);

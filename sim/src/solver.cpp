@@ -47,6 +47,7 @@ std::optional<const char*> validate(const SolverParams& p) {
     return "compliance must be >= 0";
   if (!(p.max_strain > 0.0F) || !(p.max_strain < 10.0F)) return "max_strain must be in (0, 10)";
   if (p.strain_limit_passes < 1 || p.strain_limit_passes > 100) return "strain_limit_passes must be in [1, 100]";
+  if (p.repair_per_step < 1) return "repair_per_step must be at least 1";
   return std::nullopt;
 }
 
@@ -56,9 +57,6 @@ namespace {
 
 constexpr std::uint32_t kNone = 0xFFFFFFFFU;
 constexpr float kInf = std::numeric_limits<float>::infinity();
-/// Particles a repair of the attachments settles per step at most (~0.3 ms here): a cut that re-routes
-/// the shortest paths of a whole piece (the last cuts before it comes off) is spread over a few steps.
-constexpr std::size_t kSettledPerStep = 2048;
 
 /// Octile distance between two rest coordinates (cells): the length of the shortest path along a
 /// grid's structural and shear springs, which Dijkstra over an uncut grid measures.
@@ -75,6 +73,17 @@ float octile(const Cloth& cloth, const Eigen::Vector2f& a, const Eigen::Vector2f
 std::size_t Solver::attachment_count() const {
   return static_cast<std::size_t>(std::count_if(attachments_.begin(), attachments_.end(),
                                                 [](const Attachment& a) { return std::isfinite(a.length2); }));
+}
+
+float Solver::pin_distance(std::size_t group, std::uint32_t particle) const {
+  if (group >= searches_.size() || particle >= searches_[group].dist.size()) return kInf;
+  const Search& search = searches_[group];
+  return search.open[particle] != 0 ? kInf : search.dist[particle];
+}
+
+bool Solver::repairing() const {
+  return std::any_of(searches_.begin(), searches_.end(),
+                     [](const Search& s) { return !s.heap.empty() || !s.open_list.empty(); });
 }
 
 void Solver::build_groups(const std::vector<PackedSpring>& springs, const std::vector<std::uint32_t>& keys,
@@ -120,10 +129,7 @@ void Solver::refresh_caches(const Cloth& cloth) {
   const bool topology_same = cache_valid_ && cached_version_ == cloth.topology_version &&
                              cached_springs_ == cloth.spring_count() &&
                              cached_particles_ == cloth.particle_count();
-  if (topology_same && pins == cached_pins_) {
-    continue_searches(cloth);
-    return;
-  }
+  if (topology_same && pins == cached_pins_) return;
   // Incremental only when the change is one the cloth logged: springs edited through its functions and
   // particles appended. Anything else (new pins, a grab, arrays edited directly) is rebuilt in full.
   const bool logged = cache_valid_ && pins == cached_pins_ && cloth.spring_edits.size() > edits_read_ &&
@@ -149,11 +155,12 @@ void Solver::full_build(const Cloth& cloth, std::vector<std::uint32_t> pins) {
   // per-particle arrays in place instead of reallocating (and faulting in) every one of them at once, which
   // made the step of the first cut at 256 x 256 take ~50 ms.
   const std::size_t particle_room = cloth.position.capacity() + 1;
-  nearest_.reserve(particle_room);
-  affected_.reserve(particle_room);
-  work_.reserve(particle_room);
-  old_work_.reserve(particle_room);
-  slot_.reserve(cloth.spring_a.capacity());
+  reserve_touched(nearest_, particle_room);
+  reserve_touched(opened_, particle_room);
+  reserve_touched(work_, particle_room);
+  reserve_touched(old_work_, particle_room);
+  reserve_touched(slot_, cloth.spring_a.capacity());
+  reserve_touched(limit_slot_, cloth.spring_a.capacity());
   slot_.assign(cloth.spring_count(), Slot{});
   lanes_ = 0;
   blanked_ = 0;
@@ -169,8 +176,9 @@ void Solver::full_build(const Cloth& cloth, std::vector<std::uint32_t> pins) {
   lanes_ = 0;
   for (auto& g : groups_) {
     lanes_ += 4 * g.size();
-    g.reserve(g.size() + g.size() / 4);  // the cuts' springs are appended (compacted past half blanked)
+    reserve_touched(g, g.size() + g.size() / 4);  // the cuts' springs are appended (compacted past half blanked)
   }
+  reserve_touched(strain_limit_, strain_limit_.size() + strain_limit_.size() / 4);
 }
 
 void Solver::append_springs(const Cloth& cloth, const std::vector<std::uint32_t>& springs) {
@@ -293,18 +301,45 @@ void Solver::update_incrementally(const Cloth& cloth) {
     strain_limit_.push_back({na, nb, cloth.rest_length[k]});
   }
   limit_order_stale_ = true;
-  bool repairing = false;
-  for (const Search& search : searches_) repairing = repairing || !search.heap.empty() || !search.open_list.empty();
-  if (!repairing) pending_limit_order_ = true;
+  if (!repairing()) pending_limit_order_ = true;
 }
 
 bool Solver::run_search(const Cloth& cloth, Search& search, bool repair, std::size_t budget) {
-  // Dijkstra over live structural and shear springs (rest lengths), at most `budget` particles settled per
-  // call. A repair (after a cut) relaxes only the open particles: the others' distances are final (a cut
-  // only lengthens paths, so a particle whose shortest path the cut did not touch keeps it); each particle
-  // it settles gets its tether back. Returns true when the search is complete.
+  // Dijkstra over live structural and shear springs (rest lengths), at most `budget` particles seeded or
+  // settled per call. A repair (after a cut) first seeds every open particle with its distance through its
+  // settled neighbours, then relaxes only the open particles: the others' distances are final (a cut only
+  // lengthens paths, so a particle whose shortest path the cut did not touch keeps it); each particle it
+  // settles gets its tether back. Seeding is finished before anything settles, so no particle settles at a
+  // distance a seed not yet in the heap would have shortened. Returns true when the search is complete.
   auto& heap = search.heap;
   const auto greater = [](const auto& x, const auto& y) { return x.first > y.first; };
+  const auto neighbour = [&](std::uint32_t k, std::uint32_t i) {
+    return cloth.spring_a[k] == i ? cloth.spring_b[k] : cloth.spring_a[k];
+  };
+  if (repair) {
+    while (search.seeded < search.open_list.size() && budget > 0) {
+      const std::uint32_t i = search.open_list[search.seeded++];
+      --budget;
+      if (search.open[i] == 0) continue;
+      for (const std::uint32_t k : cloth.springs_of(i)) {
+        if (cloth.kind[k] == SpringKind::Bend) continue;
+        const std::uint32_t j = neighbour(k, i);
+        if (search.open[j] != 0 || !std::isfinite(search.dist[j])) continue;
+        const float d = search.dist[j] + cloth.rest_length[k];
+        if (d < search.dist[i]) {
+          search.dist[i] = d;
+          search.parent[i] = j;
+          search.parent_spring[i] = k;
+          search.owner[i] = search.owner[j];
+        }
+      }
+      if (std::isfinite(search.dist[i])) {
+        heap.emplace_back(search.dist[i], i);
+        std::push_heap(heap.begin(), heap.end(), greater);
+      }
+    }
+    if (search.seeded < search.open_list.size()) return false;
+  }
   while (!heap.empty() && budget > 0) {
     std::pop_heap(heap.begin(), heap.end(), greater);
     const auto [d, i] = heap.back();
@@ -314,18 +349,23 @@ bool Solver::run_search(const Cloth& cloth, Search& search, bool repair, std::si
       if (search.open[i] == 0) continue;
       search.open[i] = 0;
       refresh_nearest(i);
+    } else if (search.order_pos[i] != kNone) {
+      continue;  // settled already (a duplicate heap entry at the same distance)
     }
+    search.order_pos[i] = static_cast<std::uint32_t>(search.order.size());
+    search.order.push_back(i);
     // In the order particles settle: a particle's anchor comes from its parent's, settled before it.
     if (params_.long_range_attachments) attach(cloth, search, i);
     --budget;
     for (const std::uint32_t k : cloth.springs_of(i)) {
       if (cloth.kind[k] == SpringKind::Bend) continue;
-      const std::uint32_t j = cloth.spring_a[k] == i ? cloth.spring_b[k] : cloth.spring_a[k];
-      if (repair && search.open[j] == 0) continue;
+      const std::uint32_t j = neighbour(k, i);
       const float dj = d + cloth.rest_length[k];
+      if (repair ? search.open[j] == 0 : search.order_pos[j] != kNone) continue;
       if (dj < search.dist[j]) {
         search.dist[j] = dj;
         search.parent[j] = i;
+        search.parent_spring[j] = k;
         search.owner[j] = search.owner[i];
         heap.emplace_back(dj, j);
         std::push_heap(heap.begin(), heap.end(), greater);
@@ -336,6 +376,18 @@ bool Solver::run_search(const Cloth& cloth, Search& search, bool repair, std::si
   // What the repair never reached is cut off from this pin: no tether (set when it was opened).
   for (const std::uint32_t i : search.open_list) search.open[i] = 0;
   search.open_list.clear();
+  search.seeded = 0;
+  // Stale entries (particles that settled again) past half the order: drop them, keeping the order.
+  if (search.order.size() > 2 * cloth.particle_count()) {
+    std::size_t live = 0;
+    for (std::size_t pos = 0; pos < search.order.size(); ++pos) {
+      const std::uint32_t i = search.order[pos];
+      if (search.order_pos[i] != pos) continue;
+      search.order_pos[i] = static_cast<std::uint32_t>(live);
+      search.order[live++] = i;
+    }
+    search.order.resize(live);
+  }
   return true;
 }
 
@@ -353,7 +405,7 @@ void Solver::continue_searches(const Cloth& cloth) {
   for (Search& search : searches_) {
     if (search.heap.empty() && search.open_list.empty()) continue;
     progressed = true;
-    pending = !run_search(cloth, search, true, kSettledPerStep) || pending;
+    pending = !run_search(cloth, search, true, static_cast<std::size_t>(params_.repair_per_step)) || pending;
   }
   // Settled particles change the strain limit's order (their distance to the pins): redo it once done.
   if ((progressed && !pending) || (pending_limit_order_ && !pending)) {
@@ -452,18 +504,27 @@ void Solver::build_attachments(const Cloth& cloth) {
     }
   }
   const std::size_t particle_room = cloth.position.capacity();
-  attachments_.reserve(searches_.size() * particle_room);
-  tether_order_.reserve(searches_.size() * particle_room);
+  reserve_touched(attachments_, searches_.size() * particle_room);
+  reserve_touched(tether_order_, searches_.size() * particle_room);
   for (Search& search : searches_) {
-    search.dist.reserve(particle_room);
-    search.parent.reserve(particle_room);
-    search.owner.reserve(particle_room);
-    search.attachment.reserve(particle_room);
-    search.anchor.reserve(particle_room);
-    search.bends.reserve(particle_room);
-    search.open.reserve(particle_room);
+    reserve_touched(search.dist, particle_room);
+    reserve_touched(search.parent, particle_room);
+    reserve_touched(search.parent_spring, particle_room);
+    reserve_touched(search.order_pos, particle_room);
+    reserve_touched(search.order, 2 * particle_room);
+    reserve_touched(search.owner, particle_room);
+    reserve_touched(search.attachment, particle_room);
+    reserve_touched(search.anchor, particle_room);
+    reserve_touched(search.bends, particle_room);
+    reserve_touched(search.open, particle_room);
+    reserve_touched(search.open_list, particle_room);
+    reserve_touched(search.heap, particle_room);
     search.dist.assign(n, kInf);
     search.parent.assign(n, kNone);
+    search.parent_spring.assign(n, kNone);
+    search.order_pos.assign(n, kNone);
+    search.order.clear();
+    search.seeded = 0;
     search.owner.assign(n, kNone);
     search.attachment.assign(n, kNone);
     search.anchor.assign(n, kNone);
@@ -481,97 +542,111 @@ void Solver::build_attachments(const Cloth& cloth) {
   }
 }
 
+bool Solver::parent_spring_intact(const Cloth& cloth, Search& search, std::uint32_t i) {
+  const std::uint32_t p = search.parent[i];
+  const std::uint32_t k = search.parent_spring[i];
+  if (k < cloth.spring_count() && cloth.alive[k] != 0 &&
+      ((cloth.spring_a[k] == i && cloth.spring_b[k] == p) || (cloth.spring_a[k] == p && cloth.spring_b[k] == i))) {
+    return true;
+  }
+  // The cut may have re-made the spring under another index (its particles' springs re-derived).
+  for (const std::uint32_t other : cloth.springs_of(i)) {
+    if (cloth.kind[other] == SpringKind::Bend) continue;
+    if ((cloth.spring_a[other] == i && cloth.spring_b[other] == p) || (cloth.spring_a[other] == p && cloth.spring_b[other] == i)) {
+      search.parent_spring[i] = other;
+      return true;
+    }
+  }
+  return false;
+}
+
+void Solver::open_particle(Search& search, std::uint32_t i) {
+  // Off its shortest-path tree until the repair settles it again, and its tether off meanwhile (a particle
+  // cut off from the pin never gets one back).
+  search.dist[i] = kInf;
+  search.parent[i] = kNone;
+  search.parent_spring[i] = kNone;
+  search.owner[i] = kNone;
+  search.order_pos[i] = kNone;  // its entry in the order goes stale
+  if (search.open[i] == 0) search.open_list.push_back(i);
+  search.open[i] = 1;
+  search.anchor[i] = kNone;
+  if (search.bends[i] != 0) tether_order_stale_ = true;
+  search.bends[i] = 0;
+  if (search.attachment[i] != kNone) attachments_[search.attachment[i]] = {i, i, kInf, 0};
+  opened_.push_back(i);
+}
+
 void Solver::update_attachments(const Cloth& cloth, const std::vector<std::uint32_t>& touched) {
   const std::size_t n = cloth.particle_count();
   nearest_.resize(n, kInf);
   if (searches_.empty()) return;
   // Decremental shortest paths (Ramalingam and Reps 1996): a particle is affected when the spring to its
-  // parent on the shortest-path tree is gone, or it is new; so is everything below it on the tree.
-  // Only those are searched again, from the distances of their unaffected neighbours.
-  const auto has_edge = [&](std::uint32_t i, std::uint32_t j) {
-    for (const std::uint32_t k : cloth.springs_of(i)) {
-      if (cloth.kind[k] != SpringKind::Bend && (cloth.spring_a[k] == j || cloth.spring_b[k] == j)) return true;
-    }
-    return false;
-  };
-  std::vector<std::uint32_t> stack;
-  std::vector<std::uint32_t> all_affected(touched);
-  std::vector<std::uint32_t> affected_list;
+  // parent on the shortest-path tree is gone, or it is new; so is everything below it on the tree. They are
+  // opened here (distance and tether off); the repair that searches them again from the distances of their
+  // settled neighbours runs within each step's budget (continue_searches).
+  // A cut may also make a path shorter (an exact cut's new triangles' edges cut across a cell): that is not
+  // searched for, so a repaired distance may exceed a full build's by a few per cent, never fall short of
+  // it. Searching for it too (re-opening a settled particle that a newly settled one reaches by a shorter
+  // way) was tried: the 64 x 64 exact slit of tachi-sim's CutCli test then rested at 14.9 % strain instead
+  // of <= 10 %, likely because attach()'s straightness test, tuned on grid paths, then lets more chains of
+  // tethers count as straight around a cut's tip.
+  // The subtrees are found in one pass over the settle order from the first orphan: a particle there comes
+  // after its parent, so it is opened when its parent was. That is a load and a test per particle, where
+  // walking the subtrees through the springs cost ~500 instructions per particle and search (5 ms for the
+  // lower half of a 128 x 128 cloth over four searches).
+  opened_.clear();
   for (Search& search : searches_) {
     const std::size_t old_n = search.dist.size();
     search.dist.resize(n, kInf);
     search.parent.resize(n, kNone);
+    search.parent_spring.resize(n, kNone);
     search.owner.resize(n, kNone);
     search.attachment.resize(n, kNone);
     search.anchor.resize(n, kNone);
     search.bends.resize(n, 0);
     search.open.resize(n, 0);
-    affected_.assign(n, 0);
-    stack.clear();
+    search.order_pos.resize(n, kNone);
+    const std::size_t open_before = search.open_list.size();
+    std::uint32_t first = kNone;
     for (const std::uint32_t i : touched) {
-      const bool fresh = i >= old_n;
-      const bool orphaned = search.parent[i] != kNone && !has_edge(i, search.parent[i]);
-      if ((fresh || orphaned) && affected_[i] == 0) {
-        affected_[i] = 1;
-        stack.push_back(i);
+      if (i >= old_n) {
+        if (search.open[i] == 0) open_particle(search, i);
+        continue;
       }
+      if (search.open[i] != 0 || search.parent[i] == kNone || parent_spring_intact(cloth, search, i)) continue;
+      first = std::min(first, search.order_pos[i]);
+      open_particle(search, i);
     }
-    if (stack.empty()) continue;
-    // Everything below them on the tree: a particle's children are among its spring neighbours (the tree's
-    // edges are springs), so the subtree is found from the springs, in time proportional to its size rather
-    // than to the cloth (building children lists of the whole tree cost O(n) per search and cut).
-    affected_list.clear();
-    while (!stack.empty()) {
-      const std::uint32_t i = stack.back();
-      stack.pop_back();
-      affected_list.push_back(i);
-      for (const std::uint32_t k : cloth.springs_of(i)) {
-        if (cloth.kind[k] == SpringKind::Bend) continue;
-        const std::uint32_t j = cloth.spring_a[k] == i ? cloth.spring_b[k] : cloth.spring_a[k];
-        if (affected_[j] == 0 && search.parent[j] == i) {
-          affected_[j] = 1;
-          stack.push_back(j);
-        }
-      }
+    if (first == kNone) continue;
+    for (std::size_t pos = first + 1; pos < search.order.size(); ++pos) {
+      const std::uint32_t i = search.order[pos];
+      if (search.order_pos[i] != pos) continue;  // stale: it settled again later
+      const std::uint32_t p = search.parent[i];
+      if (p != kNone && search.open[p] != 0) open_particle(search, i);
     }
-    // Opened: no tether until the repair settles them (a particle cut off from the pin never gets one).
-    for (const std::uint32_t i : affected_list) {
+    // A repair in progress: a particle still open holds a tentative distance through a settled particle
+    // (seeds and relaxations always come from one). If this cut opened that particle or cut the spring to
+    // it, the distance is gone with it, so it is forgotten and the open particles are seeded again.
+    bool reseed = false;
+    for (std::size_t k = 0; k < open_before; ++k) {
+      const std::uint32_t i = search.open_list[k];
+      const std::uint32_t p = search.parent[i];
+      if (p == kNone || (search.open[p] == 0 && parent_spring_intact(cloth, search, i))) continue;
       search.dist[i] = kInf;
       search.parent[i] = kNone;
+      search.parent_spring[i] = kNone;
       search.owner[i] = kNone;
-      if (search.open[i] == 0) search.open_list.push_back(i);
-      search.open[i] = 1;
-      if (params_.long_range_attachments) attach(cloth, search, i);
+      reseed = true;
     }
-    for (const std::uint32_t i : affected_list) {
-      for (const std::uint32_t k : cloth.springs_of(i)) {
-        if (cloth.kind[k] == SpringKind::Bend) continue;
-        const std::uint32_t j = cloth.spring_a[k] == i ? cloth.spring_b[k] : cloth.spring_a[k];
-        if (search.open[j] != 0 || !std::isfinite(search.dist[j])) continue;
-        const float d = search.dist[j] + cloth.rest_length[k];
-        if (d < search.dist[i]) {
-          search.dist[i] = d;
-          search.parent[i] = j;
-          search.owner[i] = search.owner[j];
-        }
-      }
-      if (std::isfinite(search.dist[i])) {
-        search.heap.emplace_back(search.dist[i], i);
-        std::push_heap(search.heap.begin(), search.heap.end(),
-                       [](const auto& x, const auto& y) { return x.first > y.first; });
-      }
-    }
-    all_affected.insert(all_affected.end(), affected_list.begin(), affected_list.end());
+    if (reseed) search.seeded = 0;
   }
-  for (const std::uint32_t i : all_affected) refresh_nearest(i);
-  // The repair itself, within this step's budget; continue_searches goes on with it in the next steps.
-  for (Search& search : searches_) {
-    if (!search.open_list.empty()) run_search(cloth, search, true, kSettledPerStep);
-  }
+  for (const std::uint32_t i : opened_) refresh_nearest(i);
 }
 
 void Solver::step(Cloth& cloth, const Colliders& colliders) {
   refresh_caches(cloth);
+  continue_searches(cloth);
   if (tether_order_stale_) order_tethers();
   const std::size_t n = cloth.particle_count();
   // Work on (x, y, z, w) quadruples: one aligned 16-byte load brings a position and its inverse mass.

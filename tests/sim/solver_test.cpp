@@ -1,10 +1,13 @@
 #include "tachi/sim/solver.hpp"
+#include "tachi/sim/stroke.hpp"
 
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
 #include <numeric>
+#include <random>
+#include <string>
 
 namespace {
 
@@ -201,6 +204,71 @@ TEST(Solver, RejectsBadParameters) {
   p = {};
   p.dt = -1.0F;
   EXPECT_TRUE(validate(p).has_value());
+  p = {};
+  p.repair_per_step = 0;
+  EXPECT_TRUE(validate(p).has_value());
 }
 
 }  // namespace
+
+// Issue 11: the update after a cut touches only what the cut changed (the attachments' shortest paths are
+// repaired decrementally, within each step's budget). Whatever the cuts and however they interleave with
+// the repair, once it settles every particle must reach the same pin groups as a full build on the same
+// cloth finds, at the same path length, or a little longer where an exact cut's new edges made a shortcut
+// the repair does not look for (Solver::update_attachments): never shorter, which would stretch the cloth.
+class IncrementalAttachments : public ::testing::TestWithParam<CutMode> {};
+
+TEST_P(IncrementalAttachments, CutsWhileRepairingEndAsAFullBuildWould) {
+  std::mt19937 rng{11};
+  std::uniform_real_distribution<float> coord{-0.6F, 0.6F};
+  for (int trial = 0; trial < 6; ++trial) {
+    Cloth cloth = make(24, PinMode::TopEdge);
+    StrokeOptions options;
+    options.mode = GetParam();
+    StrokeCutter cutter{cloth, options};
+    SolverParams params;
+    params.repair_per_step = 50;  // a repair takes several steps here, so later cuts come in the middle of it
+    Solver solver{params};
+    solver.step(cloth);
+    double t = 0.0;
+    // Two strokes of a few long segments each, a step after every sample: later segments cut while the
+    // repair of earlier ones is still going on.
+    for (int stroke = 0; stroke < 2; ++stroke) {
+      Eigen::Vector3f at{coord(rng), coord(rng), 0.0F};
+      for (int s = 0; s < 6; ++s) {
+        cutter.add_sample({t += 1.0 / 60.0, at});
+        solver.step(cloth);
+        at = Eigen::Vector3f{coord(rng), coord(rng), 0.0F};
+      }
+      cutter.end_stroke();
+    }
+    for (int s = 0; s < 2000 && solver.repairing(); ++s) solver.step(cloth);
+    ASSERT_FALSE(solver.repairing()) << "trial " << trial;
+    EXPECT_GT(solver.incremental_updates(), 0U) << "trial " << trial;
+
+    Cloth same = cloth;
+    Solver fresh;
+    fresh.update_topology(same);
+    ASSERT_EQ(fresh.pin_groups(), solver.pin_groups());
+    for (std::size_t g = 0; g < solver.pin_groups(); ++g) {
+      for (std::uint32_t i = 0; i < cloth.particle_count(); ++i) {
+        const float want = fresh.pin_distance(g, i);
+        const float got = solver.pin_distance(g, i);
+        if (std::isinf(want)) {
+          ASSERT_TRUE(std::isinf(got)) << "trial " << trial << " group " << g << " particle " << i;
+        } else {
+          ASSERT_GE(got, want * (1.0F - 1e-5F)) << "trial " << trial << " group " << g << " particle " << i;
+          // Octile paths on the grid are at most 8 % longer than the straight line a new edge may take.
+          ASSERT_LE(got, want * 1.08F + 1e-6F) << "trial " << trial << " group " << g << " particle " << i;
+          if (GetParam() != CutMode::Exact) {
+            ASSERT_NEAR(got, want, 1e-5F * std::max(1.0F, want)) << "trial " << trial << " group " << g << " particle " << i;
+          }
+        }
+      }
+    }
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(CutModes, IncrementalAttachments,
+                         ::testing::Values(CutMode::Exact, CutMode::Grid, CutMode::Delete),
+                         [](const auto& param) { return std::string{to_string(param.param)}; });

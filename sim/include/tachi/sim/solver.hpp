@@ -33,6 +33,9 @@ struct SolverParams {
   float structural_compliance = 0.0F;  ///< XPBD compliance of the structural springs, m/N (0: hard; materials set 1/k)
   float max_strain = 0.10F;        ///< Provot's critical deformation rate (10%)
   int strain_limit_passes = 6;     ///< at most this many strain-limit sweeps per sub-step (stops when clean)
+  /// Particles the attachments' repair after a cut seeds or settles per step and pin group, at most: a cut
+  /// that re-routes a whole piece is spread over steps (those particles' tethers are off meanwhile).
+  int repair_per_step = 2048;
   bool long_range_attachments = true;
   bool soft_every_substep = true;  ///< shear/bend in every sub-step (false: cheaper, but never fully at rest)
 };
@@ -53,6 +56,7 @@ class Solver {
   /// Advances the cloth by params().dt.
   void step(Cloth& cloth, const Colliders& colliders = {});
   /// Picks up the cloth's topology changes now (step() does it first anyway): for timing the update apart.
+  /// The attachments' repair after a cut is not part of it: each step goes on with it within a budget.
   void update_topology(const Cloth& cloth) { refresh_caches(cloth); }
 
   [[nodiscard]] const SolverParams& params() const { return params_; }
@@ -61,6 +65,13 @@ class Solver {
   /// Full cache builds so far (the first step's included), and incremental updates after cuts.
   [[nodiscard]] std::size_t full_builds() const { return full_builds_; }
   [[nodiscard]] std::size_t incremental_updates() const { return incremental_updates_; }
+  /// Pin groups of the long-range attachments (one search each): each particle has a tether per group.
+  [[nodiscard]] std::size_t pin_groups() const { return searches_.size(); }
+  /// Rest length of the shortest path along the cloth's springs from pin group `group` to `particle`
+  /// (+inf: none, or a repair after a cut has not settled it yet). What its tether is measured from.
+  [[nodiscard]] float pin_distance(std::size_t group, std::uint32_t particle) const;
+  /// Whether a repair of the attachments after a cut is still going on (it goes on within each step).
+  [[nodiscard]] bool repairing() const;
 
   /// A live spring copied out of the Cloth arrays, in the solver's sweep order.
   struct PackedSpring {
@@ -88,6 +99,7 @@ class Solver {
     std::vector<std::uint32_t> sources;
     std::vector<float> dist;
     std::vector<std::uint32_t> parent;     ///< previous particle on the shortest path (none at a source)
+    std::vector<std::uint32_t> parent_spring;  ///< the spring from the parent (none at a source)
     std::vector<std::uint32_t> owner;      ///< the pin the path starts at
     std::vector<std::uint32_t> attachment; ///< per particle: its attachment in attachments_, or none
     /// Per particle: what its tether holds it to (the pin, or the last particle before the shortest path
@@ -99,6 +111,12 @@ class Solver {
     std::vector<std::pair<float, std::uint32_t>> heap;
     std::vector<std::uint8_t> open;
     std::vector<std::uint32_t> open_list;
+    std::size_t seeded = 0;  ///< open_list entries whose distances from settled neighbours are in the heap
+    /// The settled particles in the order they settled, so each after its parent (the tree's edges point
+    /// backwards); re-settled ones are appended and their old entries go stale (order_pos tells). A cut's
+    /// orphaned subtrees are then one pass over the array from the first orphan, with no adjacency walks.
+    std::vector<std::uint32_t> order;
+    std::vector<std::uint32_t> order_pos;  ///< per particle: its live place in order (none: not settled)
   };
 
   void refresh_caches(const Cloth& cloth);
@@ -111,6 +129,8 @@ class Solver {
   void continue_searches(const Cloth& cloth);
   void refresh_nearest(std::uint32_t i);
   void attach(const Cloth& cloth, Search& search, std::uint32_t i);
+  void open_particle(Search& search, std::uint32_t i);
+  [[nodiscard]] static bool parent_spring_intact(const Cloth& cloth, Search& search, std::uint32_t i);
   void update_attachments(const Cloth& cloth, const std::vector<std::uint32_t>& touched);
   static void build_groups(const std::vector<PackedSpring>& springs, const std::vector<std::uint32_t>& keys,
                            std::vector<Group>& groups);
@@ -153,7 +173,7 @@ class Solver {
   void order_tethers();
   std::vector<Search> searches_;
   std::vector<float> nearest_;  ///< per particle: rest distance to the nearest pin (+inf: no pin reaches it)
-  std::vector<std::uint8_t> affected_;  ///< scratch of the incremental searches
+  std::vector<std::uint32_t> opened_;  ///< scratch of the incremental update: particles it opened
   // Positions with the inverse mass in w, during a step; element 0 is the fixed padding particle.
   std::vector<Eigen::Vector4f> work_;
   std::vector<Eigen::Vector4f> old_work_;

@@ -664,6 +664,9 @@ bool HandFinder::Impl::measure_turned_palm(std::span<const std::uint16_t> raw, c
   // the flattest place may be among them (measured: 6-7 cm off at 63-77 degrees): placed by the
   // hand's shape instead.
   if (-plane.normal.dot(centre.normalized()) < kMinPalmViewCos) return measure_edge_on_palm(roi, hand_plane, palm);
+  // No palm-sized circle there: the flattest place was not the palm (measured: the wrist, 7 cm
+  // below it, at 56 degrees with the palm turned 50): placed by the hand's shape instead.
+  if (peak * kCellM < params.min_palm_radius_m) return measure_edge_on_palm(roi, hand_plane, palm);
   // Share of the circle with readings (before the holes were filled).
   cv::warpPerspective(roi_mask, rectified_mask, palm_grid.grid_to_roi, palm_grid.size, cv::INTER_NEAREST | cv::WARP_INVERSE_MAP,
                       cv::BORDER_CONSTANT, cv::Scalar(0));

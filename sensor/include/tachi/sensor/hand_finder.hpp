@@ -11,7 +11,7 @@
 //  3. at full resolution, in that region only: the hand mask (dropouts inside it filled), its
 //     distance transform; the palm centre is the distance-transform maximum (the centre of the
 //     largest inscribed circle, i.e. the palm), back-projected at the median depth of the palm
-//     circle. A palm turned 26-63 degrees away is measured in its own plane instead: the hand's
+//     circle. A palm turned 31-63 degrees away is measured in its own plane instead: the hand's
 //     readings near a total-least-squares plane, the flattest palm-sized place on a metric grid in
 //     that plane (fingers are round, the palm flat), resampled through the plane-to-image
 //     homography K [e1 e2 p0] (Hartley & Zisserman, Multiple View Geometry, sec. 8.1.1). Seen

@@ -4,7 +4,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <map>
 #include <numbers>
 #include <string>
 
@@ -40,32 +39,21 @@ ScenarioRun run_scenario(const std::string& name) {
   return run;
 }
 
-/// Scenarios that miss a target (docs/sensor.md, "Known limits"), held to what they reach so that a
-/// regression still fails: a palm turned 60 degrees (52% tracked at 5.5 mm RMS: the frames seen more
-/// obliquely than 63 degrees from the line of sight are not reported).
-struct Floor {
-  double max_rms_m;
-  double min_tracked_ratio;
-};
-const std::map<std::string, Floor> kKnownMisses = {
-    {"turned_palm", {0.010, 0.50}}};
-
+/// The targets (issue 14), for every bundled scenario: RMS <= 1 cm, >= 99% of the visible frames
+/// tracked, no phantom frame.
 class ScenarioAccuracy : public ::testing::TestWithParam<std::string> {};
 
 TEST_P(ScenarioAccuracy, MeetsTheTargets) {
   const auto run = run_scenario(GetParam());
   const Evaluation e = evaluate(run.hands, run.truth);
-  const auto miss = kKnownMisses.find(GetParam());
-  const Floor floor = miss != kKnownMisses.end() ? miss->second : Floor{0.010, 0.99};
   EXPECT_EQ(e.missing_frames, 0u);
   EXPECT_GE(e.visible, 50u);  // enough visible frames for the ratio to mean something
-  EXPECT_LE(e.rms_m, floor.max_rms_m);
-  EXPECT_GE(e.tracked_ratio, floor.min_tracked_ratio);
+  EXPECT_LE(e.rms_m, 0.010);
+  EXPECT_GE(e.tracked_ratio, 0.99);
   EXPECT_EQ(e.phantoms, 0u);
-  // No frame far off: a palm cut by the image border is not reported 4-5 cm inward of its centre.
-  if (miss == kKnownMisses.end()) {
-    EXPECT_LE(e.max_m, 0.02);
-  }
+  // No frame far off: a palm cut by the image border is not reported 4-5 cm inward of its centre,
+  // nor an edge-on palm placed on its fingers.
+  EXPECT_LE(e.max_m, 0.02);
   RecordProperty("rms_mm", std::to_string(e.rms_m * 1000));
 }
 
@@ -85,6 +73,36 @@ TEST(HandFinder, APalmTurnedUpTo60DegreesFromTheLineOfSightIsTrackedWithin1Cm) {
     EXPECT_LE((run.hands[i].position - truth.position).norm(), 0.01) << "frame " << truth.frame;
   }
   EXPECT_GE(checked, 20);
+}
+
+TEST(HandFinder, APalmSeenNearlyEdgeOnIsPlacedWithin15MmWithLowerConfidence) {
+  // turned_palm beyond 63 degrees from the line of sight (33 visible frames, up to 77 degrees):
+  // the flattest place may be among the fingers there, so the centre is placed by the hand's shape.
+  // Every such frame is tracked, within 1.5 cm (12.9 mm measured), 1 cm RMS, at half confidence.
+  const auto dir = std::filesystem::path(test::recordings_dir()) / "turned_palm";
+  const auto truth = read_truth_csv(dir / "ground_truth.csv");
+  RecordingSource source(dir, Playback{0.0, false});
+  HandFinder finder(source.model());
+  const Eigen::Vector3d normal(-std::sin(60.0 * std::numbers::pi / 180), 0.0, -std::cos(60.0 * std::numbers::pi / 180));  // toward the sensor
+  int checked = 0;
+  double sum_squares = 0;
+  for (std::size_t i = 0; auto frame = source.next(); ++i) {
+    const auto hand = finder.find(*frame);
+    ASSERT_LT(i, truth.size());
+    if (!truth[i].visible || -normal.dot(truth[i].position.normalized()) >= std::cos(63.0 * std::numbers::pi / 180)) continue;
+    ++checked;
+    ASSERT_TRUE(hand.tracked) << "frame " << truth[i].frame;
+    const double error = (hand.position_m.cast<double>() - truth[i].position).norm();
+    EXPECT_LE(error, 0.015) << "frame " << truth[i].frame;
+    // Placed, not measured: half confidence (near 63 degrees the finder's own plane may still
+    // measure the palm, within a degree or two).
+    if (-normal.dot(truth[i].position.normalized()) < std::cos(65.0 * std::numbers::pi / 180)) {
+      EXPECT_LE(hand.confidence, 0.5f) << "frame " << truth[i].frame;
+    }
+    sum_squares += error * error;
+  }
+  EXPECT_GE(checked, 30);
+  EXPECT_LE(std::sqrt(sum_squares / std::max(1, checked)), 0.010);
 }
 
 TEST(HandFinder, AHandRisingThroughWhereTheArmRestedIsFoundInItsFirstVisibleFrame) {

@@ -14,7 +14,10 @@
 //     circle. A palm turned 31-63 degrees away is measured in its own plane instead: the hand's
 //     readings near a total-least-squares plane, the flattest palm-sized place on a metric grid in
 //     that plane (fingers are round, the palm flat), resampled through the plane-to-image
-//     homography K [e1 e2 p0] (Hartley & Zisserman, Multiple View Geometry, sec. 8.1.1).
+//     homography K [e1 e2 p0] (Hartley & Zisserman, Multiple View Geometry, sec. 8.1.1). Seen
+//     63-80 degrees from the line of sight (the fingers as flat as the palm there), the centre is
+//     placed by the hand's shape instead: 12 cm back from the fingertips along the hand, away from
+//     the forearm, a palm's half width in from the palm's far edge (half the confidence).
 // All thresholds are raw-disparity lookups built once from metric parameters.
 #pragma once
 

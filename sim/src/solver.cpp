@@ -377,18 +377,21 @@ bool Solver::run_search(const Cloth& cloth, Search& search, bool repair, std::si
   for (const std::uint32_t i : search.open_list) search.open[i] = 0;
   search.open_list.clear();
   search.seeded = 0;
-  // Stale entries (particles that settled again) past half the order: drop them, keeping the order.
-  if (search.order.size() > 2 * cloth.particle_count()) {
-    std::size_t live = 0;
-    for (std::size_t pos = 0; pos < search.order.size(); ++pos) {
-      const std::uint32_t i = search.order[pos];
-      if (search.order_pos[i] != pos) continue;
-      search.order_pos[i] = static_cast<std::uint32_t>(live);
-      search.order[live++] = i;
-    }
-    search.order.resize(live);
-  }
   return true;
+}
+
+void Solver::compact_order(Search& search, std::size_t particles) {
+  // Stale entries (particles that settled again) past half the order: dropped, the live ones keeping their
+  // relative order (each still after its parent). Any time, a repair in progress included.
+  if (search.order.size() <= 2 * particles) return;
+  std::size_t live = 0;
+  for (std::size_t pos = 0; pos < search.order.size(); ++pos) {
+    const std::uint32_t i = search.order[pos];
+    if (search.order_pos[i] != pos) continue;
+    search.order_pos[i] = static_cast<std::uint32_t>(live);
+    search.order[live++] = i;
+  }
+  search.order.resize(live);
 }
 
 void Solver::refresh_nearest(std::uint32_t i) {
@@ -607,6 +610,7 @@ void Solver::update_attachments(const Cloth& cloth, const std::vector<std::uint3
     search.bends.resize(n, 0);
     search.open.resize(n, 0);
     search.order_pos.resize(n, kNone);
+    compact_order(search, n);
     const std::size_t open_before = search.open_list.size();
     std::uint32_t first = kNone;
     for (const std::uint32_t i : touched) {
@@ -618,8 +622,7 @@ void Solver::update_attachments(const Cloth& cloth, const std::vector<std::uint3
       first = std::min(first, search.order_pos[i]);
       open_particle(search, i);
     }
-    if (first == kNone) continue;
-    for (std::size_t pos = first + 1; pos < search.order.size(); ++pos) {
+    for (std::size_t pos = first == kNone ? search.order.size() : first + 1; pos < search.order.size(); ++pos) {
       const std::uint32_t i = search.order[pos];
       if (search.order_pos[i] != pos) continue;  // stale: it settled again later
       const std::uint32_t p = search.parent[i];

@@ -231,9 +231,9 @@ TEST_P(IncrementalAttachments, CutsWhileRepairingEndAsAFullBuildWould) {
     Solver solver{params};
     solver.step(cloth);
     double t = 0.0;
-    // Two strokes of a few long segments each, a step after every sample: later segments cut while the
+    // Twelve strokes of a few long segments each, a step after every sample: later segments cut while the
     // repair of earlier ones is still going on.
-    for (int stroke = 0; stroke < 2; ++stroke) {
+    for (int stroke = 0; stroke < 12; ++stroke) {
       Eigen::Vector3f at{coord(rng), coord(rng), 0.0F};
       for (int s = 0; s < 6; ++s) {
         cutter.add_sample({t += 1.0 / 60.0, at});

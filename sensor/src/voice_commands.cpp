@@ -54,13 +54,13 @@ std::optional<std::string> validate(const VoiceConfig& config) {
         return "phrases: \"" + p.phrase + "\" may hold only letters, spaces and apostrophes";
     if (!seen.insert(p.phrase).second) return "phrases: \"" + p.phrase + "\" appears twice";
     if (!std::isfinite(p.threshold) || p.threshold <= 0.0 || p.threshold > 1.0)
-      return "phrases: threshold of \"" + p.phrase + "\" must be in (0, 1] (e.g. 1e-20)";
+      return "phrases: threshold of \"" + p.phrase + "\" must be in (0, 1] (e.g. 1e-15)";
     start = start || p.command == VoiceCommand::Start;
     stop = stop || p.command == VoiceCommand::Stop;
   }
   if (!start || !stop) return "phrases: need at least one start and one stop phrase";
   if (!std::isfinite(config.phone_loop_probability) || config.phone_loop_probability <= 0.0 || config.phone_loop_probability > 1.0)
-    return "phone_loop_probability must be in (0, 1] (e.g. 0.1, or 1e-6 in noise)";
+    return "phone_loop_probability must be in (0, 1] (e.g. 1e-10 with the second pass, 0.1 without)";
   if (config.verify_min_log_ratio && std::isnan(*config.verify_min_log_ratio))
     return "verify_min_log_ratio must be a number (or null for no second pass)";
   return std::nullopt;

@@ -54,9 +54,9 @@ std::string normalise_phrase(const std::string& phrase);
 /// Why a config is unusable (empty phrase, duplicate phrase, bad threshold, no start or no stop...), or nothing.
 std::optional<std::string> validate(const VoiceConfig& config);
 
-/// Parses JSON ({"model_dir", "dictionary", "phone_loop_probability", "phrases": [{"phrase", "command",
-/// "threshold"}]}); missing keys
-/// keep their defaults. Throws std::invalid_argument naming the key.
+/// Parses JSON ({"model_dir", "dictionary", "phone_loop_probability", "verify_min_log_ratio" (null: one
+/// pass), "phrases": [{"phrase", "command", "threshold"}]}); missing keys keep their defaults. Throws
+/// std::invalid_argument naming the key.
 VoiceConfig parse_voice_config(const std::string& json_text);
 VoiceConfig load_voice_config(const std::string& path);
 

@@ -155,9 +155,13 @@ int main(int argc, char** argv) try {
   if (verify) commands.verify_min_log_ratio = *verify;
   if (no_verify) commands.verify_min_log_ratio.reset();
   if (sweep) commands.verify_min_log_ratio = -std::numeric_limits<double>::infinity();
+  char second_pass[48] = "off";
+  if (sweep)
+    std::snprintf(second_pass, sizeof second_pass, "swept");
+  else if (commands.verify_min_log_ratio)
+    std::snprintf(second_pass, sizeof second_pass, "min log ratio %g", *commands.verify_min_log_ratio);
   std::printf("default phrases at thresholds %g / %g, phone-loop probability %g, second pass %s, %s noise, seeds +%u\n",
-              commands.phrases[0].threshold, commands.phrases[1].threshold, commands.phone_loop_probability,
-              commands.verify_min_log_ratio ? (sweep ? "swept" : std::to_string(*commands.verify_min_log_ratio).c_str()) : "off",
+              commands.phrases[0].threshold, commands.phrases[1].threshold, commands.phone_loop_probability, second_pass,
               noise.c_str(), seed_offset);
   const auto t0 = std::chrono::steady_clock::now();
   std::vector<Run> runs;

@@ -11,6 +11,7 @@
 #include <spdlog/spdlog.h>
 
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <iostream>
 #include <optional>
@@ -89,6 +90,7 @@ class CommandPublisher {
 
 void report(const tachi::sensor::VoiceDetection& d) {
   std::printf("%.3f,%s,%s\n", d.time_s, tachi::sensor::to_string(d.command).c_str(), d.phrase.c_str());
+  if (!std::isnan(d.verification_score)) spdlog::debug("\"{}\" at {:.3f} s: second-pass log-likelihood ratio {:.2f} per frame", d.phrase, d.time_s, d.verification_score);
   std::fflush(stdout);
 }
 
@@ -109,6 +111,11 @@ int run_file(const Options& o, const tachi::sensor::VoiceConfig& config) {
       publisher.publish(d, start_ns + static_cast<std::int64_t>(d.time_s * 1e9));
       ++count;
     }
+  }
+  for (const auto& d : spotter.finish()) {
+    report(d);
+    publisher.publish(d, start_ns + static_cast<std::int64_t>(d.time_s * 1e9));
+    ++count;
   }
   publisher.flush();
   spdlog::info("{:.2f} s of audio, {} commands", spotter.time_s(), count);

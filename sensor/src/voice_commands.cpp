@@ -54,13 +54,15 @@ std::optional<std::string> validate(const VoiceConfig& config) {
         return "phrases: \"" + p.phrase + "\" may hold only letters, spaces and apostrophes";
     if (!seen.insert(p.phrase).second) return "phrases: \"" + p.phrase + "\" appears twice";
     if (!std::isfinite(p.threshold) || p.threshold <= 0.0 || p.threshold > 1.0)
-      return "phrases: threshold of \"" + p.phrase + "\" must be in (0, 1] (e.g. 1e-20)";
+      return "phrases: threshold of \"" + p.phrase + "\" must be in (0, 1] (e.g. 1e-15)";
     start = start || p.command == VoiceCommand::Start;
     stop = stop || p.command == VoiceCommand::Stop;
   }
   if (!start || !stop) return "phrases: need at least one start and one stop phrase";
   if (!std::isfinite(config.phone_loop_probability) || config.phone_loop_probability <= 0.0 || config.phone_loop_probability > 1.0)
-    return "phone_loop_probability must be in (0, 1] (e.g. 0.1, or 1e-6 in noise)";
+    return "phone_loop_probability must be in (0, 1] (e.g. 1e-10 with the second pass, 0.1 without)";
+  if (config.verify_min_log_ratio && std::isnan(*config.verify_min_log_ratio))
+    return "verify_min_log_ratio must be a number (or null for no second pass)";
   return std::nullopt;
 }
 
@@ -79,12 +81,22 @@ VoiceConfig parse_voice_config(const std::string& json_text) {
   if (!root.is_object()) fail("the document must be a JSON object");
   VoiceConfig c;
   for (const auto& item : root.items())
-    if (item.key() != "model_dir" && item.key() != "dictionary" && item.key() != "phrases" && item.key() != "phone_loop_probability")
+    if (item.key() != "model_dir" && item.key() != "dictionary" && item.key() != "phrases" && item.key() != "phone_loop_probability" &&
+        item.key() != "verify_min_log_ratio")
       fail("unknown key " + item.key());
   try {
     if (root.contains("model_dir")) c.model_dir = root.at("model_dir").get<std::string>();
     if (root.contains("dictionary")) c.dictionary = root.at("dictionary").get<std::string>();
     if (root.contains("phone_loop_probability")) c.phone_loop_probability = root.at("phone_loop_probability").get<double>();
+    if (root.contains("verify_min_log_ratio")) {
+      const auto& v = root.at("verify_min_log_ratio");
+      if (v.is_null())
+        c.verify_min_log_ratio.reset();  // one pass
+      else if (v.is_number())
+        c.verify_min_log_ratio = v.get<double>();
+      else
+        fail("verify_min_log_ratio must be a number (e.g. -20) or null (no second pass)");
+    }
     if (root.contains("phrases")) {
       c.phrases.clear();
       for (const auto& p : root.at("phrases")) {
@@ -113,7 +125,7 @@ VoiceConfig load_voice_config(const std::string& path) {
 }
 
 void set_phrase(VoiceConfig& config, VoiceCommand command, const std::string& phrase) {
-  double threshold = 1e-20;
+  double threshold = VoicePhrase{}.threshold;
   std::vector<VoicePhrase> kept;
   for (const auto& p : config.phrases) {
     if (p.command == command)

@@ -3,12 +3,16 @@
 #include "tachi/sensor/voice_audio.hpp"
 
 #include <pocketsphinx.h>
+#include <cmn.h>
+#include <feat.h>
 
 #include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <limits>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 #include <unistd.h>
@@ -19,11 +23,37 @@ struct KeywordSpotter::Impl {
   VoiceConfig config;
   cmd_ln_t* cmdln = nullptr;
   ps_decoder_t* decoder = nullptr;
+  // The second pass has its own decoder: switching the keyword decoder to other searches and back
+  // shifted the frames of its later hits by the frames the other searches had read.
+  cmd_ln_t* verifier_cmdln = nullptr;
+  ps_decoder_t* verifier = nullptr;
   long samples = 0;
   long utterance_start = 0;         // sample at which the current utterance began
+  long frames_before_utterance = 0;  // frames the decoder read in earlier utterances
   std::vector<std::int16_t> audio;  // the latest audio, from sample audio_start on
   long audio_start = 0;
   long last_hit_end = -1L << 30;  // sample at which the last reported hit ended (none yet)
+
+  std::size_t phrase_index(const std::string& phrase) const {
+    return static_cast<std::size_t>(std::find_if(config.phrases.begin(), config.phrases.end(),
+                                                 [&](const VoicePhrase& p) { return p.phrase == phrase; }) -
+                                    config.phrases.begin());
+  }
+  struct PendingHit {
+    std::size_t phrase;  // index into config.phrases
+    long begin, end;     // samples from stream start
+  };
+  std::vector<PendingHit> pending;  // keyword hits waiting for the audio the second pass needs
+  /// Runs the second pass over the pending hits that ended by sample `ended_by`; appends the accepted.
+  void verify_pending(long ended_by, std::vector<VoiceDetection>& accepted);
+
+  /// The second pass over the audio of one hit: which phrase it was, and its log-likelihood ratio
+  /// against a free phone loop per frame (-infinity when no phrase fits the audio).
+  struct Verdict {
+    std::optional<VoicePhrase> phrase;
+    double log_ratio = -std::numeric_limits<double>::infinity();
+  };
+  Verdict verify(const std::vector<std::size_t>& candidates, long begin, long end);
 
   ~Impl() {
     if (decoder != nullptr) {
@@ -31,6 +61,8 @@ struct KeywordSpotter::Impl {
       ps_free(decoder);
     }
     if (cmdln != nullptr) cmd_ln_free_r(cmdln);
+    if (verifier != nullptr) ps_free(verifier);
+    if (verifier_cmdln != nullptr) cmd_ln_free_r(verifier_cmdln);
   }
 };
 
@@ -38,6 +70,35 @@ namespace {
 constexpr long kSamplesPerFrame = kVoiceSampleRate / 100;     // pocketsphinx's 10 ms frames
 constexpr std::size_t kKeepSamples = 4 * kVoiceSampleRate;   // replayable audio: longer than a phrase
 constexpr long kRedetectSamples = kVoiceSampleRate / 2;      // a hit ending < 0.5 s after the last one is it again
+// The audio the second pass sees around a keyword hit. The keyword search reports a phrase as soon as
+// its last state scores well enough, up to 0.5 s before the phrase ends (flite "stop cutting": hit at
+// 3.98 s, the word's end at 4.49 s); a grammar cannot be aligned to a phrase cut short.
+constexpr long kVerifyBeforeSamples = 3 * kVoiceSampleRate / 10;
+constexpr long kVerifyAfterSamples = 6 * kVoiceSampleRate / 10;
+constexpr const char* kKeywordSearch = "commands";
+const std::string kPhoneLoopSearch = "verify-phone-loop";
+std::string grammar_search(std::size_t phrase) { return "verify-phrase-" + std::to_string(phrase); }
+
+/// One word (or filler, or phone) of a decoder's best path.
+struct PathSegment {
+  std::string word;
+  int first_frame = 0, last_frame = 0;
+  double acoustic = 0.0;  // log-likelihood, pocketsphinx's log base and scaling
+};
+std::vector<PathSegment> best_path(ps_decoder_t* decoder) {
+  std::vector<PathSegment> path;
+  for (ps_seg_t* seg = ps_seg_iter(decoder); seg != nullptr; seg = ps_seg_next(seg)) {
+    PathSegment s{ps_seg_word(seg)};
+    int ascr = 0, lscr = 0, lback = 0;
+    ps_seg_prob(seg, &ascr, &lscr, &lback);
+    s.acoustic = ascr;
+    ps_seg_frames(seg, &s.first_frame, &s.last_frame);
+    path.push_back(std::move(s));
+  }
+  return path;
+}
+/// Silence and noise words: "<sil>", "<s>", "</s>", "[NOISE]", "[SPEECH]".
+bool is_filler(const std::string& word) { return word.empty() || word.front() == '<' || word.front() == '['; }
 
 // pocketsphinx reads keyword lists from a file only.
 std::string write_kws_file(const std::string& text) {
@@ -51,6 +112,54 @@ std::string write_kws_file(const std::string& text) {
 }
 }  // namespace
 
+// Keyword verification by a likelihood-ratio test against a background model (Rose & Paul, "A hidden
+// Markov model based keyword recognition system", ICASSP 1990; as utterance verification, Sukkar &
+// Lee, IEEE Trans. Speech Audio Proc. 4(6), 1996). The audio around the hit, X (0.3 s before it to
+// 0.6 s after it), is decoded again, once with a grammar that allows only the phrase, with silence and
+// noise fillers around it, and once with a free loop of context-independent phones, the background
+// model. The score is the log-likelihood ratio per frame of the phrase,
+//   LLR = (log p(X | fillers + phrase) - log p(X | phone loop)) / T_phrase,
+// from the acoustic scores of the two best paths over the same frames; dividing by the phrase's
+// T_phrase frames is Sukkar & Lee's duration normalisation, so that one threshold serves all phrases.
+// The window holds the audio around the phrase too, where the grammar has only silence and noise:
+// a phrase inside ongoing speech scores low. That is what rejects the keyword search's false alarms in
+// ordinary reading, and it asks a command to be said on its own ("of clubs" inside "four of clubs
+// seven" scores -64, the same phrase alone -4 to -13; docs/voice.md).
+KeywordSpotter::Impl::Verdict KeywordSpotter::Impl::verify(const std::vector<std::size_t>& candidates, long begin, long end) {
+  Verdict verdict;
+  const long from = std::max(begin - kVerifyBeforeSamples, audio_start);
+  const long to = std::min(end + kVerifyAfterSamples, audio_start + static_cast<long>(audio.size()));
+  if (to <= from) return verdict;
+  // Both decodings normalise the cepstra with the keyword search's live mean: a short window alone
+  // would start from the model's initial estimate.
+  cmn_t* cmn = ps_get_feat(decoder)->cmn_struct;
+  std::vector<mfcc_t> cepstral_mean(static_cast<std::size_t>(cmn->veclen));
+  cmn_live_get(cmn, cepstral_mean.data());
+  const auto decode = [&](const char* search) {
+    if (ps_set_search(verifier, search) < 0) throw std::runtime_error(std::string("pocketsphinx has no search ") + search);
+    cmn_live_set(ps_get_feat(verifier)->cmn_struct, cepstral_mean.data());
+    ps_start_utt(verifier);
+    if (ps_process_raw(verifier, audio.data() + (from - audio_start), static_cast<std::size_t>(to - from), FALSE, FALSE) < 0)
+      throw std::runtime_error("pocketsphinx failed to process audio");
+    ps_end_utt(verifier);
+    return best_path(verifier);
+  };
+  double loop_score = 0.0;
+  for (const auto& seg : decode(kPhoneLoopSearch.c_str())) loop_score += seg.acoustic;
+  for (const std::size_t i : candidates) {
+    double phrase_score = 0.0;
+    int phrase_frames = 0;
+    for (const auto& seg : decode(grammar_search(i).c_str())) {
+      phrase_score += seg.acoustic;
+      if (!is_filler(seg.word)) phrase_frames += seg.last_frame - seg.first_frame + 1;
+    }
+    if (phrase_frames == 0) continue;  // the phrase cannot be aligned to this audio
+    const double log_ratio = (phrase_score - loop_score) / phrase_frames;
+    if (log_ratio > verdict.log_ratio) verdict = {config.phrases[i], log_ratio};
+  }
+  return verdict;
+}
+
 KeywordSpotter::KeywordSpotter(const VoiceConfig& config) : impl_(std::make_unique<Impl>()) {
   if (const auto why = validate(config)) throw std::runtime_error("voice config: " + *why);
   namespace fs = std::filesystem;
@@ -62,7 +171,12 @@ KeywordSpotter::KeywordSpotter(const VoiceConfig& config) : impl_(std::make_uniq
   char phone_loop[32];
   std::snprintf(phone_loop, sizeof phone_loop, "%g", config.phone_loop_probability);
   impl_->cmdln = cmd_ln_init(nullptr, ps_args(), TRUE, "-hmm", config.model_dir.c_str(), "-dict", config.dictionary.c_str(),
-                             "-kws_plp", phone_loop, "-logfn", "/dev/null", nullptr);
+                             "-kws_plp", phone_loop,
+                             // Every frame is searched: with pocketsphinx's voice-activity gate dropping
+                             // silent frames, a hit's frame numbers cannot be mapped back to stream time
+                             // (after the first restart they pointed past the audio: the replay and
+                             // the second pass lost the hits that followed).
+                             "-remove_silence", "no", "-logfn", "/dev/null", nullptr);
   if (impl_->cmdln == nullptr) throw std::runtime_error("pocketsphinx rejected its arguments");
   impl_->decoder = ps_init(impl_->cmdln);
   if (impl_->decoder == nullptr) throw std::runtime_error("pocketsphinx could not load " + config.model_dir);
@@ -74,9 +188,23 @@ KeywordSpotter::KeywordSpotter(const VoiceConfig& config) : impl_(std::make_uniq
         throw std::runtime_error("word \"" + word + "\" of phrase \"" + p.phrase + "\" is not in " + config.dictionary);
   }
   const std::string kws = write_kws_file(kws_file_text(config.phrases));
-  const int rc = ps_set_kws(impl_->decoder, "commands", kws.c_str());
+  const int rc = ps_set_kws(impl_->decoder, kKeywordSearch, kws.c_str());
   std::filesystem::remove(kws);
-  if (rc < 0 || ps_set_search(impl_->decoder, "commands") < 0) throw std::runtime_error("pocketsphinx rejected the keyword list");
+  if (rc < 0) throw std::runtime_error("pocketsphinx rejected the keyword list");
+  if (config.verify_min_log_ratio) {
+    impl_->verifier_cmdln = cmd_ln_init(nullptr, ps_args(), TRUE, "-hmm", config.model_dir.c_str(), "-dict", config.dictionary.c_str(),
+                                        "-remove_silence", "no", "-allphone_ci", "yes", "-logfn", "/dev/null", nullptr);
+    if (impl_->verifier_cmdln != nullptr) impl_->verifier = ps_init(impl_->verifier_cmdln);
+    if (impl_->verifier == nullptr) throw std::runtime_error("pocketsphinx could not load " + config.model_dir + " for the second pass");
+    for (std::size_t i = 0; i < config.phrases.size(); ++i) {
+      // One grammar per phrase, each of its own name (pocketsphinx keeps grammars by name).
+      const std::string grammar = "#JSGF V1.0;\ngrammar phrase" + std::to_string(i) + ";\npublic <phrase> = " + config.phrases[i].phrase + ";\n";
+      if (ps_set_jsgf_string(impl_->verifier, grammar_search(i).c_str(), grammar.c_str()) < 0)
+        throw std::runtime_error("pocketsphinx rejected the grammar " + grammar);
+    }
+    if (ps_set_allphone(impl_->verifier, kPhoneLoopSearch.c_str(), nullptr) < 0) throw std::runtime_error("pocketsphinx could not set up a phone loop");
+  }
+  if (ps_set_search(impl_->decoder, kKeywordSearch) < 0) throw std::runtime_error("pocketsphinx rejected the keyword list");
   if (ps_start_utt(impl_->decoder) < 0) throw std::runtime_error("pocketsphinx could not start decoding");
 }
 
@@ -90,7 +218,7 @@ std::vector<VoiceDetection> KeywordSpotter::process(std::span<const std::int16_t
   if (ps_process_raw(impl_->decoder, samples.data(), samples.size(), FALSE, FALSE) < 0)
     throw std::runtime_error("pocketsphinx failed to process audio");
   impl_->samples += static_cast<long>(samples.size());
-  // The utterance's audio (the last kKeepSamples of it), for the replay below.
+  // The utterance's audio (the last kKeepSamples of it), for the replay and the second pass below.
   impl_->audio.insert(impl_->audio.end(), samples.begin(), samples.end());
   if (impl_->audio.size() > kKeepSamples) {
     const std::size_t drop = impl_->audio.size() - kKeepSamples;
@@ -103,22 +231,37 @@ std::vector<VoiceDetection> KeywordSpotter::process(std::span<const std::int16_t
     // Restart, or the same hit is reported with every later block; then replay the audio after the
     // hit's end, which the decoder held and a restart alone drops: in "go forward ten meters" the
     // second phrase follows the first at once and was never found that way (issue 14).
-    int last_end = -1;
+    struct Hit {
+      std::string words;
+      long begin, end;  // samples from stream start
+    };
+    std::vector<Hit> hits;
+    long last_end = impl_->utterance_start;  // no segment: resume where the utterance began, as before
     for (ps_seg_t* seg = ps_seg_iter(impl_->decoder); seg != nullptr; seg = ps_seg_next(seg)) {
       int start_frame = 0, end_frame = 0;
       ps_seg_frames(seg, &start_frame, &end_frame);
-      last_end = std::max(last_end, end_frame);
-    }
-    // The replay can hold the tail of the phrase just reported ("... cutting"), found again ending
-    // just after it; a real next phrase ends at least a phrase's length later.
-    const long hit_end = impl_->utterance_start + (last_end + 1) * kSamplesPerFrame;
-    if (hit_end - impl_->last_hit_end >= kRedetectSamples) {
-      for (const auto& p : phrases_in_hypothesis(hyp, impl_->config.phrases)) found.push_back({time_s(), p.command, p.phrase});
-      impl_->last_hit_end = hit_end;
+      // The keyword search numbers frames from the decoder's first utterance on, not from this one's start.
+      hits.push_back({ps_seg_word(seg), impl_->utterance_start + (start_frame - impl_->frames_before_utterance) * kSamplesPerFrame,
+                      impl_->utterance_start + (end_frame + 1 - impl_->frames_before_utterance) * kSamplesPerFrame});
+      last_end = std::max(last_end, hits.back().end);
     }
     ps_end_utt(impl_->decoder);
+    impl_->frames_before_utterance += ps_get_n_frames(impl_->decoder);
+    // The replay can hold the tail of the phrase just reported ("... cutting"), found again ending
+    // just after it; a real next phrase ends at least a phrase's length later. Rejected hits count
+    // too, so that the second pass's threshold can be swept over one run's scores.
+    if (last_end - impl_->last_hit_end >= kRedetectSamples) {
+      for (const auto& h : hits)
+        for (const auto& p : phrases_in_hypothesis(h.words, impl_->config.phrases)) {
+          if (impl_->config.verify_min_log_ratio)
+            impl_->pending.push_back({impl_->phrase_index(p.phrase), h.begin, h.end});
+          else
+            found.push_back({time_s(), p.command, p.phrase});
+        }
+      impl_->last_hit_end = last_end;
+    }
     ps_start_utt(impl_->decoder);
-    const long resume = std::max(impl_->utterance_start + (last_end + 1) * kSamplesPerFrame, impl_->audio_start);
+    const long resume = std::max(last_end, impl_->audio_start);
     impl_->utterance_start = resume;
     const long from = resume - impl_->audio_start;
     if (from >= static_cast<long>(impl_->audio.size())) break;
@@ -126,7 +269,38 @@ std::vector<VoiceDetection> KeywordSpotter::process(std::span<const std::int16_t
                        FALSE) < 0)
       throw std::runtime_error("pocketsphinx failed to process audio");
   }
+  impl_->verify_pending(impl_->samples - kVerifyAfterSamples, found);
   return found;
+}
+
+std::vector<VoiceDetection> KeywordSpotter::finish() {
+  std::vector<VoiceDetection> found;
+  impl_->verify_pending(impl_->samples, found);
+  return found;
+}
+
+void KeywordSpotter::Impl::verify_pending(long ended_by, std::vector<VoiceDetection>& accepted) {
+  // Each hit waits for the audio just after it: the keyword search may report a phrase before its
+  // last phone has ended, and the second pass must see all of it.
+  while (!pending.empty() && pending.front().end <= ended_by) {
+    const PendingHit hit = pending.front();
+    pending.erase(pending.begin());
+    // Both phrases may be hit on one utterance ("start cutting" and "stop cutting" share most of
+    // their phones): the second pass scores each and keeps the better, once. Only phrases the keyword
+    // search found compete: offered every phrase, it named "of clubs" "of hearts" in a recording.
+    std::vector<std::size_t> candidates{hit.phrase};
+    long end = hit.end;
+    while (!pending.empty() && pending.front().begin < hit.end) {
+      candidates.push_back(pending.front().phrase);
+      end = std::max(end, pending.front().end);
+      pending.erase(pending.begin());
+    }
+    const Verdict verdict = verify(candidates, hit.begin, end);
+    if (!verdict.phrase) continue;
+    VoiceDetection d{static_cast<double>(samples) / kVoiceSampleRate, verdict.phrase->command, verdict.phrase->phrase};
+    d.verification_score = verdict.log_ratio;
+    if (d.verification_score >= *config.verify_min_log_ratio) accepted.push_back(d);
+  }
 }
 
 std::vector<VoiceDetection> spot_commands(const VoiceConfig& config, std::span<const std::int16_t> samples) {
@@ -137,6 +311,8 @@ std::vector<VoiceDetection> spot_commands(const VoiceConfig& config, std::span<c
     const auto found = spotter.process(samples.subspan(at, std::min(kBlock, samples.size() - at)));
     all.insert(all.end(), found.begin(), found.end());
   }
+  const auto last = spotter.finish();
+  all.insert(all.end(), last.begin(), last.end());
   return all;
 }
 

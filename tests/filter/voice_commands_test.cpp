@@ -18,7 +18,7 @@ TEST(VoiceCommands, DefaultsAreTwoWordPhrasesForStartAndStop) {
 TEST(VoiceCommands, KeywordListHoldsEveryPhraseWithItsThreshold) {
   VoiceConfig c;
   c.phrases[1].threshold = 1e-30;
-  EXPECT_EQ(kws_file_text(c.phrases), "start cutting /1e-20/\nstop cutting /1e-30/\n");
+  EXPECT_EQ(kws_file_text(c.phrases), "start cutting /1e-15/\nstop cutting /1e-30/\n");
 }
 
 TEST(VoiceCommands, HypothesisWithTrailingSpaceMapsToItsCommand) {
@@ -57,7 +57,7 @@ TEST(VoiceCommands, ConfigParsesAndRejectsBadValuesByName) {
       {"phrase": "end cut", "command": "stop"}]})");
   ASSERT_EQ(c.phrases.size(), 2U);
   EXPECT_EQ(c.phrases[0].threshold, 1e-25);
-  EXPECT_EQ(c.phrases[1].threshold, 1e-20);
+  EXPECT_EQ(c.phrases[1].threshold, 1e-15);  // the default phrases' when the key is missing
   const auto error_of = [](const std::string& json) -> std::string {
     try {
       parse_voice_config(json);
@@ -75,7 +75,12 @@ TEST(VoiceCommands, ConfigParsesAndRejectsBadValuesByName) {
   EXPECT_NE(error_of(R"({"phrases": [{"phrase": "a1", "command": "start"}, {"phrase": "b", "command": "stop"}]})")
                 .find("letters"), std::string::npos);
   EXPECT_NE(error_of(R"({"model": "x"})").find("unknown key model"), std::string::npos);
-  EXPECT_EQ(c.phone_loop_probability, 0.1);  // pocketsphinx's own when the key is missing
+  EXPECT_EQ(c.phone_loop_probability, 1e-10);  // the two-pass default when the key is missing
+  EXPECT_EQ(c.verify_min_log_ratio, -20.0);
+  // null turns the second pass off (one pass, every keyword hit is a command); a string is refused.
+  EXPECT_FALSE(parse_voice_config(R"({"verify_min_log_ratio": null})").verify_min_log_ratio.has_value());
+  EXPECT_EQ(parse_voice_config(R"({"verify_min_log_ratio": -12.5})").verify_min_log_ratio, -12.5);
+  EXPECT_NE(error_of(R"({"verify_min_log_ratio": "high"})").find("verify_min_log_ratio"), std::string::npos);
   EXPECT_EQ(parse_voice_config(R"({"phone_loop_probability": 1e-6})").phone_loop_probability, 1e-6);
   EXPECT_NE(error_of(R"({"phone_loop_probability": 0})").find("phone_loop_probability"), std::string::npos);
   EXPECT_NE(error_of(R"({"phone_loop_probability": 2})").find("phone_loop_probability"), std::string::npos);
@@ -88,6 +93,8 @@ TEST(VoiceCommands, TheShippedConfigFileMatchesTheDefaults) {
   EXPECT_EQ(file.model_dir, defaults.model_dir);
   EXPECT_EQ(file.dictionary, defaults.dictionary);
   EXPECT_EQ(kws_file_text(file.phrases), kws_file_text(defaults.phrases));
+  EXPECT_EQ(file.phone_loop_probability, defaults.phone_loop_probability);
+  EXPECT_EQ(file.verify_min_log_ratio, defaults.verify_min_log_ratio);
 }
 
 }  // namespace

@@ -8,6 +8,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <random>
@@ -61,6 +62,24 @@ class Sequence {
   void noise(double rms) {
     std::normal_distribution<double> n{0.0, rms};
     for (auto& s : samples_) s = clip(s + n(rng_));
+  }
+  /// Adds babble: `talkers` of the `speech` clips at once, each from a random point and looped, scaled
+  /// together to the given RMS (other people talking in the room).
+  void babble(const std::vector<std::vector<std::int16_t>>& speech, int talkers, double rms) {
+    std::vector<double> mix(samples_.size(), 0.0);
+    std::uniform_int_distribution<std::size_t> pick(0, speech.size() - 1);
+    for (int t = 0; t < talkers; ++t) {
+      const auto& clip_samples = speech[pick(rng_)];
+      std::size_t at = std::uniform_int_distribution<std::size_t>(0, clip_samples.size() - 1)(rng_);
+      for (auto& m : mix) {
+        m += clip_samples[at];
+        at = (at + 1) % clip_samples.size();
+      }
+    }
+    double sum = 0.0;
+    for (double m : mix) sum += m * m;
+    const double scale = sum > 0.0 ? rms / std::sqrt(sum / static_cast<double>(mix.size())) : 0.0;
+    for (std::size_t i = 0; i < mix.size(); ++i) samples_[i] = clip(samples_[i] + scale * mix[i]);
   }
   double seconds() const { return static_cast<double>(samples_.size()) / kVoiceSampleRate; }
   const std::vector<std::int16_t>& samples() const { return samples_; }

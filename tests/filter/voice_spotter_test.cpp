@@ -47,10 +47,14 @@ TEST(VoiceSpotter, RealSpeechAPhraseRightAfterAnotherIsSpottedToo) {
 
 TEST(VoiceSpotter, RealSpeechTwoWordPhrasesAreSpottedInOrder) {
   // cards/005.wav says "eight of spades four of clubs seven of hearts".
+  // One pass: the second pass wants a command said on its own, and "of clubs" here sits inside
+  // "four of clubs seven" (log-likelihood ratio -64 per frame against -20 to pass; docs/voice.md).
   VoiceConfig c;
   c.phrases = {{"of spades", VoiceCommand::Stop, 1e-20},
                {"of clubs", VoiceCommand::Start, 1e-20},
                {"of hearts", VoiceCommand::Stop, 1e-20}};
+  c.phone_loop_probability = 0.1;
+  c.verify_min_log_ratio.reset();
   const auto audio = read_wav_file(kTestData + "/cards/005.wav");
   EXPECT_EQ(phrases_of(spot_commands(c, audio.samples)), (std::vector<std::string>{"of spades", "of clubs", "of hearts"}));
 }
@@ -80,18 +84,21 @@ TEST(VoiceSpotter, SynthesisedCommandsAreSpottedInOrderBetweenPausesAndNoise) {
   const auto found = spot_commands(VoiceConfig{}, seq.samples());
   ASSERT_EQ(phrases_of(found), (std::vector<std::string>{"start cutting", "stop cutting", "start cutting", "stop cutting"}));
   for (std::size_t i = 0; i < found.size(); ++i) {
-    // Reported at the end of the 32 ms block in which the decoder saw the phrase end.
+    // Reported once the second pass has the 0.6 s of audio after the keyword hit (the hit itself may
+    // come before the phrase ends): within a second of the phrase's end. With the keyword search's
+    // frames taken for stream time, the hits after the first were verified on the wrong audio and lost.
     EXPECT_GT(found[i].time_s, seq.placed()[i].begin_s) << i;
-    EXPECT_LT(found[i].time_s, seq.placed()[i].end_s + 0.5) << i;
+    EXPECT_LT(found[i].time_s, seq.placed()[i].end_s + 1.0) << i;
   }
   EXPECT_EQ(found[0].command, VoiceCommand::Start);
   EXPECT_EQ(found[1].command, VoiceCommand::Stop);
 }
 
-TEST(VoiceSpotter, ASmallerPhoneLoopProbabilityFindsCommandsInWhiteNoiseAndNoneInReading) {
+TEST(VoiceSpotter, TwoPassesFindCommandsInWhiteNoiseThatOnePassMissesWithoutFalseAlarms) {
   // Six commands at 20 dB SNR (white noise against the voice at full gain, the phrases at 0.5-1 of
-  // it): at pocketsphinx's phone-loop probability (0.1) few are found; at 1e-6 with thresholds 1e-15
-  // (docs/voice.md) most, with no false alarm there nor in the LibriVox reading.
+  // it): one pass at pocketsphinx's phone-loop probability (0.1) finds few; the default, a keyword
+  // search at 1e-10 whose hits a second pass verifies (docs/voice.md), finds nearly all, with no false
+  // alarm there nor in the LibriVox reading, where the same keyword search alone false-alarms.
   const auto start = testing::flite_say("start cutting");
   const auto stop = testing::flite_say("stop cutting");
   double sum = 0;
@@ -105,7 +112,7 @@ TEST(VoiceSpotter, ASmallerPhoneLoopProbabilityFindsCommandsInWhiteNoiseAndNoneI
     seq.pause(1.0);
   }
   seq.noise(speech_rms * std::pow(10.0, -20.0 / 20.0));
-  // A detection counts for an utterance when it names its phrase between its start and 0.6 s after
+  // A detection counts for an utterance when it names its phrase between its start and 1 s after
   // its end (as tachi-voice-eval scores); any other detection is a false alarm.
   const auto count_right = [&](const std::vector<VoiceDetection>& found) {
     std::size_t right = 0;
@@ -113,7 +120,7 @@ TEST(VoiceSpotter, ASmallerPhoneLoopProbabilityFindsCommandsInWhiteNoiseAndNoneI
     for (const auto& utterance : seq.placed())
       for (std::size_t i = 0; i < found.size(); ++i)
         if (!used[i] && found[i].phrase == utterance.phrase && found[i].time_s > utterance.begin_s &&
-            found[i].time_s < utterance.end_s + 0.6) {
+            found[i].time_s < utterance.end_s + 1.0) {
           used[i] = true;
           ++right;
           break;
@@ -122,17 +129,26 @@ TEST(VoiceSpotter, ASmallerPhoneLoopProbabilityFindsCommandsInWhiteNoiseAndNoneI
       EXPECT_TRUE(used[i]) << "false alarm: " << found[i].phrase << " at " << found[i].time_s << " s";
     return right;
   };
-  VoiceConfig noisy;
-  noisy.phone_loop_probability = 1e-6;
-  for (auto& p : noisy.phrases) p.threshold = 1e-15;
+  VoiceConfig one_pass;
+  one_pass.phone_loop_probability = 0.1;
+  for (auto& p : one_pass.phrases) p.threshold = 1e-20;
+  one_pass.verify_min_log_ratio.reset();
+  const std::size_t by_one_pass = count_right(spot_commands(one_pass, seq.samples()));
   const std::size_t by_default = count_right(spot_commands(VoiceConfig{}, seq.samples()));
-  const std::size_t tuned = count_right(spot_commands(noisy, seq.samples()));
+  RecordProperty("found_by_one_pass", static_cast<int>(by_one_pass));
   RecordProperty("found_by_default", static_cast<int>(by_default));
-  RecordProperty("found_tuned", static_cast<int>(tuned));
-  // Measured: 4 of 6 against 1 of 6 (docs/voice.md has the 48-command figures).
-  EXPECT_GE(tuned, 4U) << "by default " << by_default;
-  EXPECT_GE(tuned, by_default + 2) << "tuned " << tuned;
-  for (const auto& clip : testing::librivox_clips()) EXPECT_TRUE(spot_commands(noisy, read_wav_file(clip).samples).empty()) << clip;
+  EXPECT_GE(by_default, 5U) << "one pass " << by_one_pass;
+  EXPECT_GE(by_default, by_one_pass + 2) << "two passes " << by_default;
+  VoiceConfig keyword_search_alone;  // the default's first pass without its second
+  keyword_search_alone.verify_min_log_ratio.reset();
+  std::size_t unverified_false_alarms = 0;
+  for (const auto& clip : testing::librivox_clips()) {
+    const auto reading = read_wav_file(clip).samples;
+    EXPECT_TRUE(spot_commands(VoiceConfig{}, reading).empty()) << clip;
+    unverified_false_alarms += spot_commands(keyword_search_alone, reading).size();
+  }
+  // Measured: 3 in the 24.7 s; the second pass is what keeps the default at none.
+  EXPECT_GE(unverified_false_alarms, 1U);
 }
 
 TEST(VoiceSpotter, UnknownWordsAndMissingModelsAreClearErrors) {

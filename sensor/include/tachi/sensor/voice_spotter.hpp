@@ -1,10 +1,13 @@
 // Keyword spotting with CMU pocketsphinx: one keyword list holds every command phrase, and the decoder
-// restarts after each detection (otherwise the same hit is reported again and again).
+// restarts after each detection (otherwise the same hit is reported again and again). By default each
+// hit is verified by a second pass (VoiceConfig::verify_min_log_ratio): the phrase aligned again to
+// the audio around the hit against a phone loop, a likelihood-ratio test (voice_spotter.cpp).
 #pragma once
 
 #include "tachi/sensor/voice_commands.hpp"
 
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <span>
 #include <string>
@@ -13,9 +16,13 @@
 namespace tachi::sensor {
 
 struct VoiceDetection {
-  double time_s = 0.0;  ///< end of the audio block in which the phrase was spotted, from stream start
+  /// From stream start: the end of the audio block in which the phrase was spotted, or, with the
+  /// second pass, in which it was verified (once 0.6 s of audio after the keyword hit had come).
+  double time_s = 0.0;
   VoiceCommand command = VoiceCommand::Start;
   std::string phrase;
+  /// The second pass's score (VoiceConfig::verify_min_log_ratio); NaN when there is no second pass.
+  double verification_score = std::numeric_limits<double>::quiet_NaN();
 };
 
 class KeywordSpotter {
@@ -29,6 +36,9 @@ class KeywordSpotter {
 
   /// Feeds 16 kHz mono samples; returns the commands spotted in them.
   std::vector<VoiceDetection> process(std::span<const std::int16_t> samples);
+  /// At the end of the audio: the commands still waiting for the second pass's audio after them
+  /// (VoiceConfig::verify_min_log_ratio), judged on the audio there is.
+  std::vector<VoiceDetection> finish();
   /// Seconds of audio processed so far.
   double time_s() const noexcept;
 

@@ -22,12 +22,15 @@ double distance_to_segment(const Eigen::Vector2d& p, const Eigen::Vector2d& a, c
   return (p - (a + s * d)).norm();
 }
 
+/// How close counts as touching in segments_meet, cells (see there).
+constexpr double kTouchCells = 1e-5;
+
 /// Whether the closed segments p1-p2 and q1-q2 meet (touching counts). Rest coordinates are stored as
 /// floats, so "touching" allows their rounding (1e-5 cells; a float near 256 is exact to 1.5e-5): a path
 /// through a particle that lies on a bend's line (the bend's crossing) touches the bend.
 bool segments_meet(const Eigen::Vector2d& p1, const Eigen::Vector2d& p2, const Eigen::Vector2d& q1,
                    const Eigen::Vector2d& q2) {
-  constexpr double kEps = 1e-5;
+  constexpr double kEps = kTouchCells;
   // Boxes apart: no meeting. Most pairs tested (every bend near a cut against every cut edge of the segment)
   // are, and this saves the four point-to-segment distances below (8 % of an exact stroke's time).
   if (std::max(p1.x(), p2.x()) < std::min(q1.x(), q2.x()) - kEps || std::max(q1.x(), q2.x()) < std::min(p1.x(), p2.x()) - kEps ||
@@ -67,14 +70,16 @@ SpringKind kind_of(const Cloth& cloth, std::uint32_t a, std::uint32_t b) {
 }  // namespace
 
 bool across_quad(const Cloth& cloth, std::uint32_t p, std::uint32_t x) {
+  // Every pair of p's and x's triangles, counting their shared corners without branches (this ran ~1300
+  // times per 64-segment stroke, 12 % of an exact stroke's instructions with std::find).
   for (const std::uint32_t tp : cloth.triangles_of(p)) {
+    const auto v = cloth.triangles[tp];
     for (const std::uint32_t tx : cloth.triangles_of(x)) {
-      int shared = 0;
-      for (const std::uint32_t y : cloth.triangles[tp]) {
-        const auto& other = cloth.triangles[tx];
-        if (std::find(other.begin(), other.end(), y) != other.end()) ++shared;
-      }
-      if (shared == 2) return true;
+      const auto w = cloth.triangles[tx];
+      const auto in_w = [&w](std::uint32_t y) {
+        return static_cast<int>(y == w[0]) | static_cast<int>(y == w[1]) | static_cast<int>(y == w[2]);
+      };
+      if (in_w(v[0]) + in_w(v[1]) + in_w(v[2]) == 2) return true;
     }
   }
   return false;
@@ -84,6 +89,16 @@ namespace {
 
 std::uint32_t other_end(const Cloth& cloth, std::uint32_t k, std::uint32_t p) {
   return cloth.spring_a[k] == p ? cloth.spring_b[k] : cloth.spring_a[k];
+}
+
+/// An undirected edge as one comparable key.
+std::uint64_t edge_key(std::uint32_t a, std::uint32_t b) {
+  return (static_cast<std::uint64_t>(std::min(a, b)) << 32U) | std::max(a, b);
+}
+
+/// The edge of triangle `tri` opposite its corner p (p must be a corner), as a key.
+std::uint64_t opposite_edge(const std::array<std::uint32_t, 3>& tri, std::uint32_t p) {
+  return tri[0] == p ? edge_key(tri[1], tri[2]) : tri[1] == p ? edge_key(tri[2], tri[0]) : edge_key(tri[0], tri[1]);
 }
 
 }  // namespace
@@ -99,9 +114,14 @@ ExactCutter::ExactCutter(Cloth& cloth, double snap_cells)
   cloth.reserve(cloth.particle_count() + cells / 2, cloth.spring_count() + 2 * cells,
                 cloth.triangle_count() + 2 * cells);
   reserve_touched(triangle_stamp_, cloth.triangle_count() + 2 * cells);
+  reserve_touched(edge_stamp_, cloth.triangle_count() + 2 * cells);
+  reserve_touched(edge_visited_, cloth.triangle_count() + 2 * cells);
+  reserve_touched(spring_stamp_, cloth.spring_count() + 2 * cells);
+  cell_stamp_.assign(cells, 0);
   reserve_touched(triangle_cell_, cloth.triangle_count() + 2 * cells);
   const std::size_t particle_room = cloth.particle_count() + cells / 2;
   reserve_touched(particle_stamp_, particle_room);
+  reserve_touched(split_head_, particle_room);
   reserve_touched(side_, particle_room);
   reserve_touched(snapped_, particle_room);
   reserve_touched(cut_partners_, particle_room);
@@ -151,8 +171,9 @@ void ExactCutter::finish(TopologyChange& change, std::uint32_t version_before) {
 void ExactCutter::gather(const Eigen::Vector2d& from, const Eigen::Vector2d& to) {
   // A new stamp marks this cut's triangles and particles (the stamps are cleared once every 2^32 cuts).
   if (++stamp_ == 0) {
-    std::fill(triangle_stamp_.begin(), triangle_stamp_.end(), 0);
-    std::fill(particle_stamp_.begin(), particle_stamp_.end(), 0);
+    for (auto* stamps : {&triangle_stamp_, &particle_stamp_, &cell_stamp_, &spring_stamp_, &edge_stamp_}) {
+      std::fill(stamps->begin(), stamps->end(), 0);
+    }
     stamp_ = 1;
   }
   touched_particles_.clear();
@@ -171,7 +192,12 @@ void ExactCutter::gather(const Eigen::Vector2d& from, const Eigen::Vector2d& to)
     const int v1 = std::clamp(static_cast<int>(std::floor(p.y() + reach)), 0, cell_rows_ - 1);
     for (int v = v0; v <= v1; ++v) {
       for (int u = u0; u <= u1; ++u) {
-        for (const std::uint32_t t : cell_triangles_[static_cast<std::size_t>(v * cell_columns_ + u)]) {
+        // The points are 0.1 cell apart, so each cell comes up ~10 times; once its triangles are in, they
+        // all are (same candidates, same order).
+        const auto cell = static_cast<std::size_t>(v * cell_columns_ + u);
+        if (cell_stamp_[cell] == stamp_) continue;
+        cell_stamp_[cell] = stamp_;
+        for (const std::uint32_t t : cell_triangles_[cell]) {
           if (triangle_stamp_[t] == stamp_) continue;
           triangle_stamp_[t] = stamp_;
           candidates_.push_back(t);
@@ -273,16 +299,19 @@ void ExactCutter::split_edge_at(std::uint32_t a, std::uint32_t b, double t, Topo
 }
 
 const ExactCutter::Split* ExactCutter::split_on(std::uint32_t a, std::uint32_t b) const {
+  // Each split is listed from its lower end (split_head_, Split::next); only particles stamped by this cut
+  // (every end of a crossed edge) can have one.
   const std::uint32_t lo = std::min(a, b);
   const std::uint32_t hi = std::max(a, b);
-  for (const Split& s : splits_) {
-    if (s.a == lo && s.b == hi) return &s;
+  if (lo >= particle_stamp_.size() || particle_stamp_[lo] != stamp_) return nullptr;
+  for (std::uint32_t i = split_head_[lo]; i != kNone; i = splits_[i].next) {
+    if (splits_[i].b == hi) return &splits_[i];
   }
   return nullptr;
 }
 
 bool ExactCutter::is_cut(std::uint32_t a, std::uint32_t b) const {
-  if (a >= cut_partners_.size()) return false;
+  if (a >= cut_partners_.size() || cut_partners_[a].empty()) return false;
   const auto& partners = cut_partners_[a];
   return std::find(partners.begin(), partners.end(), b) != partners.end();
 }
@@ -349,6 +378,7 @@ TopologyChange ExactCutter::cut(const Eigen::Vector2d& from_in, const Eigen::Vec
   particle_stamp_.resize(cloth.particle_count(), 0);
   side_.resize(cloth.particle_count(), 0.0);
   snapped_.resize(cloth.particle_count(), 0);
+  split_head_.resize(cloth.particle_count(), kNone);
   neighbourhood_.clear();
   const std::size_t original_candidates = candidates_.size();
   for (std::size_t c = 0; c < original_candidates; ++c) {
@@ -357,6 +387,7 @@ TopologyChange ExactCutter::cut(const Eigen::Vector2d& from_in, const Eigen::Vec
     for (const std::uint32_t p : cloth.triangles[t]) {
       if (particle_stamp_[p] == stamp_) continue;
       particle_stamp_[p] = stamp_;
+      split_head_[p] = kNone;
       neighbourhood_.push_back(p);
       side_[p] = cross2(dir, uv(p) - from);
       snapped_[p] = distance_to_segment(uv(p), from, to) <= snap_ ? 1 : 0;
@@ -378,7 +409,8 @@ TopologyChange ExactCutter::cut(const Eigen::Vector2d& from_in, const Eigen::Vec
       const Eigen::Vector2d x = uv(lo) + t_lo * (uv(hi) - uv(lo));
       const double s = (x - from).dot(dir);
       if (s < -1e-9 || s > length + 1e-9) continue;
-      splits_.push_back({lo, hi, t_lo, kNone});
+      splits_.push_back({lo, hi, t_lo, kNone, split_head_[lo]});
+      split_head_[lo] = static_cast<std::uint32_t>(splits_.size() - 1);
     }
   }
   for (Split& split : splits_) split.particle = particle_on_edge(split.a, split.b, split.t, change);
@@ -444,29 +476,48 @@ TopologyChange ExactCutter::cut(const Eigen::Vector2d& from_in, const Eigen::Vec
   }
 
   // 4. Separate the sides along the cut edges.
-  std::vector<std::uint32_t> on_cut;
+  on_cut_.clear();
   for (const auto& [p, q] : cut_pairs_) {
-    on_cut.push_back(p);
-    on_cut.push_back(q);
+    on_cut_.push_back(p);
+    on_cut_.push_back(q);
   }
-  std::sort(on_cut.begin(), on_cut.end());
-  on_cut.erase(std::unique(on_cut.begin(), on_cut.end()), on_cut.end());
-  for (const std::uint32_t c : on_cut) separate(c, change);
+  std::sort(on_cut_.begin(), on_cut_.end());
+  on_cut_.erase(std::unique(on_cut_.begin(), on_cut_.end()), on_cut_.end());
+  for (const std::uint32_t c : on_cut_) separate(c, change);
 
   // Springs follow the triangles around everything touched; bends across or onto the cut go.
-  touched_particles_.insert(touched_particles_.end(), on_cut.begin(), on_cut.end());
+  touched_particles_.insert(touched_particles_.end(), on_cut_.begin(), on_cut_.end());
   std::sort(touched_particles_.begin(), touched_particles_.end());
   touched_particles_.erase(std::unique(touched_particles_.begin(), touched_particles_.end()), touched_particles_.end());
+  spring_stamp_.resize(cloth.spring_count(), 0);  // springs added while re-deriving are triangle edges
   for (const std::uint32_t p : touched_particles_) rederive_springs(p, change);
   if (!cut_pairs_.empty()) {
+    // The box of all cut edges: a bend apart from it (segments_meet's own first test, against the union of
+    // the edges' boxes) meets none of them.
+    Eigen::Vector2d box_lo = uv(cut_pairs_.front()[0]);
+    Eigen::Vector2d box_hi = box_lo;
+    for (const auto& pair : cut_pairs_) {
+      for (const std::uint32_t x : pair) {
+        box_lo = box_lo.cwiseMin(uv(x));
+        box_hi = box_hi.cwiseMax(uv(x));
+      }
+    }
+    if (spring_stamp_.size() < cloth.spring_count()) spring_stamp_.resize(cloth.spring_count(), 0);
     neighbourhood_.insert(neighbourhood_.end(), touched_particles_.begin(), touched_particles_.end());
     for (const std::uint32_t p : neighbourhood_) {
       const auto springs = cloth.springs_of(p);
       bends_.assign(springs.begin(), springs.end());
       for (const std::uint32_t k : bends_) {
         if (cloth.kind[k] != SpringKind::Bend || cloth.alive[k] == 0) continue;
+        // Met from its other end already: it stayed, and would again (the test is geometry only).
+        if (spring_stamp_[k] == stamp_) continue;
+        spring_stamp_[k] = stamp_;
         const Eigen::Vector2d a = uv(cloth.spring_a[k]);
         const Eigen::Vector2d b = uv(cloth.spring_b[k]);
+        if (std::max(a.x(), b.x()) < box_lo.x() - kTouchCells || box_hi.x() < std::min(a.x(), b.x()) - kTouchCells ||
+            std::max(a.y(), b.y()) < box_lo.y() - kTouchCells || box_hi.y() < std::min(a.y(), b.y()) - kTouchCells) {
+          continue;
+        }
         for (const auto& [x, y] : cut_pairs_) {
           if (!segments_meet(a, b, uv(x), uv(y))) continue;
           cloth.remove_spring(k);
@@ -479,6 +530,8 @@ TopologyChange ExactCutter::cut(const Eigen::Vector2d& from_in, const Eigen::Vec
 
   // Bends for the new triangles, after the removal above (they never cross the path: see add_bends).
   if (!cut_pairs_.empty()) {
+    edge_stamp_.resize(cloth.triangle_count(), 0);
+    edge_visited_.resize(cloth.triangle_count(), 0);
     for (const std::uint32_t p : touched_particles_) add_bends(p, change);
   }
 
@@ -497,34 +550,63 @@ void ExactCutter::add_bends(std::uint32_t p, TopologyChange& change) {
   // on a triangle mesh, one across each interior edge.
   // Only where those corners lie on opposite sides of the shared edge and the edge's ends on opposite sides
   // of the bend: the bend then stays inside the two triangles, so it crosses no cut.
+  // Each (triangle, edge) is visited once per cut: from the edge's other end it would find the same
+  // triangles, the same geometry and the bend it made (adding bends changes neither triangles nor cut edges),
+  // so that second visit is skipped (it was 30 % of an exact stroke's instructions with the first).
   Cloth& cloth = *cloth_;
-  const auto fan = cloth.triangles_of(p);
-  const std::vector<std::uint32_t> around(fan.begin(), fan.end());
-  for (const std::uint32_t t : around) {
+  constexpr std::array<std::size_t, 3> kNext{1, 2, 0};
+  const auto visit = [&](std::uint32_t t, std::size_t e) {
+    if (edge_stamp_[t] != stamp_) {
+      edge_stamp_[t] = stamp_;
+      edge_visited_[t] = 0;
+    }
+    const auto bit = static_cast<std::uint8_t>(1U << e);
+    const bool seen = (edge_visited_[t] & bit) != 0;
+    edge_visited_[t] = static_cast<std::uint8_t>(edge_visited_[t] | bit);
+    return !seen;
+  };
+  for (const std::uint32_t t : cloth.triangles_of(p)) {  // add_spring leaves the triangle lists alone
     const auto tri = cloth.triangles[t];
-    for (std::size_t e = 0; e < 3; ++e) {
+    const std::size_t at = tri[0] == p ? 0 : tri[1] == p ? 1 : 2;
+    // The two edges at p, in the order of the triangle's edges: e runs from tri[e] to tri[e + 1].
+    const std::size_t before = kNext[kNext[at]];
+    for (const std::size_t e : {std::min(before, at), std::max(before, at)}) {
       const std::uint32_t a = tri[e];
-      const std::uint32_t b = tri[(e + 1) % 3];
-      const std::uint32_t far = tri[(e + 2) % 3];
-      // Only the edges at p (each edge is reached from both its ends), and not a cut edge whose lips have
-      // not opened yet (a slit's last edge: both triangles still share it).
-      if ((a != p && b != p) || is_cut(a, b)) continue;
+      const std::uint32_t b = tri[kNext[e]];
+      const std::uint32_t far = tri[kNext[kNext[e]]];
+      // Not a cut edge whose lips have not opened yet (a slit's last edge: both triangles still share it).
+      if (!visit(t, e) || is_cut(a, b)) continue;
+      std::uint32_t only_other = kNone;  // the one other triangle on a-b, if there is exactly one
+      std::size_t others = 0;
+      std::size_t only_other_edge = 0;
+      bool bend_there = false;
       for (const std::uint32_t t2 : cloth.triangles_of(a)) {
         const auto& other = cloth.triangles[t2];
-        if (t2 == t || std::find(other.begin(), other.end(), b) == other.end()) continue;
-        std::uint32_t far2 = other[0];
-        for (const std::uint32_t x : other) {
-          if (x != a && x != b) far2 = x;
-        }
+        if (t2 == t || (other[0] != b && other[1] != b && other[2] != b)) continue;
+        ++others;
+        const std::size_t far2_at = other[0] != a && other[0] != b ? 0 : other[1] != a && other[1] != b ? 1 : 2;
+        const std::uint32_t far2 = other[far2_at];
+        only_other = t2;
+        only_other_edge = kNext[far2_at];
         const double s1 = cross2(uv(b) - uv(a), uv(far) - uv(a));
         const double s2 = cross2(uv(b) - uv(a), uv(far2) - uv(a));
         const double s3 = cross2(uv(far2) - uv(far), uv(a) - uv(far));
         const double s4 = cross2(uv(far2) - uv(far), uv(b) - uv(far));
         if (!(s1 * s2 < 0.0 && s3 * s4 < 0.0) || (uv(far2) - uv(far)).norm() < kMinBendCells) continue;
-        bool exists = false;
-        for (const std::uint32_t k : cloth.springs_of(far)) exists = exists || other_end(cloth, k, far) == far2;
+        bend_there = true;
+        // A spring far-far2 is in both ends' lists: the shorter one is searched.
+        const bool from_far = cloth.springs_of(far).size() <= cloth.springs_of(far2).size();
+        const std::uint32_t near_end = from_far ? far : far2;
+        const std::uint32_t far_end = from_far ? far2 : far;
+        const auto springs = cloth.springs_of(near_end);
+        const bool exists = std::any_of(springs.begin(), springs.end(),
+                                        [&](std::uint32_t k) { return other_end(cloth, k, near_end) == far_end; });
         if (!exists) change.changed_springs.push_back(cloth.add_spring(far, far2, SpringKind::Bend));
       }
+      // From the other triangle the same edge would find only t, and the bend between their far corners
+      // that is there now: nothing to do. (When the test above failed it is repeated from there: the
+      // mirrored cross products may round the other way.)
+      if (others == 1 && bend_there) visit(only_other, only_other_edge);
     }
   }
 }
@@ -634,10 +716,12 @@ TopologyChange ExactCutter::remove_crossed(const Eigen::Vector2d& from_in, const
 void ExactCutter::separate(std::uint32_t c, TopologyChange& change) {
   Cloth& cloth = *cloth_;
   const auto incident = cloth.triangles_of(c);
-  const std::vector<std::uint32_t> tris(incident.begin(), incident.end());
+  fan_.assign(incident.begin(), incident.end());  // rewired below: a copy (member scratch, no allocation)
+  const auto& tris = fan_;
   const std::size_t m = tris.size();
   if (m < 2) return;
-  std::vector<std::size_t> parent(m);
+  auto& parent = fan_parent_;
+  parent.resize(m);
   for (std::size_t i = 0; i < m; ++i) parent[i] = i;
   const auto find = [&](std::size_t i) {
     while (parent[i] != i) i = parent[i] = parent[parent[i]];
@@ -654,7 +738,8 @@ void ExactCutter::separate(std::uint32_t c, TopologyChange& change) {
       }
     }
   }
-  std::vector<std::size_t> roots;
+  auto& roots = fan_roots_;
+  roots.clear();
   for (std::size_t i = 0; i < m; ++i) {
     if (std::find(roots.begin(), roots.end(), find(i)) == roots.end()) roots.push_back(find(i));
   }
@@ -663,8 +748,8 @@ void ExactCutter::separate(std::uint32_t c, TopologyChange& change) {
     const auto copy = static_cast<std::uint32_t>(cloth.duplicate_particle(c));
     change.duplicated_from.push_back(c);
     touched_particles_.push_back(copy);
-    const std::vector<std::uint32_t> partners = cut_partners_[c];  // the copy has the same cut edges
-    for (const std::uint32_t y : partners) mark_cut(copy, y);
+    partners_ = cut_partners_[c];  // the copy has the same cut edges (a copy: mark_cut may grow the lists)
+    for (const std::uint32_t y : partners_) mark_cut(copy, y);
     for (std::size_t i = 0; i < m; ++i) {
       if (find(i) != roots[r]) continue;
       cloth.rewire_triangle(tris[i], c, copy);
@@ -679,6 +764,7 @@ void ExactCutter::rederive_springs(std::uint32_t p, TopologyChange& change) {
   // The structural and shear springs of p are exactly its triangles' edges (completeCUT, seed 001: a
   // particle without triangles keeps no spring, a spring no triangle borders is removed).
   wanted_.clear();
+  opposite_edges_.clear();
   for (const std::uint32_t t : cloth.triangles_of(p)) {
     for (const std::uint32_t x : cloth.triangles[t]) {
       if (x != p && std::find(wanted_.begin(), wanted_.end(), x) == wanted_.end()) wanted_.push_back(x);
@@ -697,7 +783,32 @@ void ExactCutter::rederive_springs(std::uint32_t p, TopologyChange& change) {
     const std::uint32_t x = other_end(cloth, k, p);
     const auto it = std::find(wanted_.begin(), wanted_.end(), x);
     if (it == wanted_.end()) {
-      if (cloth.kind[k] == SpringKind::Shear && across_quad(cloth, p, x)) continue;
+      if (cloth.kind[k] == SpringKind::Shear) {
+        // Kept from its other end already this cut (triangles do not change while springs are re-derived,
+        // and across_quad is symmetric): the same answer without the search.
+        if (k < spring_stamp_.size() && spring_stamp_[k] == stamp_) continue;
+        // across_quad(p, x), by keys when p and x share no triangle (always, unless two springs join them):
+        // two of their triangles then share two corners exactly when one of x's has, opposite x, the edge
+        // one of p's has opposite p.
+        const auto p_fan = cloth.triangles_of(p);
+        const bool share_a_triangle = std::any_of(p_fan.begin(), p_fan.end(), [&](std::uint32_t t) {
+          const auto& tri = cloth.triangles[t];
+          return tri[0] == x || tri[1] == x || tri[2] == x;
+        });
+        if (opposite_edges_.empty()) {
+          for (const std::uint32_t t : p_fan) opposite_edges_.push_back(opposite_edge(cloth.triangles[t], p));
+        }
+        const auto x_fan = cloth.triangles_of(x);
+        const bool across =
+            share_a_triangle ? across_quad(cloth, p, x) : std::any_of(x_fan.begin(), x_fan.end(), [&](std::uint32_t t) {
+              const std::uint64_t key = opposite_edge(cloth.triangles[t], x);
+              return std::find(opposite_edges_.begin(), opposite_edges_.end(), key) != opposite_edges_.end();
+            });
+        if (across) {
+          if (k < spring_stamp_.size()) spring_stamp_[k] = stamp_;
+          continue;
+        }
+      }
       cloth.remove_spring(k);
       change.changed_springs.push_back(k);
     } else {

@@ -72,6 +72,7 @@ class ExactCutter {
     std::uint32_t b;
     double t;         // from a
     std::uint32_t particle;
+    std::uint32_t next;  // the next split of this cut whose `a` is the same particle (kNone: the last)
   };
   /// Fills the change's "before" fields; the segment clipped to the cloth, or nothing to cut.
   std::optional<std::pair<Eigen::Vector2d, Eigen::Vector2d>> begin(const Eigen::Vector2d& from, const Eigen::Vector2d& to,
@@ -101,12 +102,17 @@ class ExactCutter {
   std::vector<std::vector<std::uint32_t>> cell_triangles_;  // per cell (v * (columns - 1) + u): live triangles
   std::vector<std::uint32_t> triangle_cell_;
   std::vector<std::vector<std::uint32_t>> cut_partners_;  // per particle: the particles it has a cut edge to
-  // Scratch of one cut.
+  // Scratch of one cut. A stamp marks what this cut has seen: an entry equal to stamp_ is this cut's.
   std::vector<std::uint32_t> triangle_stamp_;
   std::vector<std::uint32_t> particle_stamp_;
+  std::vector<std::uint32_t> cell_stamp_;    // gather: the cell's triangles are candidates already
+  std::vector<std::uint32_t> spring_stamp_;  // a shear spring kept across a quad, a bend tested against the path
+  std::vector<std::uint32_t> edge_stamp_;    // add_bends: per triangle, whether edge_visited_ is this cut's
+  std::vector<std::uint8_t> edge_visited_;   // add_bends: per triangle, bit e = its edge e was visited
   std::uint32_t stamp_ = 0;
   std::vector<std::uint32_t> candidates_;
   std::vector<Split> splits_;
+  std::vector<std::uint32_t> split_head_;  // per particle stamped this cut: its first split as `a`, or kNone
   std::vector<std::array<std::uint32_t, 2>> cut_pairs_;
   std::vector<std::uint32_t> touched_particles_;
   std::vector<double> side_;            // per particle: signed distance from the segment's line, cells
@@ -114,6 +120,12 @@ class ExactCutter {
   std::vector<std::uint32_t> neighbourhood_;
   std::vector<std::uint32_t> bends_;
   std::vector<std::uint32_t> wanted_;
+  std::vector<std::uint64_t> opposite_edges_;  // rederive_springs: p's triangles' edges opposite p, as keys
+  std::vector<std::uint32_t> on_cut_;
+  std::vector<std::uint32_t> fan_;  // separate: the triangles around the particle
+  std::vector<std::size_t> fan_parent_;
+  std::vector<std::size_t> fan_roots_;
+  std::vector<std::uint32_t> partners_;
   // Results.
   double max_deviation_ = 0.0;
   double cut_length_m_ = 0.0;

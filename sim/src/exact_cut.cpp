@@ -125,6 +125,19 @@ ExactCutter::ExactCutter(Cloth& cloth, double snap_cells)
   reserve_touched(side_, particle_room);
   reserve_touched(snapped_, particle_room);
   reserve_touched(cut_partners_, particle_room);
+  reserve_touched(touched_stamp_, particle_room);
+  reserve_touched(wanted_marks_, particle_room);
+  touched_stamp_.resize(cloth.particle_count(), 0);
+  wanted_marks_.resize(cloth.particle_count(), 0);
+  // The stamps sized now (0: no cut's), so that cuts only grow them by what they add.
+  triangle_stamp_.resize(cloth.triangle_count(), 0);
+  edge_stamp_.resize(cloth.triangle_count(), 0);
+  edge_visited_.resize(cloth.triangle_count(), 0);
+  spring_stamp_.resize(cloth.spring_count(), 0);
+  particle_stamp_.resize(cloth.particle_count(), 0);
+  split_head_.resize(cloth.particle_count(), kNone);
+  side_.resize(cloth.particle_count(), 0.0);
+  snapped_.resize(cloth.particle_count(), 0);
   cell_triangles_.resize(cells);
   for (std::uint32_t t = 0; t < cloth.triangle_count(); ++t) {
     if (cloth.triangle_alive[t] != 0) register_triangle(t);
@@ -141,7 +154,7 @@ std::size_t ExactCutter::cell_of(std::uint32_t t) const {
 }
 
 void ExactCutter::register_triangle(std::uint32_t t) {
-  if (triangle_cell_.size() <= t) triangle_cell_.resize(t + 1, kNone);
+  if (triangle_cell_.size() <= t) triangle_cell_.resize(t + 64, kNone);
   const std::size_t cell = cell_of(t);
   triangle_cell_[t] = static_cast<std::uint32_t>(cell);
   cell_triangles_[cell].push_back(t);
@@ -171,14 +184,14 @@ void ExactCutter::finish(TopologyChange& change, std::uint32_t version_before) {
 void ExactCutter::gather(const Eigen::Vector2d& from, const Eigen::Vector2d& to) {
   // A new stamp marks this cut's triangles and particles (the stamps are cleared once every 2^32 cuts).
   if (++stamp_ == 0) {
-    for (auto* stamps : {&triangle_stamp_, &particle_stamp_, &cell_stamp_, &spring_stamp_, &edge_stamp_}) {
+    for (auto* stamps : {&triangle_stamp_, &particle_stamp_, &cell_stamp_, &spring_stamp_, &edge_stamp_, &touched_stamp_}) {
       std::fill(stamps->begin(), stamps->end(), 0);
     }
     stamp_ = 1;
   }
   touched_particles_.clear();
   candidates_.clear();
-  triangle_stamp_.resize(cloth_->triangle_count(), 0);
+  if (triangle_stamp_.size() < cloth_->triangle_count()) triangle_stamp_.resize(cloth_->triangle_count(), 0);
   // Cells within reach of points every 0.1 cell along the segment: every triangle the segment meets, or
   // passes within `snap` of, lies in one of them.
   const double reach = snap_ + 0.06;
@@ -214,10 +227,10 @@ std::uint32_t ExactCutter::replace_triangle(std::uint32_t t, std::array<std::uin
   const std::uint32_t added = cloth_->add_triangle(vertices);
   register_triangle(added);
   change.changed_triangles.push_back(added);
-  triangle_stamp_.resize(cloth_->triangle_count(), 0);
+  if (triangle_stamp_.size() <= added) triangle_stamp_.resize(added + 64, 0);
   triangle_stamp_[added] = stamp_;
   candidates_.push_back(added);
-  for (const std::uint32_t p : vertices) touched_particles_.push_back(p);
+  for (const std::uint32_t p : vertices) touch(p);
   return added;
 }
 
@@ -272,7 +285,7 @@ void ExactCutter::insert_point(const Eigen::Vector2d& p, TopologyChange& change)
     cloth.pinned[q] = 0;
     cloth.inverse_mass[q] = 1.0F / new_mass;
     change.duplicated_from.push_back(tri[heaviest]);
-    touched_particles_.push_back(q);
+    touch(q);
     replace_triangle(t, {tri[0], tri[1], q}, change);
     replace_triangle(t, {tri[1], tri[2], q}, change);
     replace_triangle(t, {tri[2], tri[0], q}, change);
@@ -310,12 +323,6 @@ const ExactCutter::Split* ExactCutter::split_on(std::uint32_t a, std::uint32_t b
   return nullptr;
 }
 
-bool ExactCutter::is_cut(std::uint32_t a, std::uint32_t b) const {
-  if (a >= cut_partners_.size() || cut_partners_[a].empty()) return false;
-  const auto& partners = cut_partners_[a];
-  return std::find(partners.begin(), partners.end(), b) != partners.end();
-}
-
 void ExactCutter::mark_cut(std::uint32_t a, std::uint32_t b) {
   // Remembered for good: a cut edge whose lips did not open yet (a slit's last edge, whose ends are both
   // tips) opens when a later segment goes on from its tip.
@@ -342,7 +349,7 @@ std::uint32_t ExactCutter::particle_on_edge(std::uint32_t a, std::uint32_t b, do
   cloth.set_mass(b, cloth.mass[b] - give_b);
   const auto p = static_cast<std::uint32_t>(cloth.add_particle_between(a, b, tf, give_a + give_b));
   change.duplicated_from.push_back(tf < 0.5F ? a : b);
-  touched_particles_.push_back(p);
+  touch(p);
   return p;
 }
 
@@ -362,6 +369,10 @@ TopologyChange ExactCutter::cut(const Eigen::Vector2d& from_in, const Eigen::Vec
   TopologyChange change;
   const auto segment = begin(from_in, to_in, change);
   if (!segment) return change;
+  // Room for a segment of a few cells (~25 particles touched), rather than growing one push_back at a time.
+  change.changed_springs.reserve(256);
+  change.changed_triangles.reserve(64);
+  change.duplicated_from.reserve(16);
   const std::uint32_t version_before = change.version;
   const Eigen::Vector2d from = segment->first;
   const Eigen::Vector2d to = segment->second;
@@ -486,9 +497,8 @@ TopologyChange ExactCutter::cut(const Eigen::Vector2d& from_in, const Eigen::Vec
   for (const std::uint32_t c : on_cut_) separate(c, change);
 
   // Springs follow the triangles around everything touched; bends across or onto the cut go.
-  touched_particles_.insert(touched_particles_.end(), on_cut_.begin(), on_cut_.end());
+  for (const std::uint32_t c : on_cut_) touch(c);
   std::sort(touched_particles_.begin(), touched_particles_.end());
-  touched_particles_.erase(std::unique(touched_particles_.begin(), touched_particles_.end()), touched_particles_.end());
   spring_stamp_.resize(cloth.spring_count(), 0);  // springs added while re-deriving are triangle edges
   for (const std::uint32_t p : touched_particles_) rederive_springs(p, change);
   if (!cut_pairs_.empty()) {
@@ -501,6 +511,10 @@ TopologyChange ExactCutter::cut(const Eigen::Vector2d& from_in, const Eigen::Vec
         box_lo = box_lo.cwiseMin(uv(x));
         box_hi = box_hi.cwiseMax(uv(x));
       }
+    }
+    cut_edges_uv_.clear();
+    for (const auto& [x, y] : cut_pairs_) {
+      cut_edges_uv_.push_back({uv(x), uv(y), uv(x).cwiseMin(uv(y)), uv(x).cwiseMax(uv(y))});
     }
     if (spring_stamp_.size() < cloth.spring_count()) spring_stamp_.resize(cloth.spring_count(), 0);
     neighbourhood_.insert(neighbourhood_.end(), touched_particles_.begin(), touched_particles_.end());
@@ -518,8 +532,15 @@ TopologyChange ExactCutter::cut(const Eigen::Vector2d& from_in, const Eigen::Vec
             std::max(a.y(), b.y()) < box_lo.y() - kTouchCells || box_hi.y() < std::min(a.y(), b.y()) - kTouchCells) {
           continue;
         }
-        for (const auto& [x, y] : cut_pairs_) {
-          if (!segments_meet(a, b, uv(x), uv(y))) continue;
+        const Eigen::Vector2d bend_lo = a.cwiseMin(b);
+        const Eigen::Vector2d bend_hi = a.cwiseMax(b);
+        for (const CutEdge& edge : cut_edges_uv_) {
+          // segments_meet's first test, on boxes computed once: most cut edges are apart from the bend.
+          if (bend_hi.x() < edge.lo.x() - kTouchCells || edge.hi.x() < bend_lo.x() - kTouchCells ||
+              bend_hi.y() < edge.lo.y() - kTouchCells || edge.hi.y() < bend_lo.y() - kTouchCells) {
+            continue;
+          }
+          if (!segments_meet(a, b, edge.x, edge.y)) continue;
           cloth.remove_spring(k);
           change.changed_springs.push_back(k);
           break;
@@ -570,7 +591,8 @@ void ExactCutter::add_bends(std::uint32_t p, TopologyChange& change) {
     const std::size_t at = tri[0] == p ? 0 : tri[1] == p ? 1 : 2;
     // The two edges at p, in the order of the triangle's edges: e runs from tri[e] to tri[e + 1].
     const std::size_t before = kNext[kNext[at]];
-    for (const std::size_t e : {std::min(before, at), std::max(before, at)}) {
+    const std::array<std::size_t, 2> edges_at_p{std::min(before, at), std::max(before, at)};
+    for (const std::size_t e : edges_at_p) {
       const std::uint32_t a = tri[e];
       const std::uint32_t b = tri[kNext[e]];
       const std::uint32_t far = tri[kNext[kNext[e]]];
@@ -616,7 +638,7 @@ void ExactCutter::remove_triangle(std::uint32_t t, TopologyChange& change) {
   unregister_triangle(t);
   cloth_->remove_triangle(t);
   change.changed_triangles.push_back(t);
-  for (const std::uint32_t p : cloth_->triangles[t]) touched_particles_.push_back(p);
+  for (const std::uint32_t p : cloth_->triangles[t]) touch(p);
 }
 
 TopologyChange ExactCutter::remove_crossed(const Eigen::Vector2d& from_in, const Eigen::Vector2d& to_in) {
@@ -671,11 +693,10 @@ TopologyChange ExactCutter::remove_crossed(const Eigen::Vector2d& from_in, const
     const auto tris = cloth.triangles_of(c);
     const std::vector<std::uint32_t> doomed(tris.begin(), tris.end());
     for (const std::uint32_t t : doomed) remove_triangle(t, change);
-    touched_particles_.push_back(c);
+    touch(c);
   }
   // completeCUT's clean-up: springs follow the surviving triangles.
   std::sort(touched_particles_.begin(), touched_particles_.end());
-  touched_particles_.erase(std::unique(touched_particles_.begin(), touched_particles_.end()), touched_particles_.end());
   for (const std::uint32_t p : touched_particles_) {
     const auto springs = cloth.springs_of(p);
     bends_.assign(springs.begin(), springs.end());
@@ -747,14 +768,15 @@ void ExactCutter::separate(std::uint32_t c, TopologyChange& change) {
   for (std::size_t r = 1; r < roots.size(); ++r) {
     const auto copy = static_cast<std::uint32_t>(cloth.duplicate_particle(c));
     change.duplicated_from.push_back(c);
-    touched_particles_.push_back(copy);
-    partners_ = cut_partners_[c];  // the copy has the same cut edges (a copy: mark_cut may grow the lists)
+    touch(copy);
+    const auto partners = cut_partners_[c].items();
+    partners_.assign(partners.begin(), partners.end());  // the copy has the same cut edges (mark_cut may move the lists)
     for (const std::uint32_t y : partners_) mark_cut(copy, y);
     for (std::size_t i = 0; i < m; ++i) {
       if (find(i) != roots[r]) continue;
       cloth.rewire_triangle(tris[i], c, copy);
       change.changed_triangles.push_back(tris[i]);
-      for (const std::uint32_t p : cloth.triangles[tris[i]]) touched_particles_.push_back(p);
+      for (const std::uint32_t p : cloth.triangles[tris[i]]) touch(p);
     }
   }
 }
@@ -763,11 +785,24 @@ void ExactCutter::rederive_springs(std::uint32_t p, TopologyChange& change) {
   Cloth& cloth = *cloth_;
   // The structural and shear springs of p are exactly its triangles' edges (completeCUT, seed 001: a
   // particle without triangles keeps no spring, a spring no triangle borders is removed).
+  // wanted_: p's triangles' other corners, in order; wanted_marks_ says which of them is wanted (mark) and
+  // which has its spring already (mark + 1), instead of searching and erasing in wanted_.
+  wanted_mark_ += 2;
+  if (wanted_mark_ < 2) {  // wrapped: old marks could read as this call's
+    std::fill(wanted_marks_.begin(), wanted_marks_.end(), 0);
+    wanted_mark_ = 2;
+  }
+  const std::uint32_t wanted = wanted_mark_;
+  const std::uint32_t found = wanted_mark_ + 1;
+  if (wanted_marks_.size() < cloth.particle_count()) wanted_marks_.resize(cloth.particle_count(), 0);
   wanted_.clear();
   opposite_edges_.clear();
   for (const std::uint32_t t : cloth.triangles_of(p)) {
     for (const std::uint32_t x : cloth.triangles[t]) {
-      if (x != p && std::find(wanted_.begin(), wanted_.end(), x) == wanted_.end()) wanted_.push_back(x);
+      if (x != p && wanted_marks_[x] != wanted) {
+        wanted_marks_[x] = wanted;
+        wanted_.push_back(x);
+      }
     }
   }
   const auto springs = cloth.springs_of(p);
@@ -781,41 +816,38 @@ void ExactCutter::rederive_springs(std::uint32_t p, TopologyChange& change) {
       continue;
     }
     const std::uint32_t x = other_end(cloth, k, p);
-    const auto it = std::find(wanted_.begin(), wanted_.end(), x);
-    if (it == wanted_.end()) {
-      if (cloth.kind[k] == SpringKind::Shear) {
-        // Kept from its other end already this cut (triangles do not change while springs are re-derived,
-        // and across_quad is symmetric): the same answer without the search.
-        if (k < spring_stamp_.size() && spring_stamp_[k] == stamp_) continue;
-        // across_quad(p, x), by keys when p and x share no triangle (always, unless two springs join them):
-        // two of their triangles then share two corners exactly when one of x's has, opposite x, the edge
-        // one of p's has opposite p.
-        const auto p_fan = cloth.triangles_of(p);
-        const bool share_a_triangle = std::any_of(p_fan.begin(), p_fan.end(), [&](std::uint32_t t) {
-          const auto& tri = cloth.triangles[t];
-          return tri[0] == x || tri[1] == x || tri[2] == x;
-        });
-        if (opposite_edges_.empty()) {
-          for (const std::uint32_t t : p_fan) opposite_edges_.push_back(opposite_edge(cloth.triangles[t], p));
-        }
-        const auto x_fan = cloth.triangles_of(x);
-        const bool across =
-            share_a_triangle ? across_quad(cloth, p, x) : std::any_of(x_fan.begin(), x_fan.end(), [&](std::uint32_t t) {
-              const std::uint64_t key = opposite_edge(cloth.triangles[t], x);
-              return std::find(opposite_edges_.begin(), opposite_edges_.end(), key) != opposite_edges_.end();
-            });
-        if (across) {
-          if (k < spring_stamp_.size()) spring_stamp_[k] = stamp_;
-          continue;
-        }
-      }
-      cloth.remove_spring(k);
-      change.changed_springs.push_back(k);
-    } else {
-      wanted_.erase(it);  // already there
+    if (wanted_marks_[x] == wanted) {
+      wanted_marks_[x] = found;  // already there
+      continue;
     }
+    if (cloth.kind[k] == SpringKind::Shear) {
+      // Kept from its other end already this cut (triangles do not change while springs are re-derived,
+      // and across_quad is symmetric): the same answer without the search.
+      if (k < spring_stamp_.size() && spring_stamp_[k] == stamp_) continue;
+      // across_quad(p, x), by keys when p and x share no triangle (always, unless two springs join them):
+      // two of their triangles then share two corners exactly when one of x's has, opposite x, the edge
+      // one of p's has opposite p.
+      const bool share_a_triangle = wanted_marks_[x] == found;
+      if (opposite_edges_.empty()) {
+        for (const std::uint32_t t : cloth.triangles_of(p)) opposite_edges_.push_back(opposite_edge(cloth.triangles[t], p));
+      }
+      const auto x_fan = cloth.triangles_of(x);
+      const bool across =
+          share_a_triangle ? across_quad(cloth, p, x) : std::any_of(x_fan.begin(), x_fan.end(), [&](std::uint32_t t) {
+            const std::uint64_t key = opposite_edge(cloth.triangles[t], x);
+            return std::find(opposite_edges_.begin(), opposite_edges_.end(), key) != opposite_edges_.end();
+          });
+      if (across) {
+        if (k < spring_stamp_.size()) spring_stamp_[k] = stamp_;
+        continue;
+      }
+    }
+    cloth.remove_spring(k);
+    change.changed_springs.push_back(k);
   }
-  for (const std::uint32_t x : wanted_) change.changed_springs.push_back(cloth.add_spring(p, x, kind_of(cloth, p, x)));
+  for (const std::uint32_t x : wanted_) {
+    if (wanted_marks_[x] == wanted) change.changed_springs.push_back(cloth.add_spring(p, x, kind_of(cloth, p, x)));
+  }
 }
 
 }  // namespace tachi::sim

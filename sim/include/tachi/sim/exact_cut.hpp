@@ -27,6 +27,7 @@
 
 #include <Eigen/Core>
 
+#include <algorithm>
 #include <array>
 #include <cstdint>
 #include <optional>
@@ -89,7 +90,18 @@ class ExactCutter {
   void remove_triangle(std::uint32_t t, TopologyChange& change);
   void rederive_springs(std::uint32_t p, TopologyChange& change);
   void add_bends(std::uint32_t p, TopologyChange& change);
-  [[nodiscard]] bool is_cut(std::uint32_t a, std::uint32_t b) const;
+  /// Adds p to touched_particles_, once per cut (a stamp instead of sorting out ~6 repeats of each).
+  void touch(std::uint32_t p) {
+    if (p >= touched_stamp_.size()) touched_stamp_.resize(cloth_->particle_count() + 64, 0);
+    if (touched_stamp_[p] == stamp_) return;
+    touched_stamp_[p] = stamp_;
+    touched_particles_.push_back(p);
+  }
+  /// Whether a-b is a cut edge. Inline: it runs for every edge add_bends and separate look at, and almost
+  /// every particle has no cut edge.
+  [[nodiscard]] bool is_cut(std::uint32_t a, std::uint32_t b) const {
+    return a < cut_partners_.size() && cut_partners_[a].size() != 0 && cut_partners_[a].contains(b);
+  }
   void mark_cut(std::uint32_t a, std::uint32_t b);
   std::uint32_t particle_on_edge(std::uint32_t a, std::uint32_t b, double t, TopologyChange& change);
   void split_edge_at(std::uint32_t a, std::uint32_t b, double t, TopologyChange& change);
@@ -101,7 +113,9 @@ class ExactCutter {
   int cell_rows_;
   std::vector<std::vector<std::uint32_t>> cell_triangles_;  // per cell (v * (columns - 1) + u): live triangles
   std::vector<std::uint32_t> triangle_cell_;
-  std::vector<std::vector<std::uint32_t>> cut_partners_;  // per particle: the particles it has a cut edge to
+  // Per particle: the particles it has a cut edge to (inline lists: a particle on a cut has two, four where
+  // cuts cross; std::vector here cost three allocations per new cut edge).
+  std::vector<SmallIndexList<4>> cut_partners_;
   // Scratch of one cut. A stamp marks what this cut has seen: an entry equal to stamp_ is this cut's.
   std::vector<std::uint32_t> triangle_stamp_;
   std::vector<std::uint32_t> particle_stamp_;
@@ -114,13 +128,24 @@ class ExactCutter {
   std::vector<Split> splits_;
   std::vector<std::uint32_t> split_head_;  // per particle stamped this cut: its first split as `a`, or kNone
   std::vector<std::array<std::uint32_t, 2>> cut_pairs_;
-  std::vector<std::uint32_t> touched_particles_;
+  std::vector<std::uint32_t> touched_particles_;  // each once (touched_stamp_), sorted before use
+  std::vector<std::uint32_t> touched_stamp_;
   std::vector<double> side_;            // per particle: signed distance from the segment's line, cells
   std::vector<std::uint8_t> snapped_;   // per particle: within snap of the segment
   std::vector<std::uint32_t> neighbourhood_;
   std::vector<std::uint32_t> bends_;
   std::vector<std::uint32_t> wanted_;
   std::vector<std::uint64_t> opposite_edges_;  // rederive_springs: p's triangles' edges opposite p, as keys
+  // rederive_springs: per particle, wanted_mark_ when p wants a spring to it, + 1 once that spring is found.
+  std::vector<std::uint32_t> wanted_marks_;
+  std::uint32_t wanted_mark_ = 0;
+  struct CutEdge {  // a cut edge of this segment in rest coordinates, for the bend-removal tests
+    Eigen::Vector2d x;
+    Eigen::Vector2d y;
+    Eigen::Vector2d lo;  // its box: min and max of x and y
+    Eigen::Vector2d hi;
+  };
+  std::vector<CutEdge> cut_edges_uv_;
   std::vector<std::uint32_t> on_cut_;
   std::vector<std::uint32_t> fan_;  // separate: the triangles around the particle
   std::vector<std::size_t> fan_parent_;

@@ -519,9 +519,10 @@ TopologyChange ExactCutter::cut(const Eigen::Vector2d& from_in, const Eigen::Vec
     if (spring_stamp_.size() < cloth.spring_count()) spring_stamp_.resize(cloth.spring_count(), 0);
     neighbourhood_.insert(neighbourhood_.end(), touched_particles_.begin(), touched_particles_.end());
     for (const std::uint32_t p : neighbourhood_) {
-      const auto springs = cloth.springs_of(p);
-      bends_.assign(springs.begin(), springs.end());
-      for (const std::uint32_t k : bends_) {
+      // The list is read first and the bends that meet the cut removed after it, in the same order (no test
+      // depends on another bend's removal): no copy of every list.
+      doomed_.clear();
+      for (const std::uint32_t k : cloth.springs_of(p)) {
         if (cloth.kind[k] != SpringKind::Bend || cloth.alive[k] == 0) continue;
         // Met from its other end already: it stayed, and would again (the test is geometry only).
         if (spring_stamp_[k] == stamp_) continue;
@@ -541,10 +542,13 @@ TopologyChange ExactCutter::cut(const Eigen::Vector2d& from_in, const Eigen::Vec
             continue;
           }
           if (!segments_meet(a, b, edge.x, edge.y)) continue;
-          cloth.remove_spring(k);
-          change.changed_springs.push_back(k);
+          doomed_.push_back(k);
           break;
         }
+      }
+      for (const std::uint32_t k : doomed_) {
+        cloth.remove_spring(k);
+        change.changed_springs.push_back(k);
       }
     }
   }
@@ -805,14 +809,12 @@ void ExactCutter::rederive_springs(std::uint32_t p, TopologyChange& change) {
       }
     }
   }
-  const auto springs = cloth.springs_of(p);
-  bends_.assign(springs.begin(), springs.end());
-  for (const std::uint32_t k : bends_) {
+  // Removals wait until the list has been read (no decision below depends on another spring's removal),
+  // then happen in the same order: no copy of the list.
+  doomed_.clear();
+  for (const std::uint32_t k : cloth.springs_of(p)) {
     if (cloth.kind[k] == SpringKind::Bend) {
-      if (cloth.triangles_of(p).empty()) {
-        cloth.remove_spring(k);
-        change.changed_springs.push_back(k);
-      }
+      if (cloth.triangles_of(p).empty()) doomed_.push_back(k);
       continue;
     }
     const std::uint32_t x = other_end(cloth, k, p);
@@ -842,6 +844,9 @@ void ExactCutter::rederive_springs(std::uint32_t p, TopologyChange& change) {
         continue;
       }
     }
+    doomed_.push_back(k);
+  }
+  for (const std::uint32_t k : doomed_) {
     cloth.remove_spring(k);
     change.changed_springs.push_back(k);
   }

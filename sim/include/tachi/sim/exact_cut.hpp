@@ -134,6 +134,7 @@ class ExactCutter {
   std::vector<std::uint8_t> snapped_;   // per particle: within snap of the segment
   std::vector<std::uint32_t> neighbourhood_;
   std::vector<std::uint32_t> bends_;
+  std::vector<std::uint32_t> doomed_;  // springs to remove once the list they are in has been read
   std::vector<std::uint32_t> wanted_;
   std::vector<std::uint64_t> opposite_edges_;  // rederive_springs: p's triangles' edges opposite p, as keys
   // rederive_springs: per particle, wanted_mark_ when p wants a spring to it, + 1 once that spring is found.

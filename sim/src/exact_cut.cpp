@@ -246,6 +246,15 @@ void ExactCutter::insert_point(const Eigen::Vector2d& p, TopologyChange& change)
     const Eigen::Vector2d d = uv(tri[2]);
     const double area = cross2(b - a, d - a);
     if (std::abs(area) < 1e-12) continue;
+    // Outside the triangle's box by more than 1e-6 cells: a barycentric coordinate below is negative by more
+    // than 1e-6 / 3 (p - min corner = sum of lambda_i times corner offsets of at most a cell), far beyond its
+    // 1e-12 tolerance plus rounding (~1e-13 / area, so only for areas of 1e-4 cells^2 and up): skipped anyway.
+    constexpr double kBoxMargin = 1e-6;
+    if (std::abs(area) >= 1e-4 &&
+        (p.x() < std::min({a.x(), b.x(), d.x()}) - kBoxMargin || p.x() > std::max({a.x(), b.x(), d.x()}) + kBoxMargin ||
+         p.y() < std::min({a.y(), b.y(), d.y()}) - kBoxMargin || p.y() > std::max({a.y(), b.y(), d.y()}) + kBoxMargin)) {
+      continue;
+    }
     const std::array<double, 3> lambda{cross2(b - p, d - p) / area, cross2(d - p, a - p) / area,
                                        cross2(a - p, b - p) / area};
     if (lambda[0] < -1e-12 || lambda[1] < -1e-12 || lambda[2] < -1e-12) continue;
@@ -401,7 +410,9 @@ TopologyChange ExactCutter::cut(const Eigen::Vector2d& from_in, const Eigen::Vec
       split_head_[p] = kNone;
       neighbourhood_.push_back(p);
       side_[p] = cross2(dir, uv(p) - from);
-      snapped_[p] = distance_to_segment(uv(p), from, to) <= snap_ ? 1 : 0;
+      // Farther than snap from the segment's line (by more than any rounding of side_): farther from the
+      // segment too, without its distance (most of the neighbourhood is).
+      snapped_[p] = std::abs(side_[p]) > snap_ + 1e-9 ? 0 : distance_to_segment(uv(p), from, to) <= snap_ ? 1 : 0;
     }
   }
   // Edges whose ends are strictly on opposite sides, crossed within the segment.

@@ -125,6 +125,7 @@ ExactCutter::ExactCutter(Cloth& cloth, double snap_cells)
   reserve_touched(side_, particle_room);
   reserve_touched(snapped_, particle_room);
   reserve_touched(cut_partners_, particle_room);
+  reserve_touched(on_a_cut_, particle_room);
   reserve_touched(touched_stamp_, particle_room);
   reserve_touched(wanted_marks_, particle_room);
   touched_stamp_.resize(cloth.particle_count(), 0);
@@ -335,10 +336,15 @@ const ExactCutter::Split* ExactCutter::split_on(std::uint32_t a, std::uint32_t b
 void ExactCutter::mark_cut(std::uint32_t a, std::uint32_t b) {
   // Remembered for good: a cut edge whose lips did not open yet (a slit's last edge, whose ends are both
   // tips) opens when a later segment goes on from its tip.
-  if (cut_partners_.size() < cloth_->particle_count()) cut_partners_.resize(cloth_->particle_count());
+  if (cut_partners_.size() < cloth_->particle_count()) {
+    cut_partners_.resize(cloth_->particle_count());
+    on_a_cut_.resize(cloth_->particle_count(), 0);
+  }
   if (is_cut(a, b)) return;
   cut_partners_[a].push_back(b);
   cut_partners_[b].push_back(a);
+  on_a_cut_[a] = 1;
+  on_a_cut_[b] = 1;
 }
 
 std::uint32_t ExactCutter::particle_on_edge(std::uint32_t a, std::uint32_t b, double t, TopologyChange& change) {

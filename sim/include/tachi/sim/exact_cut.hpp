@@ -98,9 +98,9 @@ class ExactCutter {
     touched_particles_.push_back(p);
   }
   /// Whether a-b is a cut edge. Inline: it runs for every edge add_bends and separate look at, and almost
-  /// every particle has no cut edge.
+  /// every particle has no cut edge (on_a_cut_, one byte a particle, answers that without the lists).
   [[nodiscard]] bool is_cut(std::uint32_t a, std::uint32_t b) const {
-    return a < cut_partners_.size() && cut_partners_[a].size() != 0 && cut_partners_[a].contains(b);
+    return a < on_a_cut_.size() && on_a_cut_[a] != 0 && cut_partners_[a].contains(b);
   }
   void mark_cut(std::uint32_t a, std::uint32_t b);
   std::uint32_t particle_on_edge(std::uint32_t a, std::uint32_t b, double t, TopologyChange& change);
@@ -116,6 +116,7 @@ class ExactCutter {
   // Per particle: the particles it has a cut edge to (inline lists: a particle on a cut has two, four where
   // cuts cross; std::vector here cost three allocations per new cut edge).
   std::vector<SmallIndexList<4>> cut_partners_;
+  std::vector<std::uint8_t> on_a_cut_;  // per particle: 1 when its cut_partners_ list is not empty
   // Scratch of one cut. A stamp marks what this cut has seen: an entry equal to stamp_ is this cut's.
   std::vector<std::uint32_t> triangle_stamp_;
   std::vector<std::uint32_t> particle_stamp_;

@@ -27,7 +27,6 @@
 
 #include <Eigen/Core>
 
-#include <algorithm>
 #include <array>
 #include <cstdint>
 #include <optional>
@@ -78,6 +77,7 @@ class ExactCutter {
   /// Fills the change's "before" fields; the segment clipped to the cloth, or nothing to cut.
   std::optional<std::pair<Eigen::Vector2d, Eigen::Vector2d>> begin(const Eigen::Vector2d& from, const Eigen::Vector2d& to,
                                                                    TopologyChange& change) const;
+  void grow_particle_scratch();
   void register_triangle(std::uint32_t t);
   void unregister_triangle(std::uint32_t t);
   [[nodiscard]] std::size_t cell_of(std::uint32_t t) const;

@@ -537,7 +537,11 @@ TopologyChange ExactCutter::cut(const Eigen::Vector2d& from_in, const Eigen::Vec
       cut_edges_uv_.push_back({uv(x), uv(y), uv(x).cwiseMin(uv(y)), uv(x).cwiseMax(uv(y))});
     }
     if (spring_stamp_.size() < cloth.spring_count()) spring_stamp_.resize(cloth.spring_count(), 0);
-    neighbourhood_.insert(neighbourhood_.end(), touched_particles_.begin(), touched_particles_.end());
+    // The touched particles not in it yet (those stamped in step 2 are: reading their lists again would
+    // only meet bends tested already).
+    for (const std::uint32_t p : touched_particles_) {
+      if (p >= particle_stamp_.size() || particle_stamp_[p] != stamp_) neighbourhood_.push_back(p);
+    }
     for (const std::uint32_t p : neighbourhood_) {
       // The list is read first and the bends that meet the cut removed after it, in the same order (no test
       // depends on another bend's removal): no copy of every list.

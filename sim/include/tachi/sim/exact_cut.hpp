@@ -72,10 +72,12 @@ class ExactCutter {
     std::uint32_t b;
     double t;         // from a
     std::uint32_t particle;
+    std::uint32_t next;  // the next split of this cut whose `a` is the same particle (kNone: the last)
   };
   /// Fills the change's "before" fields; the segment clipped to the cloth, or nothing to cut.
   std::optional<std::pair<Eigen::Vector2d, Eigen::Vector2d>> begin(const Eigen::Vector2d& from, const Eigen::Vector2d& to,
                                                                    TopologyChange& change) const;
+  void grow_particle_scratch();
   void register_triangle(std::uint32_t t);
   void unregister_triangle(std::uint32_t t);
   [[nodiscard]] std::size_t cell_of(std::uint32_t t) const;
@@ -88,7 +90,18 @@ class ExactCutter {
   void remove_triangle(std::uint32_t t, TopologyChange& change);
   void rederive_springs(std::uint32_t p, TopologyChange& change);
   void add_bends(std::uint32_t p, TopologyChange& change);
-  [[nodiscard]] bool is_cut(std::uint32_t a, std::uint32_t b) const;
+  /// Adds p to touched_particles_, once per cut (a stamp instead of sorting out ~6 repeats of each).
+  void touch(std::uint32_t p) {
+    if (p >= touched_stamp_.size()) touched_stamp_.resize(cloth_->particle_count() + 64, 0);
+    if (touched_stamp_[p] == stamp_) return;
+    touched_stamp_[p] = stamp_;
+    touched_particles_.push_back(p);
+  }
+  /// Whether a-b is a cut edge. Inline: it runs for every edge add_bends and separate look at, and almost
+  /// every particle has no cut edge (on_a_cut_, one byte a particle, answers that without the lists).
+  [[nodiscard]] bool is_cut(std::uint32_t a, std::uint32_t b) const {
+    return a < on_a_cut_.size() && on_a_cut_[a] != 0 && cut_partners_[a].contains(b);
+  }
   void mark_cut(std::uint32_t a, std::uint32_t b);
   std::uint32_t particle_on_edge(std::uint32_t a, std::uint32_t b, double t, TopologyChange& change);
   void split_edge_at(std::uint32_t a, std::uint32_t b, double t, TopologyChange& change);
@@ -100,20 +113,46 @@ class ExactCutter {
   int cell_rows_;
   std::vector<std::vector<std::uint32_t>> cell_triangles_;  // per cell (v * (columns - 1) + u): live triangles
   std::vector<std::uint32_t> triangle_cell_;
-  std::vector<std::vector<std::uint32_t>> cut_partners_;  // per particle: the particles it has a cut edge to
-  // Scratch of one cut.
+  // Per particle: the particles it has a cut edge to (inline lists: a particle on a cut has two, four where
+  // cuts cross; std::vector here cost three allocations per new cut edge).
+  std::vector<SmallIndexList<4>> cut_partners_;
+  std::vector<std::uint8_t> on_a_cut_;  // per particle: 1 when its cut_partners_ list is not empty
+  // Scratch of one cut. A stamp marks what this cut has seen: an entry equal to stamp_ is this cut's.
   std::vector<std::uint32_t> triangle_stamp_;
   std::vector<std::uint32_t> particle_stamp_;
+  std::vector<std::uint32_t> cell_stamp_;    // gather: the cell's triangles are candidates already
+  std::vector<std::uint32_t> spring_stamp_;  // a shear spring kept across a quad, a bend tested against the path
+  std::vector<std::uint32_t> edge_stamp_;    // add_bends: per triangle, whether edge_visited_ is this cut's
+  std::vector<std::uint8_t> edge_visited_;   // add_bends: per triangle, bit e = its edge e was visited
   std::uint32_t stamp_ = 0;
   std::vector<std::uint32_t> candidates_;
   std::vector<Split> splits_;
+  std::vector<std::uint32_t> split_head_;  // per particle stamped this cut: its first split as `a`, or kNone
   std::vector<std::array<std::uint32_t, 2>> cut_pairs_;
-  std::vector<std::uint32_t> touched_particles_;
+  std::vector<std::uint32_t> touched_particles_;  // each once (touched_stamp_), sorted before use
+  std::vector<std::uint32_t> touched_stamp_;
   std::vector<double> side_;            // per particle: signed distance from the segment's line, cells
   std::vector<std::uint8_t> snapped_;   // per particle: within snap of the segment
   std::vector<std::uint32_t> neighbourhood_;
   std::vector<std::uint32_t> bends_;
+  std::vector<std::uint32_t> doomed_;  // springs to remove once the list they are in has been read
   std::vector<std::uint32_t> wanted_;
+  std::vector<std::uint64_t> opposite_edges_;  // rederive_springs: p's triangles' edges opposite p, as keys
+  // rederive_springs: per particle, wanted_mark_ when p wants a spring to it, + 1 once that spring is found.
+  std::vector<std::uint32_t> wanted_marks_;
+  std::uint32_t wanted_mark_ = 0;
+  struct CutEdge {  // a cut edge of this segment in rest coordinates, for the bend-removal tests
+    Eigen::Vector2d x;
+    Eigen::Vector2d y;
+    Eigen::Vector2d lo;  // its box: min and max of x and y
+    Eigen::Vector2d hi;
+  };
+  std::vector<CutEdge> cut_edges_uv_;
+  std::vector<std::uint32_t> on_cut_;
+  std::vector<std::uint32_t> fan_;  // separate: the triangles around the particle
+  std::vector<std::size_t> fan_parent_;
+  std::vector<std::size_t> fan_roots_;
+  std::vector<std::uint32_t> partners_;
   // Results.
   double max_deviation_ = 0.0;
   double cut_length_m_ = 0.0;

@@ -33,8 +33,8 @@ struct SolverParams {
   float structural_compliance = 0.0F;  ///< XPBD compliance of the structural springs, m/N (0: hard; materials set 1/k)
   float max_strain = 0.10F;        ///< Provot's critical deformation rate (10%)
   int strain_limit_passes = 6;     ///< at most this many strain-limit sweeps per sub-step (stops when clean)
-  /// Particles the attachments' repair after a cut seeds or settles per step and pin group, at most: a cut
-  /// that re-routes a whole piece is spread over steps (those particles' tethers are off meanwhile).
+  /// Particles the attachments' repair after a cut settles per step and pin group, at most: a cut that
+  /// re-routes a whole piece is spread over steps (those particles' tethers are off meanwhile).
   int repair_per_step = 2048;
   bool long_range_attachments = true;
   bool soft_every_substep = true;  ///< shear/bend in every sub-step (false: cheaper, but never fully at rest)

@@ -130,6 +130,7 @@ class Solver {
   void refresh_nearest(std::uint32_t i);
   void attach(const Cloth& cloth, Search& search, std::uint32_t i);
   void open_particle(Search& search, std::uint32_t i);
+  static void seed(const Cloth& cloth, Search& search, std::uint32_t i);
   static void compact_order(Search& search, std::size_t particles);
   [[nodiscard]] static bool parent_spring_intact(const Cloth& cloth, Search& search, std::uint32_t i);
   void update_attachments(const Cloth& cloth, const std::vector<std::uint32_t>& touched);

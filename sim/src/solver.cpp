@@ -601,10 +601,11 @@ void Solver::update_attachments(const Cloth& cloth, const std::vector<std::uint3
   // settled neighbours runs within each step's budget (continue_searches).
   // A cut may also make a path shorter (an exact cut's new triangles' edges cut across a cell): that is not
   // searched for, so a repaired distance may exceed a full build's by a few per cent (up to 10 % after a
-  // dozen random strokes on a 24 x 24 cloth, solver_test), never fall short of it. Searching for it too (re-opening a settled particle that a newly settled one reaches by a shorter
-  // way) was tried: the 64 x 64 exact slit of tachi-sim's CutCli test then rested at 14.9 % strain instead
-  // of <= 10 %, likely because attach()'s straightness test, tuned on grid paths, then lets more chains of
-  // tethers count as straight around a cut's tip.
+  // dozen random strokes on a 24 x 24 cloth, solver_test), never fall short of it. Searching for it too
+  // (re-opening a settled particle that a newly settled one reaches by a shorter way) was tried: the 64 x 64
+  // exact slit of tachi-sim's CutCli test then rested at 14.9 % strain instead of <= 10 %, likely because
+  // attach()'s straightness test, tuned on grid paths, then lets more chains of tethers count as straight
+  // around a cut's tip.
   // The subtrees are found in one pass over the settle order from the first orphan: a particle there comes
   // after its parent, so it is opened when its parent was. That is a load and a test per particle, where
   // walking the subtrees through the springs cost ~500 instructions per particle and search (5 ms for the

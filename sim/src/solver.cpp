@@ -360,8 +360,6 @@ bool Solver::run_search(const Cloth& cloth, Search& search, bool repair, std::si
       if (search.open[i] == 0) continue;
       search.open[i] = 0;
       refresh_nearest(i);
-    } else if (search.order_pos[i] != kNone) {
-      continue;  // settled already (a duplicate heap entry at the same distance)
     }
     search.order_pos[i] = static_cast<std::uint32_t>(search.order.size());
     search.order.push_back(i);

@@ -48,7 +48,8 @@ struct SolverParams {
 /// (pinned, or held by the hand: inverse mass 0) changes; a cut is picked up INCREMENTALLY from
 /// cloth.spring_edits: the lanes of the springs it changed are blanked, its new springs are batched at
 /// the end of their family, and only the attachments whose shortest path crossed the cut are searched
-/// again (decremental Dijkstra), so the step after a cut costs about what the cut touched.
+/// again (decremental Dijkstra), inside the next steps within a budget (repair_per_step), their tethers
+/// off until then. Details and figures: docs/sim.md ("Caches"), docs/benchmarks.md ("Exact cuts").
 class Solver {
  public:
   explicit Solver(SolverParams params = {});

@@ -157,6 +157,7 @@ void Solver::full_build(const Cloth& cloth, std::vector<std::uint32_t> pins) {
   const std::size_t particle_room = cloth.position.capacity() + 1;
   reserve_touched(nearest_, particle_room);
   reserve_touched(opened_, particle_room);
+  reserve_touched(opened_mark_, particle_room);
   reserve_touched(work_, particle_room);
   reserve_touched(old_work_, particle_room);
   reserve_touched(slot_, cloth.spring_a.capacity());
@@ -586,7 +587,11 @@ void Solver::open_particle(Search& search, std::uint32_t i) {
   if (search.bends[i] != 0) tether_order_stale_ = true;
   search.bends[i] = 0;
   if (search.attachment[i] != kNone) attachments_[search.attachment[i]] = {i, i, kInf, 0};
-  opened_.push_back(i);
+  // Once per particle, however many searches open it: its nearest pin is looked up again after all of them.
+  if (opened_mark_[i] == 0) {
+    opened_mark_[i] = 1;
+    opened_.push_back(i);
+  }
 }
 
 void Solver::update_attachments(const Cloth& cloth, const std::vector<std::uint32_t>& touched) {
@@ -609,6 +614,7 @@ void Solver::update_attachments(const Cloth& cloth, const std::vector<std::uint3
   // walking the subtrees through the springs cost ~500 instructions per particle and search (5 ms for the
   // lower half of a 128 x 128 cloth over four searches).
   opened_.clear();
+  opened_mark_.resize(n, 0);
   for (Search& search : searches_) {
     const std::size_t old_n = search.dist.size();
     search.dist.resize(n, kInf);
@@ -653,7 +659,10 @@ void Solver::update_attachments(const Cloth& cloth, const std::vector<std::uint3
       if (k < search.seeded) seed(cloth, search, i);  // else the repair's seeding reaches it
     }
   }
-  for (const std::uint32_t i : opened_) refresh_nearest(i);
+  for (const std::uint32_t i : opened_) {
+    refresh_nearest(i);
+    opened_mark_[i] = 0;
+  }
 }
 
 void Solver::step(Cloth& cloth, const Colliders& colliders) {

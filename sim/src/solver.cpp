@@ -68,6 +68,55 @@ float octile(const Cloth& cloth, const Eigen::Vector2f& a, const Eigen::Vector2f
          diagonal * std::hypot(cloth.spacing_x(), cloth.spacing_y());
 }
 
+/// Distance (m) of particle p's rest coordinate from the nearest grid point: 0 for a grid particle.
+float off_grid(const Cloth& cloth, std::uint32_t p) {
+  const Eigen::Vector2f& uv = cloth.rest_uv[p];
+  const float du = (uv.x() - std::round(uv.x())) * cloth.spacing_x();
+  const float dv = (uv.y() - std::round(uv.y())) * cloth.spacing_y();
+  return std::sqrt(du * du + dv * dv);
+}
+
+/// Whether a shortest path in the cloth's rest plane can bend at particle p: p is on the boundary (one of its
+/// edges borders a single triangle) and the piece's angle there, the sum of its triangles' angles at p in rest
+/// coordinates, exceeds 180 degrees (a cut's tip: 360; a corner of a staircase cut: 270). Only there does a
+/// geodesic wrap around the cut; along a straight lip (180) or inside the cloth (360, no boundary) it runs
+/// straight. The 10 degree margin keeps the float rounding of a straight lip's rest coordinates out.
+bool is_bend_point(const Cloth& cloth, std::uint32_t p) {
+  constexpr float kReflex = 3.14159265F * (1.0F + 10.0F / 180.0F);
+  constexpr std::size_t kFan = 32;  // neighbours in p's fan (a grid particle has 6, an exact cut adds a few)
+  std::array<std::uint32_t, kFan> neighbour{};
+  std::array<std::uint8_t, kFan> edges{};  // how many of p's triangles share the edge p-neighbour
+  std::size_t count = 0;
+  const auto see = [&](std::uint32_t q) {
+    for (std::size_t k = 0; k < count; ++k) {
+      if (neighbour[k] == q) {
+        ++edges[k];
+        return;
+      }
+    }
+    if (count < kFan) {
+      neighbour[count] = q;
+      edges[count++] = 1;
+    }
+  };
+  const Eigen::Vector2f scale{cloth.spacing_x(), cloth.spacing_y()};
+  float angle = 0.0F;
+  for (const std::uint32_t t : cloth.triangles_of(p)) {
+    const auto& tri = cloth.triangles[t];
+    const std::size_t at = tri[0] == p ? 0 : tri[1] == p ? 1 : 2;
+    const std::uint32_t q = tri[(at + 1) % 3];
+    const std::uint32_t r = tri[(at + 2) % 3];
+    see(q);
+    see(r);
+    const Eigen::Vector2f a = (cloth.rest_uv[q] - cloth.rest_uv[p]).cwiseProduct(scale);
+    const Eigen::Vector2f b = (cloth.rest_uv[r] - cloth.rest_uv[p]).cwiseProduct(scale);
+    angle += std::atan2(std::abs(a.x() * b.y() - a.y() * b.x()), a.dot(b));
+  }
+  if (angle <= kReflex) return false;
+  return std::any_of(edges.begin(), edges.begin() + static_cast<std::ptrdiff_t>(count),
+                     [](std::uint8_t e) { return e == 1; });
+}
+
 }  // namespace
 
 std::size_t Solver::attachment_count() const {
@@ -436,7 +485,21 @@ void Solver::attach(const Cloth& cloth, Search& search, std::uint32_t i) {
   // "Straight" is tested on the grid: Dijkstra over springs measures octile paths, up to 8 % longer than the
   // straight line, so where the path from the anchor is no longer than the octile distance of the two rest
   // coordinates (no cut in the way) the straight rest distance is the geodesic (and the slack of the octile
-  // path would let the middle of a wide drape sag by centimetres).
+  // path would let the middle of a wide drape sag by centimetres). Two detours that bend around nothing are
+  // allowed on top: a path from or to a particle off the grid (an exact cut's) is up to about twice its
+  // distance from the nearest grid point longer than the octile distance; and past a bend a path runs along
+  // the cut's lip, whose notches (deleted triangles) or off-grid particles lengthen it by up to about a cell.
+  // Without that allowance the notches of a delete cut's lower lip became anchors for the cloth below them
+  // and kept it fluttering (64 x 64 slit: 11.7 %, 2e-3 J after 10 s). Not before the first bend: there a
+  // straight tether from the pin is tighter than the path around the cut's tip, and a cut flap could not
+  // hang open (exact flap at 32 x 32 with one cell allowed: 18 %).
+  // Where the path does bend, the new anchor is the last particle before it where a path CAN bend (a cut's
+  // tip, a reflex corner of a cut: is_bend_point), not simply the parent: "the parent" made chains of
+  // one-cell tethers down a column below a slit's tip (24 links at 64 x 64) and anchored hundreds of
+  // particles on light particles of an exact cut's lip; an anchor moved by the piece hanging from it (the
+  // tether moves the piece, the piece moves its anchor) kept a slit's lower piece fluttering forever
+  // (tachi-sim's out-of-plane jitter: kinetic energy 4e-4 J after 10 s; now 1e-8 J). A path that fails the
+  // test with no such particle since the candidate is a detour of the discretisation: the candidate stays.
   float length2 = kInf;
   std::uint32_t anchor = kNone;
   std::uint32_t bends = 0;
@@ -444,11 +507,27 @@ void Solver::attach(const Cloth& cloth, Search& search, std::uint32_t i) {
   if (cloth.inverse_mass[i] != 0.0F && std::isfinite(search.dist[i]) && parent != kNone) {
     const bool parent_is_pin = cloth.inverse_mass[parent] == 0.0F;
     const std::uint32_t candidate = parent_is_pin ? parent : search.anchor[parent];
+    const bool past_bend = candidate != kNone && cloth.inverse_mass[candidate] != 0.0F;
+    const float lip_detour = past_bend ? std::min(cloth.spacing_x(), cloth.spacing_y()) : 0.0F;
     const auto straight_from = [&](std::uint32_t a) {
-      return search.dist[i] - search.dist[a] <=
-             octile(cloth, cloth.rest_uv[i], cloth.rest_uv[a]) * (1.0F + 1e-4F) + 1e-6F;
+      return search.dist[i] - search.dist[a] <= octile(cloth, cloth.rest_uv[i], cloth.rest_uv[a]) * (1.0F + 1e-4F) +
+                                                   off_grid(cloth, i) + off_grid(cloth, a) + lip_detour + 1e-6F;
     };
-    anchor = candidate != kNone && straight_from(candidate) ? candidate : parent;
+    if (candidate == kNone) {
+      anchor = parent;
+    } else {
+      anchor = candidate;
+      if (!straight_from(candidate)) {
+        // Up the path from the parent to the candidate (anchors are ancestors), at most one step a particle.
+        std::size_t steps = cloth.particle_count();
+        for (std::uint32_t p = parent; p != candidate && p != kNone && steps > 0; p = search.parent[p], --steps) {
+          if (is_bend_point(cloth, p)) {
+            anchor = p;
+            break;
+          }
+        }
+      }
+    }
     const float length = cloth.rest_distance(i, anchor);
     length2 = length * length;
     bends = cloth.inverse_mass[anchor] == 0.0F ? 0 : search.bends[anchor] + 1;
@@ -492,14 +571,16 @@ void Solver::build_attachments(const Cloth& cloth) {
   // A few pins (corners): every particle is tethered to each of them. Many pins (an edge): Kim et al. tether
   // to the nearest only, but below a cut a particle held through one tip alone swings down around it and
   // tears the cloth between it and a neighbour held through the other tip (a slit at 64 x 64 rested at 15 %,
-  // 28 % in exact mode). So the pins are split into four groups along the pinned line and each particle is
-  // tethered to the nearest pin of each: the paths of different groups pass different tips, and the cloth
-  // below a slit hangs from both (64 x 64, in the plane: <= 10 % in every mode). Two groups did that in the
-  // plane too, but with the out-of-plane jitter of tachi-sim the cloth below the slit never came to rest
-  // (grid 11-15 %, exact 70 %; four groups: grid rests at 10.8 %, exact 12-19 %). Four tethers per particle
+  // 28 % in exact mode). So each particle gets four tethers, from four groups of pins along the pinned line,
+  // whose paths should pass different tips so that the cloth below a slit hangs from both. Four quarters of
+  // the line did not do that: the nearest pin of the right quarter still reached the left third of a slit's
+  // lower lip round the left tip, so that part hung from one tip only, the lip sagged like a hammock and its
+  // springs stayed over the limit (tachi-sim's jittered 0.65 m slit, 64 x 64: grid 10.8 %, exact 12-19 %).
+  // The groups are now the two ends of the pinned line, one pin each, and its two halves: a path from the far
+  // end reaches all but the few cells of the lip next to the near tip round the far tip, and the halves keep
+  // a pin straight above every particle of an uncut cloth, so it drapes as before. Four tethers per particle
   // instead of one: the plain step costs +90 % at 128 x 128 (docs/benchmarks.md).
   constexpr std::size_t kAllPinsUpTo = 4;
-  constexpr std::size_t kPinGroups = 4;
   if (cached_pins_.size() <= kAllPinsUpTo) {
     for (const std::uint32_t pin : cached_pins_) searches_.emplace_back().sources = {pin};
   } else {
@@ -509,11 +590,11 @@ void Solver::build_attachments(const Cloth& cloth) {
       const auto& ub = cloth.rest_uv[b];
       return ua.x() != ub.x() ? ua.x() < ub.x() : ua.y() < ub.y();
     });
-    for (std::size_t g = 0; g < kPinGroups; ++g) {
-      searches_.emplace_back().sources.assign(
-          sorted.begin() + static_cast<std::ptrdiff_t>(g * sorted.size() / kPinGroups),
-          sorted.begin() + static_cast<std::ptrdiff_t>((g + 1) * sorted.size() / kPinGroups));
-    }
+    const auto half = sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() / 2);
+    searches_.emplace_back().sources = {sorted.front()};
+    searches_.emplace_back().sources.assign(sorted.begin(), half);
+    searches_.emplace_back().sources.assign(half, sorted.end());
+    searches_.emplace_back().sources = {sorted.back()};
   }
   const std::size_t particle_room = cloth.position.capacity();
   reserve_touched(attachments_, searches_.size() * particle_room);

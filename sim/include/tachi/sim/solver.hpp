@@ -32,7 +32,7 @@ struct SolverParams {
   float bend_compliance = 2.0F;    ///< XPBD compliance, m/N
   float structural_compliance = 0.0F;  ///< XPBD compliance of the structural springs, m/N (0: hard; materials set 1/k)
   float max_strain = 0.10F;        ///< Provot's critical deformation rate (10%)
-  int strain_limit_passes = 6;     ///< at most this many strain-limit sweeps per sub-step (stops when clean)
+  int strain_limit_passes = 10;    ///< at most this many strain-limit sweeps per sub-step (stops when clean)
   /// Particles the attachments' repair after a cut settles per step and pin group, at most: a cut that
   /// re-routes a whole piece is spread over steps (those particles' tethers are off meanwhile).
   int repair_per_step = 2048;

@@ -158,6 +158,8 @@ class Solver {
   // to be re-ordered on a step with no cut (the cut's repair finished within its own step).
   std::vector<PackedSpring> strain_limit_;
   std::vector<std::uint32_t> limit_slot_;
+  /// Places in strain_limit_ of the springs shorter than a cell (an exact cut's), swept again after each pass.
+  std::vector<std::uint32_t> limit_again_;
   bool limit_order_stale_ = false;
   bool pending_limit_order_ = false;
   std::vector<std::pair<std::uint32_t, std::uint32_t>> limit_level_;  // scratch: (level, spring)

@@ -56,6 +56,7 @@ Solver::Solver(SolverParams params) : params_(std::move(params)) {}
 namespace {
 
 constexpr std::uint32_t kNone = 0xFFFFFFFFU;
+constexpr std::uint32_t kNoBend = 0xFFFFFFFEU;  // Search::last_bend: checked, there is none
 constexpr float kInf = std::numeric_limits<float>::infinity();
 
 /// Octile distance between two rest coordinates (cells): the length of the shortest path along a
@@ -99,22 +100,31 @@ bool is_bend_point(const Cloth& cloth, std::uint32_t p) {
       edges[count++] = 1;
     }
   };
+  // Called for every particle the attachments settle: the boundary test (integers) first, the angles only on
+  // the boundary.
+  const auto corners = [&](std::uint32_t t) {
+    const auto& tri = cloth.triangles[t];
+    const std::size_t at = tri[0] == p ? 0 : tri[1] == p ? 1 : 2;
+    return std::pair{tri[(at + 1) % 3], tri[(at + 2) % 3]};
+  };
+  for (const std::uint32_t t : cloth.triangles_of(p)) {
+    const auto [q, r] = corners(t);
+    see(q);
+    see(r);
+  }
+  if (std::none_of(edges.begin(), edges.begin() + static_cast<std::ptrdiff_t>(count),
+                   [](std::uint8_t e) { return e == 1; })) {
+    return false;
+  }
   const Eigen::Vector2f scale{cloth.spacing_x(), cloth.spacing_y()};
   float angle = 0.0F;
   for (const std::uint32_t t : cloth.triangles_of(p)) {
-    const auto& tri = cloth.triangles[t];
-    const std::size_t at = tri[0] == p ? 0 : tri[1] == p ? 1 : 2;
-    const std::uint32_t q = tri[(at + 1) % 3];
-    const std::uint32_t r = tri[(at + 2) % 3];
-    see(q);
-    see(r);
+    const auto [q, r] = corners(t);
     const Eigen::Vector2f a = (cloth.rest_uv[q] - cloth.rest_uv[p]).cwiseProduct(scale);
     const Eigen::Vector2f b = (cloth.rest_uv[r] - cloth.rest_uv[p]).cwiseProduct(scale);
     angle += std::atan2(std::abs(a.x() * b.y() - a.y() * b.x()), a.dot(b));
   }
-  if (angle <= kReflex) return false;
-  return std::any_of(edges.begin(), edges.begin() + static_cast<std::ptrdiff_t>(count),
-                     [](std::uint8_t e) { return e == 1; });
+  return angle > kReflex;
 }
 
 }  // namespace
@@ -515,6 +525,11 @@ void Solver::attach(const Cloth& cloth, Search& search, std::uint32_t i) {
   float length2 = kInf;
   std::uint32_t anchor = kNone;
   std::uint32_t bends = 0;
+  std::uint32_t last_bend = kNone;
+  if (search.last_bend.size() < cloth.particle_count()) {
+    search.last_bend.resize(cloth.particle_count(), kNone);
+    search.bend_checked.resize(cloth.particle_count(), 0);
+  }
   const std::uint32_t parent = search.parent[i];
   if (cloth.inverse_mass[i] != 0.0F && std::isfinite(search.dist[i]) && parent != kNone) {
     const bool parent_is_pin = cloth.inverse_mass[parent] == 0.0F;
@@ -528,16 +543,12 @@ void Solver::attach(const Cloth& cloth, Search& search, std::uint32_t i) {
     if (candidate == kNone) {
       anchor = parent;
     } else {
+      last_bend = parent == candidate ? kNoBend : nearest_bend(cloth, search, parent, candidate);
       anchor = candidate;
-      if (!straight_from(candidate)) {
-        // Up the path from the parent to the candidate (anchors are ancestors), at most one step a particle.
-        std::size_t steps = cloth.particle_count();
-        for (std::uint32_t p = parent; p != candidate && p != kNone && steps > 0; p = search.parent[p], --steps) {
-          if (is_bend_point(cloth, p)) {
-            anchor = p;
-            break;
-          }
-        }
+      // No particle where the path can bend: a detour of the discretisation, the candidate stays.
+      if (!straight_from(candidate) && last_bend != kNoBend) {
+        anchor = last_bend;
+        last_bend = kNoBend;  // nothing between it and i can bend
       }
     }
     const float length = cloth.rest_distance(i, anchor);
@@ -545,6 +556,8 @@ void Solver::attach(const Cloth& cloth, Search& search, std::uint32_t i) {
     bends = cloth.inverse_mass[anchor] == 0.0F ? 0 : search.bends[anchor] + 1;
   }
   search.anchor[i] = anchor;
+  search.last_bend[i] = last_bend;
+  search.bend_checked[i] = cloth.topology_version;
   if (bends != search.bends[i]) tether_order_stale_ = true;
   search.bends[i] = bends;
   std::uint32_t& slot = search.attachment[i];
@@ -557,6 +570,32 @@ void Solver::attach(const Cloth& cloth, Search& search, std::uint32_t i) {
     // A disabled tether keeps a valid anchor index (itself): the step reads it before comparing.
     attachments_[slot] = {i, std::isfinite(length2) ? anchor : i, length2, bends};
   }
+}
+
+std::uint32_t Solver::nearest_bend(const Cloth& cloth, Search& search, std::uint32_t from, std::uint32_t anchor) {
+  // The nearest particle where the path can bend, from `from` (included) up to `anchor` (excluded). A record
+  // is trusted when it names a particle, or says "none" checked since the last topology change: a cut makes
+  // new bend points (a tip) without reopening the particles whose paths pass them, so their old "none" may
+  // be out of date. What a walk finds is written back on the particles it passed: each is walked through at
+  // most once per topology version (walking every branch again cost a 128 x 128 long stroke 50 ms steps).
+  std::uint32_t found = kNoBend;
+  std::uint32_t p = from;
+  for (; p != anchor && p != kNone; p = search.parent[p]) {
+    if (is_bend_point(cloth, p)) {
+      found = p;
+      break;
+    }
+    const std::uint32_t known = search.last_bend[p];
+    if (known != kNone && (known != kNoBend || search.bend_checked[p] == cloth.topology_version)) {
+      found = known;
+      break;
+    }
+  }
+  for (std::uint32_t q = from; q != p && q != kNone; q = search.parent[q]) {
+    search.last_bend[q] = found;
+    search.bend_checked[q] = cloth.topology_version;
+  }
+  return found;
 }
 
 void Solver::order_tethers() {
@@ -621,6 +660,8 @@ void Solver::build_attachments(const Cloth& cloth) {
     reserve_touched(search.attachment, particle_room);
     reserve_touched(search.anchor, particle_room);
     reserve_touched(search.bends, particle_room);
+    reserve_touched(search.last_bend, particle_room);
+    reserve_touched(search.bend_checked, particle_room);
     reserve_touched(search.open, particle_room);
     reserve_touched(search.open_list, particle_room);
     reserve_touched(search.heap, particle_room);
@@ -634,6 +675,8 @@ void Solver::build_attachments(const Cloth& cloth) {
     search.attachment.assign(n, kNone);
     search.anchor.assign(n, kNone);
     search.bends.assign(n, 0);
+    search.last_bend.assign(n, kNone);
+    search.bend_checked.assign(n, 0);
     search.open.assign(n, 0);
     search.open_list.clear();
     search.heap.clear();

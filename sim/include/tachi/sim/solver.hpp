@@ -32,7 +32,7 @@ struct SolverParams {
   float bend_compliance = 2.0F;    ///< XPBD compliance, m/N
   float structural_compliance = 0.0F;  ///< XPBD compliance of the structural springs, m/N (0: hard; materials set 1/k)
   float max_strain = 0.10F;        ///< Provot's critical deformation rate (10%)
-  int strain_limit_passes = 10;    ///< at most this many strain-limit sweeps per sub-step (stops when clean)
+  int strain_limit_passes = 6;     ///< at most this many strain-limit sweeps per sub-step (stops when clean)
   /// Particles the attachments' repair after a cut settles per step and pin group, at most: a cut that
   /// re-routes a whole piece is spread over steps (those particles' tethers are off meanwhile).
   int repair_per_step = 2048;
@@ -107,6 +107,11 @@ class Solver {
     /// bends around a cut), and how many bends that is from the pin (0: held by the pin itself).
     std::vector<std::uint32_t> anchor;
     std::vector<std::uint32_t> bends;
+    /// Per particle: the particle nearest to it on its path, past its anchor and before itself, where a path can
+    /// bend around a cut (none: not known; kNoBend: there is none, checked at topology version bend_checked), so
+    /// that a particle whose path bends finds its new anchor from its parent's without walking the path.
+    std::vector<std::uint32_t> last_bend;
+    std::vector<std::uint32_t> bend_checked;
     // A repair after a cut, possibly spread over several steps: its heap, the particles whose distance is
     // not final yet (their tethers are off meanwhile), and the same as a list.
     std::vector<std::pair<float, std::uint32_t>> heap;
@@ -130,6 +135,7 @@ class Solver {
   void continue_searches(const Cloth& cloth);
   void refresh_nearest(std::uint32_t i);
   void attach(const Cloth& cloth, Search& search, std::uint32_t i);
+  static std::uint32_t nearest_bend(const Cloth& cloth, Search& search, std::uint32_t from, std::uint32_t anchor);
   void open_particle(Search& search, std::uint32_t i);
   static void seed(const Cloth& cloth, Search& search, std::uint32_t i);
   static void compact_order(Search& search, std::size_t particles);

@@ -542,14 +542,14 @@ void Solver::attach(const Cloth& cloth, Search& search, std::uint32_t i) {
     };
     if (candidate == kNone) {
       anchor = parent;
+    } else if (straight_from(candidate)) {
+      anchor = candidate;  // last_bend stays unknown: found by a walk if a descendant's path bends
     } else {
-      last_bend = parent == candidate ? kNoBend : nearest_bend(cloth, search, parent, candidate);
-      anchor = candidate;
-      // No particle where the path can bend: a detour of the discretisation, the candidate stays.
-      if (!straight_from(candidate) && last_bend != kNoBend) {
-        anchor = last_bend;
-        last_bend = kNoBend;  // nothing between it and i can bend
-      }
+      const std::uint32_t bend = parent == candidate ? kNoBend : nearest_bend(cloth, search, parent, candidate);
+      // None: a detour of the discretisation, the candidate stays. Either way nothing between the anchor and
+      // i can bend.
+      anchor = bend != kNoBend ? bend : candidate;
+      last_bend = kNoBend;
     }
     const float length = cloth.rest_distance(i, anchor);
     length2 = length * length;

@@ -108,8 +108,9 @@ class Solver {
     std::vector<std::uint32_t> anchor;
     std::vector<std::uint32_t> bends;
     /// Per particle: the particle nearest to it on its path, past its anchor and before itself, where a path can
-    /// bend around a cut (none: not known; kNoBend: there is none, checked at topology version bend_checked), so
-    /// that a particle whose path bends finds its new anchor from its parent's without walking the path.
+    /// bend around a cut (none: not known; kNoBend: there is none, checked at topology version bend_checked).
+    /// Filled in only where a path bends, by the walk that looks for it (Solver::nearest_bend), so that the
+    /// next particle whose path bends there stops its walk at the first particle that knows.
     std::vector<std::uint32_t> last_bend;
     std::vector<std::uint32_t> bend_checked;
     // A repair after a cut, possibly spread over several steps: its heap, the particles whose distance is

@@ -520,7 +520,7 @@ void Solver::attach(const Cloth& cloth, Search& search, std::uint32_t i) {
   // one-cell tethers down a column below a slit's tip (24 links at 64 x 64) and anchored hundreds of
   // particles on light particles of an exact cut's lip; an anchor moved by the piece hanging from it (the
   // tether moves the piece, the piece moves its anchor) kept a slit's lower piece fluttering forever
-  // (tachi-sim's out-of-plane jitter: kinetic energy 4e-4 J after 10 s; now 1e-8 J). A path that fails the
+  // (tachi-sim's out-of-plane jitter: kinetic energy 4e-4 J after 10 s; now 3e-7 J). A path that fails the
   // test with no such particle since the candidate is a detour of the discretisation: the candidate stays.
   float length2 = kInf;
   std::uint32_t anchor = kNone;

@@ -382,8 +382,17 @@ Summary summarize(const Cloth& cloth) {
   s.particles = cloth.particle_count();
   s.springs = cloth.alive_spring_count();
   s.triangles = cloth.alive_triangle_count();
-  s.pieces = find_pieces(cloth).count();
+  const Pieces pieces = find_pieces(cloth);
+  s.pieces = pieces.count();
   s.max_strain = cloth.max_structural_strain();
+  // Whether max_strain is a cloth at rest or a snapshot of one still moving: the kinetic energy of the pieces a
+  // pin holds (pieces that fell off are meant to move).
+  double held_kinetic = 0.0;
+  for (std::size_t i = 0; i < cloth.particle_count(); ++i) {
+    if (pieces.pinned[pieces.piece_of[i]] == 0) continue;
+    held_kinetic += 0.5 * static_cast<double>(cloth.mass[i]) * static_cast<double>(cloth.velocity[i].squaredNorm());
+  }
+  s.extra["held_kinetic_energy_j"] = held_kinetic;
   s.columns = cloth.columns;
   s.rows = cloth.rows;
   return s;

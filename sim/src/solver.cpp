@@ -56,6 +56,7 @@ Solver::Solver(SolverParams params) : params_(std::move(params)) {}
 namespace {
 
 constexpr std::uint32_t kNone = 0xFFFFFFFFU;
+constexpr std::uint32_t kNoBend = 0xFFFFFFFEU;  // Search::last_bend: checked, there is none
 constexpr float kInf = std::numeric_limits<float>::infinity();
 
 /// Octile distance between two rest coordinates (cells): the length of the shortest path along a
@@ -66,6 +67,64 @@ float octile(const Cloth& cloth, const Eigen::Vector2f& a, const Eigen::Vector2f
   const float diagonal = std::min(du, dv);
   return (du - diagonal) * cloth.spacing_x() + (dv - diagonal) * cloth.spacing_y() +
          diagonal * std::hypot(cloth.spacing_x(), cloth.spacing_y());
+}
+
+/// Distance (m) of particle p's rest coordinate from the nearest grid point: 0 for a grid particle.
+float off_grid(const Cloth& cloth, std::uint32_t p) {
+  const Eigen::Vector2f& uv = cloth.rest_uv[p];
+  const float du = (uv.x() - std::round(uv.x())) * cloth.spacing_x();
+  const float dv = (uv.y() - std::round(uv.y())) * cloth.spacing_y();
+  return std::sqrt(du * du + dv * dv);
+}
+
+/// Whether a shortest path in the cloth's rest plane can bend at particle p: p is on the boundary (one of its
+/// edges borders a single triangle) and the piece's angle there, the sum of its triangles' angles at p in rest
+/// coordinates, exceeds 180 degrees (a cut's tip: 360; a corner of a staircase cut: 270). Only there does a
+/// geodesic wrap around the cut; along a straight lip (180) or inside the cloth (360, no boundary) it runs
+/// straight. The 10 degree margin keeps the float rounding of a straight lip's rest coordinates out.
+bool is_bend_point(const Cloth& cloth, std::uint32_t p) {
+  constexpr float kReflex = 3.14159265F * (1.0F + 10.0F / 180.0F);
+  constexpr std::size_t kFan = 32;  // neighbours in p's fan (a grid particle has 6, an exact cut adds a few)
+  std::array<std::uint32_t, kFan> neighbour{};
+  std::array<std::uint8_t, kFan> edges{};  // how many of p's triangles share the edge p-neighbour
+  std::size_t count = 0;
+  const auto see = [&](std::uint32_t q) {
+    for (std::size_t k = 0; k < count; ++k) {
+      if (neighbour[k] == q) {
+        ++edges[k];
+        return;
+      }
+    }
+    if (count < kFan) {
+      neighbour[count] = q;
+      edges[count++] = 1;
+    }
+  };
+  // Called for every particle the attachments settle: the boundary test (integers) first, the angles only on
+  // the boundary.
+  const auto corners = [&](std::uint32_t t) {
+    const auto& tri = cloth.triangles[t];
+    const std::size_t at = tri[0] == p ? 0 : tri[1] == p ? 1 : 2;
+    return std::pair{tri[(at + 1) % 3], tri[(at + 2) % 3]};
+  };
+  for (const std::uint32_t t : cloth.triangles_of(p)) {
+    const auto [q, r] = corners(t);
+    see(q);
+    see(r);
+  }
+  if (std::none_of(edges.begin(), edges.begin() + static_cast<std::ptrdiff_t>(count),
+                   [](std::uint8_t e) { return e == 1; })) {
+    return false;
+  }
+  const Eigen::Vector2f scale{cloth.spacing_x(), cloth.spacing_y()};
+  float angle = 0.0F;
+  for (const std::uint32_t t : cloth.triangles_of(p)) {
+    const auto [q, r] = corners(t);
+    const Eigen::Vector2f a = (cloth.rest_uv[q] - cloth.rest_uv[p]).cwiseProduct(scale);
+    const Eigen::Vector2f b = (cloth.rest_uv[r] - cloth.rest_uv[p]).cwiseProduct(scale);
+    angle += std::atan2(std::abs(a.x() * b.y() - a.y() * b.x()), a.dot(b));
+  }
+  return angle > kReflex;
 }
 
 }  // namespace
@@ -250,6 +309,18 @@ void Solver::order_strain_limit(const Cloth& cloth) {
     if (nearest_[nb] < nearest_[na]) std::swap(na, nb);
     limit_slot_[k] = start[l];
     strain_limit_[start[l]++] = {na, nb, cloth.rest_length[k]};
+  }
+  // An exact cut's lip is a chain of structural springs 0.08-0.9 cells long between light particles. A pass
+  // corrects a long one by moving its ends by up to a tenth of its length, which overstretches a short
+  // neighbour by that much relative to ITS length: in place in the order, the short springs of a jittered
+  // 64 x 64 slit needed 10 passes to settle within 10 % (6 left them at 12.7 %, and 10 cost a long stroke's
+  // swinging steps +33 %). Swept again at the end of each pass, their corrections move their ends by a tenth of
+  // a short length, little for the long ones: 6 passes settle them (9.99 %). Places, not copies, so that a
+  // spring a later cut removes (its place blanked) is skipped here too.
+  limit_again_.clear();
+  const float short_spring = 0.9F * std::min(cloth.spacing_x(), cloth.spacing_y());
+  for (std::uint32_t s = 0; s < strain_limit_.size(); ++s) {
+    if (strain_limit_[s].rest < short_spring) limit_again_.push_back(s);
   }
   limit_order_stale_ = false;
 }
@@ -437,24 +508,57 @@ void Solver::attach(const Cloth& cloth, Search& search, std::uint32_t i) {
   // "Straight" is tested on the grid: Dijkstra over springs measures octile paths, up to 8 % longer than the
   // straight line, so where the path from the anchor is no longer than the octile distance of the two rest
   // coordinates (no cut in the way) the straight rest distance is the geodesic (and the slack of the octile
-  // path would let the middle of a wide drape sag by centimetres).
+  // path would let the middle of a wide drape sag by centimetres). Two detours that bend around nothing are
+  // allowed on top: a path from or to a particle off the grid (an exact cut's) is up to about twice its
+  // distance from the nearest grid point longer than the octile distance; and past a bend a path runs along
+  // the cut's lip, whose notches (deleted triangles) or off-grid particles lengthen it by up to about a cell.
+  // Without that allowance the notches of a delete cut's lower lip became anchors for the cloth below them
+  // and kept it fluttering (64 x 64 slit: 11.7 %, 2e-3 J after 10 s). Not before the first bend: there a
+  // straight tether from the pin is tighter than the path around the cut's tip, and a cut flap could not
+  // hang open (exact flap at 32 x 32 with one cell allowed: 18 %).
+  // Where the path does bend, the new anchor is the last particle before it where a path CAN bend (a cut's
+  // tip, a reflex corner of a cut: is_bend_point), not simply the parent: "the parent" made chains of
+  // one-cell tethers down a column below a slit's tip (24 links at 64 x 64) and anchored hundreds of
+  // particles on light particles of an exact cut's lip; an anchor moved by the piece hanging from it (the
+  // tether moves the piece, the piece moves its anchor) kept a slit's lower piece fluttering forever
+  // (tachi-sim's out-of-plane jitter: kinetic energy 4e-4 J after 10 s; now 3e-7 J). A path that fails the
+  // test with no such particle since the candidate is a detour of the discretisation: the candidate stays.
   float length2 = kInf;
   std::uint32_t anchor = kNone;
   std::uint32_t bends = 0;
+  std::uint32_t last_bend = kNone;
+  if (search.last_bend.size() < cloth.particle_count()) {
+    search.last_bend.resize(cloth.particle_count(), kNone);
+    search.bend_checked.resize(cloth.particle_count(), 0);
+  }
   const std::uint32_t parent = search.parent[i];
   if (cloth.inverse_mass[i] != 0.0F && std::isfinite(search.dist[i]) && parent != kNone) {
     const bool parent_is_pin = cloth.inverse_mass[parent] == 0.0F;
     const std::uint32_t candidate = parent_is_pin ? parent : search.anchor[parent];
+    const bool past_bend = candidate != kNone && cloth.inverse_mass[candidate] != 0.0F;
+    const float lip_detour = past_bend ? std::min(cloth.spacing_x(), cloth.spacing_y()) : 0.0F;
     const auto straight_from = [&](std::uint32_t a) {
-      return search.dist[i] - search.dist[a] <=
-             octile(cloth, cloth.rest_uv[i], cloth.rest_uv[a]) * (1.0F + 1e-4F) + 1e-6F;
+      return search.dist[i] - search.dist[a] <= octile(cloth, cloth.rest_uv[i], cloth.rest_uv[a]) * (1.0F + 1e-4F) +
+                                                   off_grid(cloth, i) + off_grid(cloth, a) + lip_detour + 1e-6F;
     };
-    anchor = candidate != kNone && straight_from(candidate) ? candidate : parent;
+    if (candidate == kNone) {
+      anchor = parent;
+    } else if (straight_from(candidate)) {
+      anchor = candidate;  // last_bend stays unknown: found by a walk if a descendant's path bends
+    } else {
+      const std::uint32_t bend = parent == candidate ? kNoBend : nearest_bend(cloth, search, parent, candidate);
+      // None: a detour of the discretisation, the candidate stays. Either way nothing between the anchor and
+      // i can bend.
+      anchor = bend != kNoBend ? bend : candidate;
+      last_bend = kNoBend;
+    }
     const float length = cloth.rest_distance(i, anchor);
     length2 = length * length;
     bends = cloth.inverse_mass[anchor] == 0.0F ? 0 : search.bends[anchor] + 1;
   }
   search.anchor[i] = anchor;
+  search.last_bend[i] = last_bend;
+  search.bend_checked[i] = cloth.topology_version;
   if (bends != search.bends[i]) tether_order_stale_ = true;
   search.bends[i] = bends;
   std::uint32_t& slot = search.attachment[i];
@@ -467,6 +571,32 @@ void Solver::attach(const Cloth& cloth, Search& search, std::uint32_t i) {
     // A disabled tether keeps a valid anchor index (itself): the step reads it before comparing.
     attachments_[slot] = {i, std::isfinite(length2) ? anchor : i, length2, bends};
   }
+}
+
+std::uint32_t Solver::nearest_bend(const Cloth& cloth, Search& search, std::uint32_t from, std::uint32_t anchor) {
+  // The nearest particle where the path can bend, from `from` (included) up to `anchor` (excluded). A record
+  // is trusted when it names a particle, or says "none" checked since the last topology change: a cut makes
+  // new bend points (a tip) without reopening the particles whose paths pass them, so their old "none" may
+  // be out of date. What a walk finds is written back on the particles it passed: each is walked through at
+  // most once per topology version (walking every branch again cost a 128 x 128 long stroke 50 ms steps).
+  std::uint32_t found = kNoBend;
+  std::uint32_t p = from;
+  for (; p != anchor && p != kNone; p = search.parent[p]) {
+    if (is_bend_point(cloth, p)) {
+      found = p;
+      break;
+    }
+    const std::uint32_t known = search.last_bend[p];
+    if (known != kNone && (known != kNoBend || search.bend_checked[p] == cloth.topology_version)) {
+      found = known;
+      break;
+    }
+  }
+  for (std::uint32_t q = from; q != p && q != kNone; q = search.parent[q]) {
+    search.last_bend[q] = found;
+    search.bend_checked[q] = cloth.topology_version;
+  }
+  return found;
 }
 
 void Solver::order_tethers() {
@@ -493,14 +623,16 @@ void Solver::build_attachments(const Cloth& cloth) {
   // A few pins (corners): every particle is tethered to each of them. Many pins (an edge): Kim et al. tether
   // to the nearest only, but below a cut a particle held through one tip alone swings down around it and
   // tears the cloth between it and a neighbour held through the other tip (a slit at 64 x 64 rested at 15 %,
-  // 28 % in exact mode). So the pins are split into four groups along the pinned line and each particle is
-  // tethered to the nearest pin of each: the paths of different groups pass different tips, and the cloth
-  // below a slit hangs from both (64 x 64, in the plane: <= 10 % in every mode). Two groups did that in the
-  // plane too, but with the out-of-plane jitter of tachi-sim the cloth below the slit never came to rest
-  // (grid 11-15 %, exact 70 %; four groups: grid rests at 10.8 %, exact 12-19 %). Four tethers per particle
+  // 28 % in exact mode). So each particle gets four tethers, from four groups of pins along the pinned line,
+  // whose paths should pass different tips so that the cloth below a slit hangs from both. Four quarters of
+  // the line did not do that: the nearest pin of the right quarter still reached the left third of a slit's
+  // lower lip round the left tip, so that part hung from one tip only, the lip sagged like a hammock and its
+  // springs stayed over the limit (tachi-sim's jittered 0.65 m slit, 64 x 64: grid 10.8 %, exact 12-19 %).
+  // The groups are now the two ends of the pinned line, one pin each, and its two halves: a path from the far
+  // end reaches all but the few cells of the lip next to the near tip round the far tip, and the halves keep
+  // a pin straight above every particle of an uncut cloth, so it drapes as before. Four tethers per particle
   // instead of one: the plain step costs +90 % at 128 x 128 (docs/benchmarks.md).
   constexpr std::size_t kAllPinsUpTo = 4;
-  constexpr std::size_t kPinGroups = 4;
   if (cached_pins_.size() <= kAllPinsUpTo) {
     for (const std::uint32_t pin : cached_pins_) searches_.emplace_back().sources = {pin};
   } else {
@@ -510,11 +642,11 @@ void Solver::build_attachments(const Cloth& cloth) {
       const auto& ub = cloth.rest_uv[b];
       return ua.x() != ub.x() ? ua.x() < ub.x() : ua.y() < ub.y();
     });
-    for (std::size_t g = 0; g < kPinGroups; ++g) {
-      searches_.emplace_back().sources.assign(
-          sorted.begin() + static_cast<std::ptrdiff_t>(g * sorted.size() / kPinGroups),
-          sorted.begin() + static_cast<std::ptrdiff_t>((g + 1) * sorted.size() / kPinGroups));
-    }
+    const auto half = sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() / 2);
+    searches_.emplace_back().sources = {sorted.front()};
+    searches_.emplace_back().sources.assign(sorted.begin(), half);
+    searches_.emplace_back().sources.assign(half, sorted.end());
+    searches_.emplace_back().sources = {sorted.back()};
   }
   const std::size_t particle_room = cloth.position.capacity();
   reserve_touched(attachments_, searches_.size() * particle_room);
@@ -529,6 +661,8 @@ void Solver::build_attachments(const Cloth& cloth) {
     reserve_touched(search.attachment, particle_room);
     reserve_touched(search.anchor, particle_room);
     reserve_touched(search.bends, particle_room);
+    reserve_touched(search.last_bend, particle_room);
+    reserve_touched(search.bend_checked, particle_room);
     reserve_touched(search.open, particle_room);
     reserve_touched(search.open_list, particle_room);
     reserve_touched(search.heap, particle_room);
@@ -542,6 +676,8 @@ void Solver::build_attachments(const Cloth& cloth) {
     search.attachment.assign(n, kNone);
     search.anchor.assign(n, kNone);
     search.bends.assign(n, 0);
+    search.last_bend.assign(n, kNone);
+    search.bend_checked.assign(n, 0);
     search.open.assign(n, 0);
     search.open_list.clear();
     search.heap.clear();
@@ -824,16 +960,19 @@ void Solver::substep(Cloth& cloth, const Colliders& colliders, float h, bool fir
   const float corrected = 1.0F + 0.95F * params_.max_strain;
   // A correction can stretch a spring swept earlier, so sweeps repeat until one finds nothing to
   // correct (usually the first: the scan without a square root is cheap) or the budget is spent.
+  // The springs shorter than a cell go again at the end of each pass (limit_again_, order_strain_limit).
   for (int pass = 0; pass < params_.strain_limit_passes; ++pass) {
     std::size_t corrections = 0;
-    for (const PackedSpring& s : strain_limit_) {
+    const auto limit_spring = [&](const PackedSpring& s) {
       const Vec4 d = (x[s.b] - x[s.a]).cwiseProduct(kXyz);
       const float target = limit * s.rest;
       if (d.squaredNorm() > target * target) {
         project_distance<Length::Exact>(x[s.a], x[s.b], corrected * s.rest, 0.0F);
         ++corrections;
       }
-    }
+    };
+    for (const PackedSpring& s : strain_limit_) limit_spring(s);
+    for (const std::uint32_t again : limit_again_) limit_spring(strain_limit_[again]);
     if (corrections == 0) break;
   }
 

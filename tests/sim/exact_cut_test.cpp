@@ -336,8 +336,8 @@ TEST(ExactCut, ASlitInAnEdgePinnedClothRestsWithinTenPercentInEveryModeAndTheSum
   // a 0.65 m horizontal stroke a little below the middle, then the cloth settles. Before the attachments
   // followed the cut (and with the strain limit's follow-the-leader rule) this rested at 470 % (grid) and
   // 1770 % (exact): the cloth below the slit was torn sideways every sub-step.
-  // In the cloth's plane (no out-of-plane jitter): with the jitter the piece below the slit swings out of
-  // the plane and does not rest within 10 % yet (docs/cutting.md section 8, "Limits").
+  // In the cloth's plane (no out-of-plane jitter); with tachi-sim's jitter, through the CLI:
+  // CutCli.ASlitRestsWithinTenPercentStrainInEveryModeWithTheDefaultJitter.
   const auto dir = std::filesystem::temp_directory_path() / "tachi_exact_cut_slit_strain";
   std::filesystem::create_directories(dir);
   const auto stroke = dir / "slit.csv";

@@ -107,6 +107,12 @@ class Solver {
     /// bends around a cut), and how many bends that is from the pin (0: held by the pin itself).
     std::vector<std::uint32_t> anchor;
     std::vector<std::uint32_t> bends;
+    /// Per particle: the particle nearest to it on its path, past its anchor and before itself, where a path can
+    /// bend around a cut (none: not known; kNoBend: there is none, checked at topology version bend_checked).
+    /// Filled in only where a path bends, by the walk that looks for it (Solver::nearest_bend), so that the
+    /// next particle whose path bends there stops its walk at the first particle that knows.
+    std::vector<std::uint32_t> last_bend;
+    std::vector<std::uint32_t> bend_checked;
     // A repair after a cut, possibly spread over several steps: its heap, the particles whose distance is
     // not final yet (their tethers are off meanwhile), and the same as a list.
     std::vector<std::pair<float, std::uint32_t>> heap;
@@ -130,6 +136,7 @@ class Solver {
   void continue_searches(const Cloth& cloth);
   void refresh_nearest(std::uint32_t i);
   void attach(const Cloth& cloth, Search& search, std::uint32_t i);
+  static std::uint32_t nearest_bend(const Cloth& cloth, Search& search, std::uint32_t from, std::uint32_t anchor);
   void open_particle(Search& search, std::uint32_t i);
   static void seed(const Cloth& cloth, Search& search, std::uint32_t i);
   static void compact_order(Search& search, std::size_t particles);
@@ -158,6 +165,8 @@ class Solver {
   // to be re-ordered on a step with no cut (the cut's repair finished within its own step).
   std::vector<PackedSpring> strain_limit_;
   std::vector<std::uint32_t> limit_slot_;
+  /// Places in strain_limit_ of the springs shorter than a cell (an exact cut's), swept again after each pass.
+  std::vector<std::uint32_t> limit_again_;
   bool limit_order_stale_ = false;
   bool pending_limit_order_ = false;
   std::vector<std::pair<std::uint32_t, std::uint32_t>> limit_level_;  // scratch: (level, spring)

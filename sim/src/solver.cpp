@@ -565,12 +565,36 @@ void Solver::attach(const Cloth& cloth, Search& search, std::uint32_t i) {
   if (slot == kNone) {
     if (!std::isfinite(length2)) return;
     slot = static_cast<std::uint32_t>(attachments_.size());
-    attachments_.push_back({i, anchor, length2, bends});
+    attachments_.push_back({i, anchor, length2, bends, length2});
     if (bends > 0) tether_order_stale_ = true;
   } else {
     // A disabled tether keeps a valid anchor index (itself): the step reads it before comparing.
-    attachments_[slot] = {i, std::isfinite(length2) ? anchor : i, length2, bends};
+    attachments_[slot] = {i, std::isfinite(length2) ? anchor : i, length2, bends, length2};
   }
+  // A tether that comes (or changes anchor) after a cut holds the particle where it is and tightens to its
+  // length over the next steps (engage_tethers): projected at once, it yanked the cloth below an advancing
+  // tip up past the cut, where the blade met it again.
+  if (repairing_now_ && std::isfinite(length2)) {
+    const float now2 = (cloth.position[i] - cloth.position[anchor]).squaredNorm();
+    if (now2 > length2) {
+      attachments_[slot].reach2 = now2;
+      engaging_.push_back(slot);
+    }
+  }
+}
+
+void Solver::engage_tethers() {
+  // Tightened by a fixed speed a step, not a fraction: a fraction of a large excess is still a yank.
+  constexpr float kTightenMetresPerStep = 0.5F / 60.0F;
+  std::size_t kept = 0;
+  for (const std::uint32_t k : engaging_) {
+    Attachment& a = attachments_[k];
+    if (!(a.reach2 > a.length2) || !std::isfinite(a.length2)) continue;
+    const float reach = std::max(std::sqrt(a.length2), std::sqrt(a.reach2) - kTightenMetresPerStep);
+    a.reach2 = reach * reach;
+    if (a.reach2 > a.length2) engaging_[kept++] = k;
+  }
+  engaging_.resize(kept);
 }
 
 std::uint32_t Solver::nearest_bend(const Cloth& cloth, Search& search, std::uint32_t from, std::uint32_t anchor) {
@@ -615,6 +639,7 @@ void Solver::order_tethers() {
 
 void Solver::build_attachments(const Cloth& cloth) {
   attachments_.clear();
+  engaging_.clear();
   tether_order_stale_ = true;
   searches_.clear();
   const std::size_t n = cloth.particle_count();
@@ -722,7 +747,7 @@ void Solver::open_particle(Search& search, std::uint32_t i) {
   search.anchor[i] = kNone;
   if (search.bends[i] != 0) tether_order_stale_ = true;
   search.bends[i] = 0;
-  if (search.attachment[i] != kNone) attachments_[search.attachment[i]] = {i, i, kInf, 0};
+  if (search.attachment[i] != kNone) attachments_[search.attachment[i]] = {i, i, kInf, 0, kInf};
   // Once per particle, however many searches open it: its nearest pin is looked up again after all of them.
   if (opened_mark_[i] == 0) {
     opened_mark_[i] = 1;
@@ -803,7 +828,10 @@ void Solver::update_attachments(const Cloth& cloth, const std::vector<std::uint3
 
 void Solver::step(Cloth& cloth, const Colliders& colliders) {
   refresh_caches(cloth);
+  repairing_now_ = true;
   continue_searches(cloth);
+  repairing_now_ = false;
+  engage_tethers();
   if (tether_order_stale_) order_tethers();
   const std::size_t n = cloth.particle_count();
   // Work on (x, y, z, w) quadruples: one aligned 16-byte load brings a position and its inverse mass.
@@ -922,7 +950,7 @@ void Solver::substep(Cloth& cloth, const Colliders& colliders, float h, bool fir
     const Vec4& anchor = x[a.anchor];
     const Vec4 d = (p - anchor).cwiseProduct(kXyz);
     const float len2 = d.squaredNorm();
-    if (len2 > a.length2) p.head<3>() = anchor.head<3>() + d.head<3>() * std::sqrt(a.length2 / len2);
+    if (len2 > a.reach2) p.head<3>() = anchor.head<3>() + d.head<3>() * std::sqrt(a.reach2 / len2);
   };
   if (tether_order_.empty()) {
     for (const Attachment& a : attachments_) tether(a);

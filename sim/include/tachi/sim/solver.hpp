@@ -178,11 +178,15 @@ class Solver {
     std::uint32_t anchor;
     float length2;  ///< squared maximal distance (+inf: disabled, the pin no longer reaches it)
     std::uint32_t bends;  ///< applied after every attachment with fewer bends (its anchor's own tether)
+    float reach2 = 0.0F;  ///< squared distance held now: from where the particle was when the tether came, down to length2
   };
+  std::vector<std::uint32_t> engaging_;  ///< attachments whose reach is still above their length
   std::vector<Attachment> attachments_;
   std::vector<std::uint32_t> tether_order_;  ///< attachments by bends; empty while none bends
   bool tether_order_stale_ = false;
   void order_tethers();
+  void engage_tethers();
+  bool repairing_now_ = false;  ///< attach() called by the repair inside step(): new tethers engage gradually
   std::vector<Search> searches_;
   std::vector<float> nearest_;  ///< per particle: rest distance to the nearest pin (+inf: no pin reaches it)
   std::vector<std::uint32_t> opened_;  ///< scratch of the incremental update: particles it opened, once each

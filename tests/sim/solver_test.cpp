@@ -216,6 +216,30 @@ TEST(Solver, RejectsBadParameters) {
 // the repair, once it settles every particle must reach the same pin groups as a full build on the same
 // cloth finds, at the same path length, or a little longer where an exact cut's new edges made a shortcut
 // the repair does not look for (Solver::update_attachments): never shorter, which would stretch the cloth.
+/// Every pin group's distance of every particle, as the solver has them, against a full build of the same
+/// cloth: never shorter, and equal unless `longer_allowed` (a fraction) says an exact cut's skipped shortcuts
+/// may make it longer.
+void expect_distances_of_a_full_build(const Solver& solver, const Cloth& cloth, float longer_allowed) {
+  Cloth same = cloth;
+  Solver fresh;
+  fresh.update_topology(same);
+  ASSERT_EQ(fresh.pin_groups(), solver.pin_groups());
+  for (std::size_t g = 0; g < solver.pin_groups(); ++g) {
+    for (std::uint32_t i = 0; i < cloth.particle_count(); ++i) {
+      const float want = fresh.pin_distance(g, i);
+      const float got = solver.pin_distance(g, i);
+      if (std::isinf(want)) {
+        ASSERT_TRUE(std::isinf(got)) << "group " << g << " particle " << i;
+      } else if (longer_allowed > 0.0F) {
+        ASSERT_GE(got, want * (1.0F - 1e-5F)) << "group " << g << " particle " << i;
+        ASSERT_LE(got, want * (1.0F + longer_allowed) + 1e-6F) << "group " << g << " particle " << i;
+      } else {
+        ASSERT_NEAR(got, want, 1e-5F * std::max(1.0F, want)) << "group " << g << " particle " << i;
+      }
+    }
+  }
+}
+
 class IncrementalAttachments : public ::testing::TestWithParam<CutMode> {};
 
 TEST_P(IncrementalAttachments, CutsWhileRepairingEndAsAFullBuildWould) {
@@ -247,47 +271,11 @@ TEST_P(IncrementalAttachments, CutsWhileRepairingEndAsAFullBuildWould) {
     ASSERT_FALSE(solver.repairing()) << "trial " << trial;
     EXPECT_GT(solver.incremental_updates(), 0U) << "trial " << trial;
 
-    Cloth same = cloth;
-    Solver fresh;
-    fresh.update_topology(same);
-    ASSERT_EQ(fresh.pin_groups(), solver.pin_groups());
-    for (std::size_t g = 0; g < solver.pin_groups(); ++g) {
-      for (std::uint32_t i = 0; i < cloth.particle_count(); ++i) {
-        const float want = fresh.pin_distance(g, i);
-        const float got = solver.pin_distance(g, i);
-        if (std::isinf(want)) {
-          ASSERT_TRUE(std::isinf(got)) << "trial " << trial << " group " << g << " particle " << i;
-        } else {
-          ASSERT_GE(got, want * (1.0F - 1e-5F)) << "trial " << trial << " group " << g << " particle " << i;
-          // A shortcut saves at most the 8 % by which an octile path exceeds the straight line, but the
-          // shortcuts of several cuts along one path add up: up to 10 % measured here over these trials.
-          ASSERT_LE(got, want * 1.15F + 1e-6F) << "trial " << trial << " group " << g << " particle " << i;
-          if (GetParam() != CutMode::Exact) {
-            ASSERT_NEAR(got, want, 1e-5F * std::max(1.0F, want)) << "trial " << trial << " group " << g << " particle " << i;
-          }
-        }
-      }
-    }
-  }
-}
-
-/// Every pin group's distance of every particle, as the solver has them, against a full build of the same
-/// cloth: equal (the cuts below only remove springs, so no shortcut is skipped).
-void expect_distances_of_a_full_build(const Solver& solver, const Cloth& cloth) {
-  Cloth same = cloth;
-  Solver fresh;
-  fresh.update_topology(same);
-  ASSERT_EQ(fresh.pin_groups(), solver.pin_groups());
-  for (std::size_t g = 0; g < solver.pin_groups(); ++g) {
-    for (std::uint32_t i = 0; i < cloth.particle_count(); ++i) {
-      const float want = fresh.pin_distance(g, i);
-      const float got = solver.pin_distance(g, i);
-      if (std::isinf(want)) {
-        ASSERT_TRUE(std::isinf(got)) << "group " << g << " particle " << i;
-      } else {
-        ASSERT_NEAR(got, want, 1e-5F * std::max(1.0F, want)) << "group " << g << " particle " << i;
-      }
-    }
+    // A shortcut saves at most the 8 % by which an octile path exceeds the straight line, but the shortcuts
+    // of several cuts along one path add up: up to 10 % measured here over these trials.
+    SCOPED_TRACE("trial " + std::to_string(trial));
+    expect_distances_of_a_full_build(solver, cloth, GetParam() == CutMode::Exact ? 0.15F : 0.0F);
+    if (HasFatalFailure()) return;
   }
 }
 
@@ -326,7 +314,7 @@ TEST(IncrementalAttachments, ACutThatTakesASeededParticlesWayToThePinSeedsItAgai
   });
   for (int s = 0; s < 5000 && solver.repairing(); ++s) solver.step(cloth);
   ASSERT_FALSE(solver.repairing());
-  expect_distances_of_a_full_build(solver, cloth);
+  expect_distances_of_a_full_build(solver, cloth, 0.0F);
 }
 
 INSTANTIATE_TEST_SUITE_P(CutModes, IncrementalAttachments,

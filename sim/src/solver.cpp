@@ -562,6 +562,9 @@ void Solver::attach(const Cloth& cloth, Search& search, std::uint32_t i) {
   if (bends != search.bends[i]) tether_order_stale_ = true;
   search.bends[i] = bends;
   std::uint32_t& slot = search.attachment[i];
+  // Already in engaging_ (a later repair settling it again): listed once, so it tightens at one speed.
+  const bool listed = slot != kNone && std::isfinite(attachments_[slot].length2) &&
+                      attachments_[slot].reach2 > attachments_[slot].length2;
   if (slot == kNone) {
     if (!std::isfinite(length2)) return;
     slot = static_cast<std::uint32_t>(attachments_.size());
@@ -578,19 +581,20 @@ void Solver::attach(const Cloth& cloth, Search& search, std::uint32_t i) {
     const float now2 = (cloth.position[i] - cloth.position[anchor]).squaredNorm();
     if (now2 > length2) {
       attachments_[slot].reach2 = now2;
-      engaging_.push_back(slot);
+      if (!listed) engaging_.push_back(slot);
     }
   }
 }
 
 void Solver::engage_tethers() {
-  // Tightened by a fixed speed a step, not a fraction: a fraction of a large excess is still a yank.
-  constexpr float kTightenMetresPerStep = 0.5F / 60.0F;
+  // Tightened at a fixed speed, not by a fraction a step: a fraction of a large excess is still a yank.
+  constexpr float kTightenMetresPerSecond = 0.5F;
+  const float tighten = kTightenMetresPerSecond * params_.dt;
   std::size_t kept = 0;
   for (const std::uint32_t k : engaging_) {
     Attachment& a = attachments_[k];
     if (!(a.reach2 > a.length2) || !std::isfinite(a.length2)) continue;
-    const float reach = std::max(std::sqrt(a.length2), std::sqrt(a.reach2) - kTightenMetresPerStep);
+    const float reach = std::max(std::sqrt(a.length2), std::sqrt(a.reach2) - tighten);
     a.reach2 = reach * reach;
     if (a.reach2 > a.length2) engaging_[kept++] = k;
   }

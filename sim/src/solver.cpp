@@ -100,8 +100,8 @@ bool is_bend_point(const Cloth& cloth, std::uint32_t p) {
       edges[count++] = 1;
     }
   };
-  // Called for every particle the attachments settle: the boundary test (integers) first, the angles only on
-  // the boundary.
+  // Called up a path that fails the straightness test (Solver::nearest_bend): the boundary test (integers)
+  // first, the angles only on the boundary.
   const auto corners = [&](std::uint32_t t) {
     const auto& tri = cloth.triangles[t];
     const std::size_t at = tri[0] == p ? 0 : tri[1] == p ? 1 : 2;
@@ -436,7 +436,7 @@ bool Solver::run_search(const Cloth& cloth, Search& search, bool repair, std::si
     search.order_pos[i] = static_cast<std::uint32_t>(search.order.size());
     search.order.push_back(i);
     // In the order particles settle: a particle's anchor comes from its parent's, settled before it.
-    if (params_.long_range_attachments) attach(cloth, search, i);
+    if (params_.long_range_attachments) attach(cloth, search, i, repair);
     --budget;
     for (const std::uint32_t k : cloth.springs_of(i)) {
       if (cloth.kind[k] == SpringKind::Bend) continue;
@@ -498,7 +498,7 @@ void Solver::continue_searches(const Cloth& cloth) {
   }
 }
 
-void Solver::attach(const Cloth& cloth, Search& search, std::uint32_t i) {
+void Solver::attach(const Cloth& cloth, Search& search, std::uint32_t i, bool engage) {
   // Kim et al.'s tether holds a particle within its rest distance of the pin, which is tight only while the
   // straight line to the pin lies in the cloth. Behind a cut the geodesic bends around the cut's tip, and a
   // tether as long as the whole path lets the cloth below a slit hang on its few springs at the tip (25 %
@@ -577,7 +577,7 @@ void Solver::attach(const Cloth& cloth, Search& search, std::uint32_t i) {
   // A tether that comes (or changes anchor) after a cut holds the particle where it is and tightens to its
   // length over the next steps (engage_tethers): projected at once, it yanked the cloth below an advancing
   // tip up past the cut, where the blade met it again.
-  if (repairing_now_ && std::isfinite(length2)) {
+  if (engage && std::isfinite(length2)) {
     const float now2 = (cloth.position[i] - cloth.position[anchor]).squaredNorm();
     if (now2 > length2) {
       attachments_[slot].reach2 = now2;
@@ -832,9 +832,7 @@ void Solver::update_attachments(const Cloth& cloth, const std::vector<std::uint3
 
 void Solver::step(Cloth& cloth, const Colliders& colliders) {
   refresh_caches(cloth);
-  repairing_now_ = true;
   continue_searches(cloth);
-  repairing_now_ = false;
   engage_tethers();
   if (tether_order_stale_) order_tethers();
   const std::size_t n = cloth.particle_count();

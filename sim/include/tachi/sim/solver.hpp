@@ -135,7 +135,8 @@ class Solver {
   bool run_search(const Cloth& cloth, Search& search, bool repair, std::size_t budget);
   void continue_searches(const Cloth& cloth);
   void refresh_nearest(std::uint32_t i);
-  void attach(const Cloth& cloth, Search& search, std::uint32_t i);
+  /// `engage`: a repair's tether, which holds the particle where it is and tightens over steps (engage_tethers).
+  void attach(const Cloth& cloth, Search& search, std::uint32_t i, bool engage);
   static std::uint32_t nearest_bend(const Cloth& cloth, Search& search, std::uint32_t from, std::uint32_t anchor);
   void open_particle(Search& search, std::uint32_t i);
   static void seed(const Cloth& cloth, Search& search, std::uint32_t i);
@@ -186,7 +187,6 @@ class Solver {
   bool tether_order_stale_ = false;
   void order_tethers();
   void engage_tethers();
-  bool repairing_now_ = false;  ///< attach() called by the repair inside step(): new tethers engage gradually
   std::vector<Search> searches_;
   std::vector<float> nearest_;  ///< per particle: rest distance to the nearest pin (+inf: no pin reaches it)
   std::vector<std::uint32_t> opened_;  ///< scratch of the incremental update: particles it opened, once each

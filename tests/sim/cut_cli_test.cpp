@@ -132,26 +132,31 @@ TEST_F(CutCli, ASlitRestsWithinTenPercentStrainInEveryModeWithTheDefaultJitter) 
   // tachi-sim's default 0.1 mm out-of-plane jitter: a 0.65 m slit a little below the middle of a 64 x 64 cloth
   // pinned along its top edge. The piece below the slit swings out of the plane and hangs from the slit's two
   // tips. Before the attachments held it from both tips and anchored only where a path can bend, this rested at
-  // exact 21.7 %, grid 10.8 %, delete 17.8 %, and the exact and delete pieces never came to rest.
+  // exact 21.7 %, grid 10.8 %, delete 17.8 %, and the exact and delete pieces never came to rest. At 128 x 128
+  // the lip next to each tip hangs from that tip alone and carries the piece's weight along ~30 springs, more
+  // than Provot's six sweeps settle: grid 14.2 % and delete 12.5 % until the sweeps went on locally.
   const fs::path stroke = dir_ / "slit.csv";
   {
     std::ofstream out{stroke};
     out << "t,x,y,z\n";
     for (int i = 0; i <= 32; ++i) out << 0.5 + 0.02 * i << ',' << -0.325 + 0.65 * i / 32.0 << ",-0.05,0\n";
   }
-  for (const std::string mode : {"exact", "grid", "delete"}) {
-    const fs::path out = dir_ / ("out_" + mode);
-    const auto r = sim({"--offline", "--cut-mode", mode, "--grid", "64", "--pin", "top-edge", "--stroke", stroke.string(),
-                        "--steps", "600", "--export", out.string()});
-    ASSERT_EQ(r.exit_code, 0) << mode << ": " << r.err;
-    std::ifstream in{out / "summary.json"};
-    const auto j = nlohmann::json::parse(in);
-    EXPECT_GT(j.at("topology_version").get<int>(), 0) << mode << ": the stroke cut";
-    EXPECT_EQ(j.at("fallen_pieces").get<int>(), mode == "delete" ? j.at("pieces").get<int>() - 1 : 0) << mode;
-    EXPECT_LE(j.at("max_strain").get<double>(), 0.10) << mode;
-    // At rest, not a snapshot of a swinging cloth: the pinned piece's kinetic energy after 10 s (it was
-    // 4e-4 J in exact mode and 2e-3 J in delete mode while a lip fluttered; 1e-7 J and less now).
-    EXPECT_LT(j.at("held_kinetic_energy_j").get<double>(), 1e-5) << mode;
+  for (const std::string grid : {"64", "128"}) {
+    for (const std::string mode : {"exact", "grid", "delete"}) {
+      SCOPED_TRACE(grid + " x " + grid + ", " + mode);
+      const fs::path out = dir_ / ("out_" + grid + "_" + mode);
+      const auto r = sim({"--offline", "--cut-mode", mode, "--grid", grid, "--pin", "top-edge", "--stroke", stroke.string(),
+                          "--steps", "600", "--export", out.string()});
+      ASSERT_EQ(r.exit_code, 0) << mode << ": " << r.err;
+      std::ifstream in{out / "summary.json"};
+      const auto j = nlohmann::json::parse(in);
+      EXPECT_GT(j.at("topology_version").get<int>(), 0) << mode << ": the stroke cut";
+      EXPECT_EQ(j.at("fallen_pieces").get<int>(), mode == "delete" ? j.at("pieces").get<int>() - 1 : 0) << mode;
+      EXPECT_LE(j.at("max_strain").get<double>(), 0.10) << mode;
+      // At rest, not a snapshot of a swinging cloth: the pinned piece's kinetic energy after 10 s (it was
+      // 4e-4 J in exact mode and 2e-3 J in delete mode while a lip fluttered; 1e-7 J and less now).
+      EXPECT_LT(j.at("held_kinetic_energy_j").get<double>(), 1e-5) << mode;
+    }
   }
 }
 

@@ -32,7 +32,7 @@ struct SolverParams {
   float bend_compliance = 2.0F;    ///< XPBD compliance, m/N
   float structural_compliance = 0.0F;  ///< XPBD compliance of the structural springs, m/N (0: hard; materials set 1/k)
   float max_strain = 0.10F;        ///< Provot's critical deformation rate (10%)
-  int strain_limit_passes = 6;     ///< at most this many strain-limit sweeps per sub-step (stops when clean)
+  int strain_limit_passes = 6;     ///< full strain-limit sweeps per sub-step at most (stops when clean); local ones follow
   /// Particles the attachments' repair after a cut settles per step and pin group, at most: a cut that
   /// re-routes a whole piece is spread over steps (those particles' tethers are off meanwhile).
   int repair_per_step = 2048;
@@ -146,6 +146,10 @@ class Solver {
   static void build_groups(const std::vector<PackedSpring>& springs, const std::vector<std::uint32_t>& keys,
                            std::vector<Group>& groups);
   void substep(Cloth& cloth, const Colliders& colliders, float h, bool first);
+  /// Provot's sweeps past their budget, over only the springs near the last corrections (substep step 5).
+  template <typename LimitSpring>
+  void limit_locally(const Cloth& cloth, const LimitSpring& limit_spring);
+  static constexpr int kLocalLimitPasses = 100;  ///< besides the cap on visits (an eighth of a full pass)
 
   SolverParams params_;
   // Cache key.
@@ -168,6 +172,11 @@ class Solver {
   std::vector<std::uint32_t> limit_slot_;
   /// Places in strain_limit_ of the springs shorter than a cell (an exact cut's), swept again after each pass.
   std::vector<std::uint32_t> limit_again_;
+  // Scratch of limit_locally: the places corrected by the last pass, the next pass's places, and a mark
+  // per place (cleared after each pass).
+  std::vector<std::uint32_t> limit_active_;
+  std::vector<std::uint32_t> limit_next_;
+  std::vector<std::uint8_t> limit_mark_;
   bool limit_order_stale_ = false;
   bool pending_limit_order_ = false;
   std::vector<std::pair<std::uint32_t, std::uint32_t>> limit_level_;  // scratch: (level, spring)

@@ -200,6 +200,7 @@ class Solver {
   std::vector<float> nearest_;  ///< per particle: rest distance to the nearest pin (+inf: no pin reaches it)
   std::vector<std::uint32_t> opened_;  ///< scratch of the incremental update: particles it opened, once each
   std::vector<std::uint8_t> opened_mark_;  ///< per particle: in opened_ (cleared after each update)
+  std::vector<std::uint8_t> touched_mark_;  ///< per particle: touched by the update's springs (cleared after it)
   // Positions with the inverse mass in w, during a step; element 0 is the fixed padding particle.
   std::vector<Eigen::Vector4f> work_;
   std::vector<Eigen::Vector4f> old_work_;

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <numeric>
 #include <utility>
 
 namespace tachi::sim {
@@ -218,6 +219,7 @@ void Solver::full_build(const Cloth& cloth, std::vector<std::uint32_t> pins) {
   reserve_touched(opened_, particle_room);
   reserve_touched(opened_mark_, particle_room);
   reserve_touched(touched_mark_, particle_room);
+  reserve_touched(flood_seen_, particle_room);
   reserve_touched(work_, particle_room);
   reserve_touched(old_work_, particle_room);
   reserve_touched(slot_, cloth.spring_a.capacity());
@@ -364,6 +366,7 @@ void Solver::update_incrementally(const Cloth& cloth) {
   std::sort(touched.begin(), touched.end());
   for (const std::uint32_t i : touched) touched_mark_[i] = 0;
   update_attachments(cloth, touched);
+  release_cut_off(cloth, touched);
   append_springs(cloth, edited);
   // The strain limit: the cut's springs leave their places (never over the limit: skipped) and its new
   // ones go last. Re-ordering outwards from the pins (the distances behind a cut grow) is linear in the
@@ -463,8 +466,12 @@ bool Solver::run_search(const Cloth& cloth, Search& search, bool repair, std::si
     }
   }
   if (!heap.empty()) return false;
-  // What the repair never reached is cut off from this pin: no tether (set when it was opened).
-  for (const std::uint32_t i : search.open_list) search.open[i] = 0;
+  // What the repair never reached is cut off from this pin: its tether, kept while it was open, goes.
+  for (const std::uint32_t i : search.open_list) {
+    if (search.open[i] == 0) continue;
+    search.open[i] = 0;
+    if (search.attachment[i] != kNone) attachments_[search.attachment[i]] = {i, i, kInf, 0, kInf};
+  }
   search.open_list.clear();
   search.seeded = 0;
   return true;
@@ -748,8 +755,12 @@ bool Solver::parent_spring_intact(const Cloth& cloth, Search& search, std::uint3
 }
 
 void Solver::open_particle(Search& search, std::uint32_t i) {
-  // Off its shortest-path tree until the repair settles it again, and its tether off meanwhile (a particle
-  // cut off from the pin never gets one back).
+  // Off its shortest-path tree until the repair settles it again. Its tether stays as it was meanwhile (the
+  // cut only lengthened its path, so the old tether is no looser than the new one will be; it was met where
+  // the particle is now): turned off, the region below a stroke advancing into a 256 x 256 cloth hung without
+  // tethers for the whole stroke and fell stretched (9771 springs over 10 %, now none). A particle the cut
+  // separated from a pin group loses that group's tether at once (release_cut_off), or, unreached, when the
+  // repair ends (run_search).
   search.dist[i] = kInf;
   search.parent[i] = kNone;
   search.parent_spring[i] = kNone;
@@ -760,7 +771,6 @@ void Solver::open_particle(Search& search, std::uint32_t i) {
   search.anchor[i] = kNone;
   if (search.bends[i] != 0) tether_order_stale_ = true;
   search.bends[i] = 0;
-  if (search.attachment[i] != kNone) attachments_[search.attachment[i]] = {i, i, kInf, 0, kInf};
   // Once per particle, however many searches open it: its nearest pin is looked up again after all of them.
   if (opened_mark_[i] == 0) {
     opened_mark_[i] = 1;
@@ -774,7 +784,7 @@ void Solver::update_attachments(const Cloth& cloth, const std::vector<std::uint3
   if (searches_.empty()) return;
   // Decremental shortest paths (Ramalingam and Reps 1996): a particle is affected when the spring to its
   // parent on the shortest-path tree is gone, or it is new; so is everything below it on the tree. They are
-  // opened here (distance and tether off); the repair that searches them again from the distances of their
+  // opened here (distance off, old tether kept); the repair that searches them again from the distances of their
   // settled neighbours runs within each step's budget (continue_searches).
   // A cut may also make a path shorter (an exact cut's new triangles' edges cut across a cell): that is not
   // searched for, so a repaired distance may exceed a full build's by a few per cent (up to 10 % after a
@@ -836,6 +846,142 @@ void Solver::update_attachments(const Cloth& cloth, const std::vector<std::uint3
   for (const std::uint32_t i : opened_) {
     refresh_nearest(i);
     opened_mark_[i] = 0;
+  }
+}
+
+void Solver::release_cut_off(const Cloth& cloth, const std::vector<std::uint32_t>& touched) {
+  // An open particle keeps its old tether until the repair settles it again (open_particle), which is right
+  // while it still hangs from the pins: the cut only lengthened its path, so the old tether holds it no
+  // farther from its anchor than it already is. A particle the cut has separated from a pin group has no new
+  // path at all, and its old tether would hold a cut-off piece in the air until the repair had settled
+  // everything else. So after each cut the open particles the cut touched are flooded through live springs,
+  // collecting the pin groups (a bit per search) whose settled particles they meet; a component of open
+  // particles that meets no settled particle of a group loses that group's tethers now.
+  // A piece the cut separated lies along the cut, so it contains a touched particle. The flood of a
+  // component stops as soon as it has met every group: from a particle next to the advancing tip of a stroke
+  // that is a few cells (the tip is next to uncut cloth); a flood that reaches a particle an earlier flood
+  // visited stops too (same component). Only a component that is really cut off is flooded whole. Flooding
+  // every open particle after every cut cost a 256 x 256 long stroke's cutting steps ~2 ms each.
+  const std::size_t n = cloth.particle_count();
+  flood_seen_.resize(n, 0);
+  const std::uint32_t all = (1U << searches_.size()) - 1U;
+  const auto is_open = [&](std::uint32_t i) {
+    for (const Search& search : searches_) {
+      if (search.open[i] != 0) return true;
+    }
+    return false;
+  };
+  const auto settled_bits = [&](std::uint32_t j) {
+    std::uint32_t bits = 0;
+    for (std::size_t s = 0; s < searches_.size(); ++s) {
+      const Search& search = searches_[s];
+      if (search.open[j] == 0 && std::isfinite(search.dist[j])) bits |= 1U << s;
+    }
+    return bits;
+  };
+  flood_visited_.clear();
+  // Past this many particles the floods stop and the components are labelled by union-find over all springs
+  // instead, in spring order: a cut-off piece is flooded whole, and hopping through the springs of 36k
+  // particles of a 256 x 256 piece cost 6.9 ms where two passes over the spring arrays cost ~1.5 ms.
+  const std::size_t flood_cap = std::max<std::size_t>(1024, n / 16);
+  for (const std::uint32_t start : touched) {
+    if (flood_visited_.size() > flood_cap) break;
+    if (start >= n || flood_seen_[start] != 0 || !is_open(start)) continue;
+    const std::size_t component = flood_visited_.size();
+    flood_seen_[start] = 1;
+    flood_visited_.push_back(start);
+    std::uint32_t met = 0;
+    bool joined = false;  // reached a particle an earlier flood visited: that component's verdict stands
+    for (std::size_t q = component; q < flood_visited_.size() && met != all && !joined && q <= flood_cap; ++q) {
+      const std::uint32_t i = flood_visited_[q];
+      met |= settled_bits(i);  // open in some searches only: settled in the others
+      for (const std::uint32_t k : cloth.springs_of(i)) {
+        if (cloth.kind[k] == SpringKind::Bend) continue;
+        const std::uint32_t j = cloth.spring_a[k] == i ? cloth.spring_b[k] : cloth.spring_a[k];
+        met |= settled_bits(j);
+        if (flood_seen_[j] != 0) {
+          if (flood_seen_[j] == 2) joined = true;
+          continue;
+        }
+        if (!is_open(j)) continue;
+        flood_seen_[j] = 1;
+        flood_visited_.push_back(j);
+      }
+    }
+    if (flood_visited_.size() > flood_cap) break;  // unfinished: the components are labelled instead
+    if (met != all && !joined) {
+      // Flooded whole: every group it never met has no path to it.
+      for (std::size_t q = component; q < flood_visited_.size(); ++q) {
+        const std::uint32_t i = flood_visited_[q];
+        for (std::size_t s = 0; s < searches_.size(); ++s) {
+          Search& search = searches_[s];
+          if ((met & (1U << s)) != 0 || search.open[i] == 0 || search.attachment[i] == kNone) continue;
+          attachments_[search.attachment[i]] = {i, i, kInf, 0, kInf};
+        }
+      }
+    }
+    for (std::size_t q = component; q < flood_visited_.size(); ++q) flood_seen_[flood_visited_[q]] = 2;
+  }
+  for (const std::uint32_t i : flood_visited_) flood_seen_[i] = 0;
+  if (flood_visited_.size() > flood_cap) release_cut_off_by_components(cloth);
+}
+
+void Solver::release_cut_off_by_components(const Cloth& cloth) {
+  // release_cut_off's verdict for every open particle at once: the components of the open particles through
+  // live springs (union-find, Tarjan 1975, over the spring arrays in order), each with the pin groups whose
+  // settled particles it touches.
+  const std::size_t n = cloth.particle_count();
+  const std::uint32_t all = (1U << searches_.size()) - 1U;
+  flood_open_.assign(n, 0);
+  flood_settled_.assign(n, 0);
+  for (std::size_t s = 0; s < searches_.size(); ++s) {
+    const Search& search = searches_[s];
+    for (std::uint32_t i = 0; i < n; ++i) {
+      if (search.open[i] != 0) {
+        flood_open_[i] |= 1U << s;
+      } else if (std::isfinite(search.dist[i])) {
+        flood_settled_[i] |= 1U << s;
+      }
+    }
+  }
+  auto& parent = flood_parent_;
+  parent.resize(n);
+  std::iota(parent.begin(), parent.end(), 0U);
+  const auto find = [&](std::uint32_t i) {
+    while (parent[i] != i) i = parent[i] = parent[parent[i]];
+    return i;
+  };
+  for (std::size_t k = 0; k < cloth.spring_count(); ++k) {
+    if (cloth.alive[k] == 0 || cloth.kind[k] == SpringKind::Bend) continue;
+    const std::uint32_t a = cloth.spring_a[k];
+    const std::uint32_t b = cloth.spring_b[k];
+    if (flood_open_[a] == 0 || flood_open_[b] == 0) continue;
+    const std::uint32_t ra = find(a);
+    const std::uint32_t rb = find(b);
+    if (ra != rb) parent[std::max(ra, rb)] = std::min(ra, rb);
+  }
+  // What each component meets: its own particles' settled groups and those of the settled particles next to it.
+  auto& met = flood_settled_;  // per root, after the open particles' own bits are folded in
+  for (std::uint32_t i = 0; i < n; ++i) {
+    if (flood_open_[i] != 0 && parent[i] != i) met[find(i)] |= met[i];
+  }
+  for (std::size_t k = 0; k < cloth.spring_count(); ++k) {
+    if (cloth.alive[k] == 0 || cloth.kind[k] == SpringKind::Bend) continue;
+    const std::uint32_t a = cloth.spring_a[k];
+    const std::uint32_t b = cloth.spring_b[k];
+    if ((flood_open_[a] == 0) == (flood_open_[b] == 0)) continue;
+    const std::uint32_t inside = flood_open_[a] != 0 ? a : b;
+    const std::uint32_t outside = inside == a ? b : a;
+    met[find(inside)] |= met[outside];
+  }
+  for (std::uint32_t i = 0; i < n; ++i) {
+    if (flood_open_[i] == 0) continue;
+    const std::uint32_t missing = all & ~met[find(i)] & flood_open_[i];
+    for (std::size_t s = 0; s < searches_.size(); ++s) {
+      const Search& search = searches_[s];
+      if ((missing & (1U << s)) == 0 || search.attachment[i] == kNone) continue;
+      attachments_[search.attachment[i]] = {i, i, kInf, 0, kInf};
+    }
   }
 }
 
@@ -945,8 +1091,10 @@ void Solver::limit_locally(const Cloth& cloth, const LimitSpring& limit_spring) 
   // The visits are capped at an eighth of a full pass: the lip never quite settles (each correction to
   // 9.5 % pushes a neighbour over 10 %), so the passes run to the cap on every sub-step while it hangs there,
   // and a sixteenth left it at 10.4 % (+15 % on that cloth's step, nothing on a cloth within the limit).
-  if (limit_active_.size() > strain_limit_.size() / 32) return;
-  std::size_t visits_left = strain_limit_.size() / 8;
+  // Going local as soon as any pass corrects few springs, not only after the sixth, was cheaper still (that
+  // slit's step -16 %), but the `curve` recording's two journals of 2026-12-02, replayed, then rested at 86 %
+  // and 20.7 % (a flap tangled along the cut) instead of 10.0 %: the full passes are kept.
+  std::size_t visits_left = strain_limit_.size() / kLocalLimitVisitsPerPass;
   limit_mark_.resize(strain_limit_.size(), 0);
   for (int pass = 0; pass < kLocalLimitPasses && !limit_active_.empty() && visits_left > 0; ++pass) {
     limit_next_.clear();
@@ -1047,22 +1195,19 @@ void Solver::substep(Cloth& cloth, const Colliders& colliders, float h, bool fir
     project_distance<Length::Exact>(x[s.a], x[s.b], corrected * s.rest, 0.0F);
     return true;
   };
+  // Past the full passes, if the last one corrected few springs, the sweeps go on locally (limit_locally).
   bool clean = false;
   for (int pass = 0; pass < params_.strain_limit_passes && !clean; ++pass) {
-    const bool last = pass + 1 == params_.strain_limit_passes;
-    if (last) limit_active_.clear();
-    std::size_t corrections = 0;
+    limit_active_.clear();
     const auto sweep = [&](std::uint32_t place) {
-      if (!limit_spring(strain_limit_[place])) return;
-      ++corrections;
-      if (last) limit_active_.push_back(place);
+      if (limit_spring(strain_limit_[place])) limit_active_.push_back(place);
     };
     for (std::uint32_t place = 0; place < strain_limit_.size(); ++place) sweep(place);
     for (const std::uint32_t again : limit_again_) sweep(again);
-    clean = corrections == 0;
+    clean = limit_active_.empty();
   }
-  // Not clean: at least one full pass ran (validate: strain_limit_passes >= 1), so limit_active_ is this sub-step's.
-  if (!clean) limit_locally(cloth, limit_spring);
+  // Not clean: at least one pass ran (validate: strain_limit_passes >= 1), so limit_active_ is this sub-step's.
+  if (!clean && few_limit_corrections()) limit_locally(cloth, limit_spring);
 
   // 6. Collisions by projection with friction (collide_with_friction), then velocities from the positions
   // actually reached.

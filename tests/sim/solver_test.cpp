@@ -317,6 +317,51 @@ TEST(IncrementalAttachments, ACutThatTakesASeededParticlesWayToThePinSeedsItAgai
   expect_distances_of_a_full_build(solver, cloth, 0.0F);
 }
 
+TEST(IncrementalAttachments, AnOpenedParticleKeepsItsTetherAndACutOffPieceLosesItsAtOnce) {
+  // While the repair after a cut goes on (here one particle a step), the particles it opened keep their old
+  // tethers: turned off, the region below a stroke advancing into a 256 x 256 cloth hung without them for the
+  // whole stroke and fell stretched. But a piece the cut separates from the pins must fall now, not once the
+  // repair has settled everything else (Solver::release_cut_off). 24 x 24: the piece is found by flooding it;
+  // 64 x 64: its 2048 particles are past the flood's cap, so the components are labelled by union-find.
+  for (const int n : {24, 64}) {
+    SCOPED_TRACE(n);
+    Cloth cloth = make(n, PinMode::TopEdge);
+    SolverParams params;
+    params.repair_per_step = 1;
+    Solver solver{params};
+    solver.step(cloth);
+    const std::size_t tethers = solver.attachment_count();
+    ASSERT_EQ(tethers, solver.pin_groups() * static_cast<std::size_t>(n * (n - 1)));
+    // Every spring across the line between rows n/2 - 1 and n/2, from column `first` to column `last`.
+    const int below = n / 2;
+    const auto cut_across = [&](int first, int last) {
+      for (std::uint32_t k = 0; k < cloth.spring_count(); ++k) {
+        const GridCoord a = cloth.grid[cloth.spring_a[k]];
+        const GridCoord b = cloth.grid[cloth.spring_b[k]];
+        const bool across = std::min(a.v, b.v) < below && std::max(a.v, b.v) >= below;
+        const bool within = std::min(a.u, b.u) >= first && std::max(a.u, b.u) <= last;
+        if (cloth.alive[k] != 0 && across && within) cloth.remove_spring(k);
+      }
+    };
+    cut_across(0, n / 2 - 1);  // a slit from the left edge: the cloth below it hangs on through its right half
+    solver.update_topology(cloth);
+    ASSERT_TRUE(solver.repairing());
+    EXPECT_EQ(solver.attachment_count(), tethers) << "the slit's opened particles kept their tethers";
+    cut_across(0, n - 1);  // the rest of the line: the lower half comes off
+    solver.update_topology(cloth);
+    ASSERT_TRUE(solver.repairing());
+    EXPECT_EQ(solver.attachment_count(), tethers - solver.pin_groups() * static_cast<std::size_t>(n * (n - below)))
+        << "the cut-off piece lost every tether at once";
+    // And it falls freely from the next step on, while the repair is still far from done.
+    solver.step(cloth);
+    ASSERT_TRUE(solver.repairing());
+    const float dt = solver.params().dt;
+    for (int u = 0; u < n; ++u) {
+      EXPECT_NEAR(cloth.velocity[cloth.index(u, n - 4)].y(), solver.params().gravity.y() * dt, 0.25F * 9.81F * dt) << u;
+    }
+  }
+}
+
 INSTANTIATE_TEST_SUITE_P(CutModes, IncrementalAttachments,
                          ::testing::Values(CutMode::Exact, CutMode::Grid, CutMode::Delete),
                          [](const auto& param) { return std::string{to_string(param.param)}; });

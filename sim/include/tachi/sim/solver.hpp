@@ -34,7 +34,8 @@ struct SolverParams {
   float max_strain = 0.10F;        ///< Provot's critical deformation rate (10%)
   int strain_limit_passes = 6;     ///< full strain-limit sweeps per sub-step at most (stops when clean); local ones follow
   /// Particles the attachments' repair after a cut settles per step and pin group, at most: a cut that
-  /// re-routes a whole piece is spread over steps (those particles' tethers are off meanwhile).
+  /// re-routes a whole piece is spread over steps (those particles keep their old tethers meanwhile, except
+  /// where the cut separated them from a pin group: Solver::release_cut_off).
   int repair_per_step = 2048;
   bool long_range_attachments = true;
   bool soft_every_substep = true;  ///< shear/bend in every sub-step (false: cheaper, but never fully at rest)
@@ -48,8 +49,9 @@ struct SolverParams {
 /// (pinned, or held by the hand: inverse mass 0) changes; a cut is picked up INCREMENTALLY from
 /// cloth.spring_edits: the lanes of the springs it changed are blanked, its new springs are batched at
 /// the end of their family, and only the attachments whose shortest path crossed the cut are searched
-/// again (decremental Dijkstra), inside the next steps within a budget (repair_per_step), their tethers
-/// off until then. Details and figures: docs/sim.md ("Caches"), docs/benchmarks.md ("Exact cuts").
+/// again (decremental Dijkstra), inside the next steps within a budget (repair_per_step), their old tethers
+/// kept until then unless the cut separated them from the pins. Details and figures: docs/sim.md
+/// ("Caches"), docs/benchmarks.md ("Exact cuts").
 class Solver {
  public:
   explicit Solver(SolverParams params = {});
@@ -114,7 +116,7 @@ class Solver {
     std::vector<std::uint32_t> last_bend;
     std::vector<std::uint32_t> bend_checked;
     // A repair after a cut, possibly spread over several steps: its heap, the particles whose distance is
-    // not final yet (their tethers are off meanwhile), and the same as a list.
+    // not final yet (their old tethers are kept meanwhile), and the same as a list.
     std::vector<std::pair<float, std::uint32_t>> heap;
     std::vector<std::uint8_t> open;
     std::vector<std::uint32_t> open_list;
@@ -143,13 +145,19 @@ class Solver {
   static void compact_order(Search& search, std::size_t particles);
   [[nodiscard]] static bool parent_spring_intact(const Cloth& cloth, Search& search, std::uint32_t i);
   void update_attachments(const Cloth& cloth, const std::vector<std::uint32_t>& touched);
+  void release_cut_off(const Cloth& cloth, const std::vector<std::uint32_t>& touched);
+  void release_cut_off_by_components(const Cloth& cloth);
   static void build_groups(const std::vector<PackedSpring>& springs, const std::vector<std::uint32_t>& keys,
                            std::vector<Group>& groups);
   void substep(Cloth& cloth, const Colliders& colliders, float h, bool first);
   /// Provot's sweeps past their budget, over only the springs near the last corrections (substep step 5).
   template <typename LimitSpring>
   void limit_locally(const Cloth& cloth, const LimitSpring& limit_spring);
-  static constexpr int kLocalLimitPasses = 100;  ///< besides the cap on visits (an eighth of a full pass)
+  static constexpr int kLocalLimitPasses = 100;  ///< besides the cap on visits (kLocalLimitVisitsPerPass)
+  /// The local passes' visits in all: at most a full pass's springs divided by this.
+  static constexpr std::size_t kLocalLimitVisitsPerPass = 8;
+  /// Whether the last strain-limit pass corrected few enough springs (a thirty-second) to go on locally.
+  [[nodiscard]] bool few_limit_corrections() const { return limit_active_.size() * 32 <= strain_limit_.size(); }
 
   SolverParams params_;
   // Cache key.
@@ -200,6 +208,15 @@ class Solver {
   std::vector<float> nearest_;  ///< per particle: rest distance to the nearest pin (+inf: no pin reaches it)
   std::vector<std::uint32_t> opened_;  ///< scratch of the incremental update: particles it opened, once each
   std::vector<std::uint8_t> opened_mark_;  ///< per particle: in opened_ (cleared after each update)
+  // Scratch of release_cut_off: per particle 0 (not flooded), 1 (in the flood going on), 2 (flooded
+  // before in this update); the flooded particles in order, component after component.
+  std::vector<std::uint8_t> flood_seen_;
+  std::vector<std::uint32_t> flood_visited_;
+  // Scratch of release_cut_off_by_components: per particle the searches it is open in, the searches it is
+  // settled in (then, per component root, the groups it meets), and the union-find parent.
+  std::vector<std::uint8_t> flood_open_;
+  std::vector<std::uint8_t> flood_settled_;
+  std::vector<std::uint32_t> flood_parent_;
   std::vector<std::uint8_t> touched_mark_;  ///< per particle: touched by the update's springs (cleared after it)
   // Positions with the inverse mass in w, during a step; element 0 is the fixed padding particle.
   std::vector<Eigen::Vector4f> work_;

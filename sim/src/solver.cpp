@@ -1086,8 +1086,9 @@ void Solver::limit_locally(const Cloth& cloth, const LimitSpring& limit_spring) 
   // 6 full passes, 10.2 % after 30 and 10.0 % after 100. The passes after the full ones visit only the
   // springs the previous pass corrected and those sharing a particle with them, in the sweep's order: at rest
   // a few hundred springs (9.998 %). Only when the last full pass corrected few springs (a thirty-second of
-  // them): where it corrected them everywhere (a piece falling fast, a region whose tethers a repair has not
-  // given back yet) these passes settled nothing and cost the 256 x 256 long stroke's median step +45 %.
+  // them): where it corrected them everywhere (a piece falling fast; before opened particles kept their
+  // tethers, a region waiting for its repair) these passes settled nothing and cost the 256 x 256 long
+  // stroke's median step +45 %.
   // The visits are capped at an eighth of a full pass: the lip never quite settles (each correction to
   // 9.5 % pushes a neighbour over 10 %), so the passes run to the cap on every sub-step while it hangs there,
   // and a sixteenth left it at 10.4 % (+15 % on that cloth's step, nothing on a cloth within the limit).

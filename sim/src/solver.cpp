@@ -1198,16 +1198,21 @@ void Solver::substep(Cloth& cloth, const Colliders& colliders, float h, bool fir
   };
   // Past the full passes, if the last one corrected few springs, the sweeps go on locally (limit_locally).
   bool clean = false;
+  // Only the last pass records what it corrected: a pass on a falling piece corrects a third of the springs.
   for (int pass = 0; pass < params_.strain_limit_passes && !clean; ++pass) {
-    limit_active_.clear();
+    const bool last = pass + 1 == params_.strain_limit_passes;
+    if (last) limit_active_.clear();
+    std::size_t corrections = 0;
     const auto sweep = [&](std::uint32_t place) {
-      if (limit_spring(strain_limit_[place])) limit_active_.push_back(place);
+      if (!limit_spring(strain_limit_[place])) return;
+      ++corrections;
+      if (last) limit_active_.push_back(place);
     };
     for (std::uint32_t place = 0; place < strain_limit_.size(); ++place) sweep(place);
     for (const std::uint32_t again : limit_again_) sweep(again);
-    clean = limit_active_.empty();
+    clean = corrections == 0;
   }
-  // Not clean: at least one pass ran (validate: strain_limit_passes >= 1), so limit_active_ is this sub-step's.
+  // Not clean: every pass ran (validate: strain_limit_passes >= 1), so limit_active_ is this sub-step's last.
   if (!clean && few_limit_corrections()) limit_locally(cloth, limit_spring);
 
   // 6. Collisions by projection with friction (collide_with_friction), then velocities from the positions

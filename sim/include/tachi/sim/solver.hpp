@@ -33,6 +33,9 @@ struct SolverParams {
   float structural_compliance = 0.0F;  ///< XPBD compliance of the structural springs, m/N (0: hard; materials set 1/k)
   float max_strain = 0.10F;        ///< Provot's critical deformation rate (10%)
   int strain_limit_passes = 6;     ///< full strain-limit sweeps per sub-step at most (stops when clean); local ones follow
+  /// After a sub-step's first strain-limit pass, each pass reads only the springs a correction moved an end of
+  /// since their last check: the same corrections as reading all of them (false: reads all, for comparison).
+  bool sparse_strain_limit = true;
   /// Particles the attachments' repair after a cut settles per step and pin group, at most: a cut that
   /// re-routes a whole piece is spread over steps (those particles keep their old tethers meanwhile, except
   /// where the cut separated them from a pin group: Solver::release_cut_off).
@@ -158,6 +161,9 @@ class Solver {
   static constexpr std::size_t kLocalLimitVisitsPerPass = 8;
   /// Whether the last strain-limit pass corrected few enough springs (a thirty-second) to go on locally.
   [[nodiscard]] bool few_limit_corrections() const { return limit_active_.size() * 32 <= strain_limit_.size(); }
+  /// A strain-limit pass that has marked more than this share (1/N) of the springs for the next one stops
+  /// marking: the next pass reads every spring (substep step 5; marking costs ~20 reads per correction).
+  static constexpr std::size_t kSparseLimitShare = 16;
 
   SolverParams params_;
   // Cache key.
@@ -185,6 +191,8 @@ class Solver {
   std::vector<std::uint32_t> limit_active_;
   std::vector<std::uint32_t> limit_next_;
   std::vector<std::uint8_t> limit_mark_;
+  /// A bit per place in strain_limit_: a correction moved an end of that spring since its last check.
+  std::vector<std::uint64_t> limit_dirty_;
   bool limit_order_stale_ = false;
   bool pending_limit_order_ = false;
   std::vector<std::pair<std::uint32_t, std::uint32_t>> limit_level_;  // scratch: (level, spring)

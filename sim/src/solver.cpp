@@ -952,28 +952,29 @@ void Solver::release_cut_off_by_components(const Cloth& cloth) {
     while (parent[i] != i) i = parent[i] = parent[parent[i]];
     return i;
   };
+  // What each component meets: its own particles' settled groups and those of the settled particles next to
+  // it. A spring from an open particle to one that is not gives the open one its neighbour's bits now (in a
+  // copy: flood_settled_ is read as it was), and they are folded into the roots once the components are known.
+  auto& met = flood_met_;
+  met = flood_settled_;
   for (std::size_t k = 0; k < cloth.spring_count(); ++k) {
     if (cloth.alive[k] == 0 || cloth.kind[k] == SpringKind::Bend) continue;
     const std::uint32_t a = cloth.spring_a[k];
     const std::uint32_t b = cloth.spring_b[k];
-    if (flood_open_[a] == 0 || flood_open_[b] == 0) continue;
-    const std::uint32_t ra = find(a);
-    const std::uint32_t rb = find(b);
-    if (ra != rb) parent[std::max(ra, rb)] = std::min(ra, rb);
+    const bool a_open = flood_open_[a] != 0;
+    const bool b_open = flood_open_[b] != 0;
+    if (a_open && b_open) {
+      const std::uint32_t ra = find(a);
+      const std::uint32_t rb = find(b);
+      if (ra != rb) parent[std::max(ra, rb)] = std::min(ra, rb);
+    } else if (a_open) {
+      met[a] |= flood_settled_[b];
+    } else if (b_open) {
+      met[b] |= flood_settled_[a];
+    }
   }
-  // What each component meets: its own particles' settled groups and those of the settled particles next to it.
-  auto& met = flood_settled_;  // per root, after the open particles' own bits are folded in
   for (std::uint32_t i = 0; i < n; ++i) {
     if (flood_open_[i] != 0 && parent[i] != i) met[find(i)] |= met[i];
-  }
-  for (std::size_t k = 0; k < cloth.spring_count(); ++k) {
-    if (cloth.alive[k] == 0 || cloth.kind[k] == SpringKind::Bend) continue;
-    const std::uint32_t a = cloth.spring_a[k];
-    const std::uint32_t b = cloth.spring_b[k];
-    if ((flood_open_[a] == 0) == (flood_open_[b] == 0)) continue;
-    const std::uint32_t inside = flood_open_[a] != 0 ? a : b;
-    const std::uint32_t outside = inside == a ? b : a;
-    met[find(inside)] |= met[outside];
   }
   for (std::uint32_t i = 0; i < n; ++i) {
     if (flood_open_[i] == 0) continue;

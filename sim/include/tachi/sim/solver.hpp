@@ -221,9 +221,10 @@ class Solver {
   std::vector<std::uint8_t> flood_seen_;
   std::vector<std::uint32_t> flood_visited_;
   // Scratch of release_cut_off_by_components: per particle the searches it is open in, the searches it is
-  // settled in (then, per component root, the groups it meets), and the union-find parent.
+  // settled in, the groups it meets (then per component root), and the union-find parent.
   std::vector<std::uint8_t> flood_open_;
   std::vector<std::uint8_t> flood_settled_;
+  std::vector<std::uint8_t> flood_met_;
   std::vector<std::uint32_t> flood_parent_;
   std::vector<std::uint8_t> touched_mark_;  ///< per particle: touched by the update's springs (cleared after it)
   // Positions with the inverse mass in w, during a step; element 0 is the fixed padding particle.

@@ -222,6 +222,11 @@ void Solver::full_build(const Cloth& cloth, std::vector<std::uint32_t> pins) {
   reserve_touched(opened_mark_, particle_room);
   reserve_touched(touched_mark_, particle_room);
   reserve_touched(flood_seen_, particle_room);
+  // release_cut_off_by_components sizes its scratch to the cloth on every call, and a cut adds particles.
+  reserve_touched(flood_open_, particle_room);
+  reserve_touched(flood_settled_, particle_room);
+  reserve_touched(flood_met_, particle_room);
+  reserve_touched(flood_parent_, particle_room);
   reserve_touched(work_, particle_room);
   reserve_touched(old_work_, particle_room);
   reserve_touched(slot_, cloth.spring_a.capacity());
@@ -472,7 +477,7 @@ bool Solver::run_search(const Cloth& cloth, Search& search, bool repair, std::si
   for (const std::uint32_t i : search.open_list) {
     if (search.open[i] == 0) continue;
     search.open[i] = 0;
-    if (search.attachment[i] != kNone) attachments_[search.attachment[i]] = {i, i, kInf, 0, kInf};
+    drop_tether(search, i);
   }
   search.open_list.clear();
   search.seeded = 0;
@@ -851,6 +856,27 @@ void Solver::update_attachments(const Cloth& cloth, const std::vector<std::uint3
   }
 }
 
+void Solver::drop_tether(const Search& search, std::uint32_t i) {
+  if (search.attachment[i] != kNone) attachments_[search.attachment[i]] = {i, i, kInf, 0, kInf};
+}
+
+std::uint32_t Solver::open_groups(std::uint32_t i) const {
+  std::uint32_t bits = 0;
+  for (std::size_t s = 0; s < searches_.size(); ++s) {
+    if (searches_[s].open[i] != 0) bits |= 1U << s;
+  }
+  return bits;
+}
+
+std::uint32_t Solver::settled_groups(std::uint32_t i) const {
+  std::uint32_t bits = 0;
+  for (std::size_t s = 0; s < searches_.size(); ++s) {
+    const Search& search = searches_[s];
+    if (search.open[i] == 0 && std::isfinite(search.dist[i])) bits |= 1U << s;
+  }
+  return bits;
+}
+
 void Solver::release_cut_off(const Cloth& cloth, const std::vector<std::uint32_t>& touched) {
   // An open particle keeps its old tether until the repair settles it again (open_particle), which is right
   // while it still hangs from the pins: the cut only lengthened its path, so the old tether holds it no
@@ -867,20 +893,7 @@ void Solver::release_cut_off(const Cloth& cloth, const std::vector<std::uint32_t
   const std::size_t n = cloth.particle_count();
   flood_seen_.resize(n, 0);
   const std::uint32_t all = (1U << searches_.size()) - 1U;
-  const auto is_open = [&](std::uint32_t i) {
-    for (const Search& search : searches_) {
-      if (search.open[i] != 0) return true;
-    }
-    return false;
-  };
-  const auto settled_bits = [&](std::uint32_t j) {
-    std::uint32_t bits = 0;
-    for (std::size_t s = 0; s < searches_.size(); ++s) {
-      const Search& search = searches_[s];
-      if (search.open[j] == 0 && std::isfinite(search.dist[j])) bits |= 1U << s;
-    }
-    return bits;
-  };
+  const auto is_open = [&](std::uint32_t i) { return open_groups(i) != 0; };
   flood_visited_.clear();
   // Past this many particles the floods stop and the components are labelled by union-find over all springs
   // instead, in spring order: a cut-off piece is flooded whole, and hopping through the springs of 36k
@@ -896,11 +909,11 @@ void Solver::release_cut_off(const Cloth& cloth, const std::vector<std::uint32_t
     bool joined = false;  // reached a particle an earlier flood visited: that component's verdict stands
     for (std::size_t q = component; q < flood_visited_.size() && met != all && !joined && q <= flood_cap; ++q) {
       const std::uint32_t i = flood_visited_[q];
-      met |= settled_bits(i);  // open in some searches only: settled in the others
+      met |= settled_groups(i);  // open in some searches only: settled in the others
       for (const std::uint32_t k : cloth.springs_of(i)) {
         if (cloth.kind[k] == SpringKind::Bend) continue;
         const std::uint32_t j = cloth.spring_a[k] == i ? cloth.spring_b[k] : cloth.spring_a[k];
-        met |= settled_bits(j);
+        met |= settled_groups(j);
         if (flood_seen_[j] != 0) {
           if (flood_seen_[j] == 2) joined = true;
           continue;
@@ -916,9 +929,7 @@ void Solver::release_cut_off(const Cloth& cloth, const std::vector<std::uint32_t
       for (std::size_t q = component; q < flood_visited_.size(); ++q) {
         const std::uint32_t i = flood_visited_[q];
         for (std::size_t s = 0; s < searches_.size(); ++s) {
-          Search& search = searches_[s];
-          if ((met & (1U << s)) != 0 || search.open[i] == 0 || search.attachment[i] == kNone) continue;
-          attachments_[search.attachment[i]] = {i, i, kInf, 0, kInf};
+          if ((met & (1U << s)) == 0 && searches_[s].open[i] != 0) drop_tether(searches_[s], i);
         }
       }
     }
@@ -934,17 +945,11 @@ void Solver::release_cut_off_by_components(const Cloth& cloth) {
   // settled particles it touches.
   const std::size_t n = cloth.particle_count();
   const std::uint32_t all = (1U << searches_.size()) - 1U;
-  flood_open_.assign(n, 0);
-  flood_settled_.assign(n, 0);
-  for (std::size_t s = 0; s < searches_.size(); ++s) {
-    const Search& search = searches_[s];
-    for (std::uint32_t i = 0; i < n; ++i) {
-      if (search.open[i] != 0) {
-        flood_open_[i] |= 1U << s;
-      } else if (std::isfinite(search.dist[i])) {
-        flood_settled_[i] |= 1U << s;
-      }
-    }
+  flood_open_.resize(n);
+  flood_settled_.resize(n);
+  for (std::uint32_t i = 0; i < n; ++i) {
+    flood_open_[i] = static_cast<std::uint8_t>(open_groups(i));
+    flood_settled_[i] = static_cast<std::uint8_t>(settled_groups(i));
   }
   auto& parent = flood_parent_;
   parent.resize(n);
@@ -981,9 +986,7 @@ void Solver::release_cut_off_by_components(const Cloth& cloth) {
     if (flood_open_[i] == 0) continue;
     const std::uint32_t missing = all & ~met[find(i)] & flood_open_[i];
     for (std::size_t s = 0; s < searches_.size(); ++s) {
-      const Search& search = searches_[s];
-      if ((missing & (1U << s)) == 0 || search.attachment[i] == kNone) continue;
-      attachments_[search.attachment[i]] = {i, i, kInf, 0, kInf};
+      if ((missing & (1U << s)) != 0) drop_tether(searches_[s], i);
     }
   }
 }

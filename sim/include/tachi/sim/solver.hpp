@@ -150,6 +150,12 @@ class Solver {
   void update_attachments(const Cloth& cloth, const std::vector<std::uint32_t>& touched);
   void release_cut_off(const Cloth& cloth, const std::vector<std::uint32_t>& touched);
   void release_cut_off_by_components(const Cloth& cloth);
+  /// Particle i has no path to search's pin group any more: its tether of that group goes (kept disabled,
+  /// anchored on itself, so that the step reads a valid index).
+  void drop_tether(const Search& search, std::uint32_t i);
+  /// A bit per pin group (search): the ones particle i is open in, and the ones it is settled in (reached).
+  [[nodiscard]] std::uint32_t open_groups(std::uint32_t i) const;
+  [[nodiscard]] std::uint32_t settled_groups(std::uint32_t i) const;
   static void build_groups(const std::vector<PackedSpring>& springs, const std::vector<std::uint32_t>& keys,
                            std::vector<Group>& groups);
   void substep(Cloth& cloth, const Colliders& colliders, float h, bool first);

@@ -143,6 +143,12 @@ float Solver::pin_distance(std::size_t group, std::uint32_t particle) const {
   return search.open[particle] != 0 ? kInf : search.dist[particle];
 }
 
+std::size_t Solver::repair_list_entries() const {
+  std::size_t entries = 0;
+  for (const Search& search : searches_) entries += search.open_list.size();
+  return entries;
+}
+
 bool Solver::repairing() const {
   return std::any_of(searches_.begin(), searches_.end(),
                      [](const Search& s) { return !s.heap.empty() || !s.open_list.empty(); });
@@ -450,6 +456,7 @@ bool Solver::run_search(const Cloth& cloth, Search& search, bool repair, std::si
     if (repair) {
       if (search.open[i] == 0) continue;
       search.open[i] = 0;
+      --search.open_count;
       refresh_nearest(i);
     }
     search.order_pos[i] = static_cast<std::uint32_t>(search.order.size());
@@ -480,6 +487,7 @@ bool Solver::run_search(const Cloth& cloth, Search& search, bool repair, std::si
     drop_tether(search, i);
   }
   search.open_list.clear();
+  search.open_count = 0;
   search.seeded = 0;
   return true;
 }
@@ -732,6 +740,7 @@ void Solver::build_attachments(const Cloth& cloth) {
     search.bend_checked.assign(n, 0);
     search.open.assign(n, 0);
     search.open_list.clear();
+    search.open_count = 0;
     search.heap.clear();
     for (const std::uint32_t s : search.sources) {
       search.dist[s] = 0.0F;
@@ -773,7 +782,10 @@ void Solver::open_particle(Search& search, std::uint32_t i) {
   search.parent_spring[i] = kNone;
   search.owner[i] = kNone;
   search.order_pos[i] = kNone;  // its entry in the order goes stale
-  if (search.open[i] == 0) search.open_list.push_back(i);
+  if (search.open[i] == 0) {
+    search.open_list.push_back(i);
+    ++search.open_count;
+  }
   search.open[i] = 1;
   search.anchor[i] = kNone;
   if (search.bends[i] != 0) tether_order_stale_ = true;
@@ -783,6 +795,24 @@ void Solver::open_particle(Search& search, std::uint32_t i) {
     opened_mark_[i] = 1;
     opened_.push_back(i);
   }
+}
+
+void Solver::compact_open_list(Search& search) {
+  // A repair that a long stroke keeps re-opening never ends, so its list was never cleared: the particles
+  // that settled again stayed in it (880k entries for 65k particles by the end of a 256 x 256 stroke), and
+  // every cut read them all, as did the repair's seeding (against its budget). Past twice the open ones they
+  // are dropped, the rest keeping their order; `seeded` still counts the same particles.
+  if (search.open_list.size() <= 2 * search.open_count + 64) return;
+  std::size_t kept = 0;
+  std::size_t seeded = 0;
+  for (std::size_t k = 0; k < search.open_list.size(); ++k) {
+    const std::uint32_t i = search.open_list[k];
+    if (search.open[i] == 0) continue;
+    if (k < search.seeded) ++seeded;
+    search.open_list[kept++] = i;
+  }
+  search.open_list.resize(kept);
+  search.seeded = seeded;
 }
 
 void Solver::update_attachments(const Cloth& cloth, const std::vector<std::uint32_t>& touched) {
@@ -818,6 +848,7 @@ void Solver::update_attachments(const Cloth& cloth, const std::vector<std::uint3
     search.open.resize(n, 0);
     search.order_pos.resize(n, kNone);
     compact_order(search, n);
+    compact_open_list(search);
     const std::size_t open_before = search.open_list.size();
     std::uint32_t first = kNone;
     for (const std::uint32_t i : touched) {

@@ -78,6 +78,8 @@ class Solver {
   [[nodiscard]] float pin_distance(std::size_t group, std::uint32_t particle) const;
   /// Whether a repair of the attachments after a cut is still going on (it goes on within each step).
   [[nodiscard]] bool repairing() const;
+  /// Entries in the repairs' lists of open particles, over all pin groups: what the next cut reads.
+  [[nodiscard]] std::size_t repair_list_entries() const;
 
   /// A live spring copied out of the Cloth arrays, in the solver's sweep order.
   struct PackedSpring {
@@ -123,6 +125,7 @@ class Solver {
     std::vector<std::pair<float, std::uint32_t>> heap;
     std::vector<std::uint8_t> open;
     std::vector<std::uint32_t> open_list;
+    std::size_t open_count = 0;  ///< particles open now (open_list also lists those settled again since)
     std::size_t seeded = 0;  ///< open_list entries whose distances from settled neighbours are in the heap
     /// The settled particles in the order they settled, so each after its parent (the tree's edges point
     /// backwards); re-settled ones are appended and their old entries go stale (order_pos tells). A cut's
@@ -146,6 +149,7 @@ class Solver {
   void open_particle(Search& search, std::uint32_t i);
   static void seed(const Cloth& cloth, Search& search, std::uint32_t i);
   static void compact_order(Search& search, std::size_t particles);
+  static void compact_open_list(Search& search);
   [[nodiscard]] static bool parent_spring_intact(const Cloth& cloth, Search& search, std::uint32_t i);
   void update_attachments(const Cloth& cloth, const std::vector<std::uint32_t>& touched);
   void release_cut_off(const Cloth& cloth, const std::vector<std::uint32_t>& touched);

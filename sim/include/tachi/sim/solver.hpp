@@ -78,6 +78,8 @@ class Solver {
   [[nodiscard]] float pin_distance(std::size_t group, std::uint32_t particle) const;
   /// Whether a repair of the attachments after a cut is still going on (it goes on within each step).
   [[nodiscard]] bool repairing() const;
+  /// Particles the repairs still have to settle, counted once per pin group whose repair has them open.
+  [[nodiscard]] std::size_t open_particles() const;
   /// Entries in the repairs' lists of open particles, over all pin groups: what the next cut reads.
   [[nodiscard]] std::size_t repair_list_entries() const;
 
@@ -157,6 +159,7 @@ class Solver {
   /// Particle i has no path to search's pin group any more: its tether of that group goes (kept disabled,
   /// anchored on itself, so that the step reads a valid index).
   void drop_tether(const Search& search, std::uint32_t i);
+  void release(Search& search, std::uint32_t i);
   /// A bit per pin group (search): the ones particle i is open in, and the ones it is settled in (reached).
   [[nodiscard]] std::uint32_t open_groups(std::uint32_t i) const;
   [[nodiscard]] std::uint32_t settled_groups(std::uint32_t i) const;

@@ -1010,11 +1010,20 @@ void Solver::release_cut_off_by_components(const Cloth& cloth) {
   // settled particles it touches.
   const std::size_t n = cloth.particle_count();
   const std::uint32_t all = (1U << searches_.size()) - 1U;
-  flood_open_.resize(n);
-  flood_settled_.resize(n);
-  for (std::uint32_t i = 0; i < n; ++i) {
-    flood_open_[i] = static_cast<std::uint8_t>(open_groups(i));
-    flood_settled_[i] = static_cast<std::uint8_t>(settled_groups(i));
+  // open_groups and settled_groups of every particle, a search at a time (loops the compiler vectorises:
+  // per particle they were a quarter of this labelling at 256 x 256).
+  flood_open_.assign(n, 0);
+  flood_settled_.assign(n, 0);
+  for (std::size_t s = 0; s < searches_.size(); ++s) {
+    const auto bit = static_cast<std::uint8_t>(1U << s);
+    const std::uint8_t* open = searches_[s].open.data();
+    const float* dist = searches_[s].dist.data();
+    std::uint8_t* open_bits = flood_open_.data();
+    std::uint8_t* settled_bits = flood_settled_.data();
+    for (std::size_t i = 0; i < n; ++i) {
+      open_bits[i] |= open[i] != 0 ? bit : std::uint8_t{0};
+      settled_bits[i] |= open[i] == 0 && dist[i] < kInf ? bit : std::uint8_t{0};
+    }
   }
   auto& parent = flood_parent_;
   parent.resize(n);

@@ -818,7 +818,7 @@ void Solver::open_particle(Search& search, std::uint32_t i) {
 
 void Solver::compact_open_list(Search& search) {
   // A repair that a long stroke keeps re-opening never ends, so its list was never cleared: the particles
-  // that settled again stayed in it (880k entries for 65k particles by the end of a 256 x 256 stroke), and
+  // that settled again stayed in it (880k entries for 66k particles by the end of a 256 x 256 stroke), and
   // every cut read them all, as did the repair's seeding (against its budget). Past twice the open ones they
   // are dropped, the rest keeping their order; `seeded` still counts the same particles.
   if (search.open_list.size() <= 2 * search.open_count + 64) return;

@@ -498,12 +498,9 @@ bool Solver::run_search(const Cloth& cloth, Search& search, bool repair, std::si
   if (!heap.empty()) return false;
   // What the repair never reached is cut off from this pin: its tether, kept while it was open, goes.
   for (const std::uint32_t i : search.open_list) {
-    if (search.open[i] == 0) continue;
-    search.open[i] = 0;
-    drop_tether(search, i);
+    if (search.open[i] != 0) release(search, i);
   }
   search.open_list.clear();
-  search.open_count = 0;
   search.seeded = 0;
   return true;
 }

@@ -62,6 +62,10 @@ constexpr std::uint32_t kNone = 0xFFFFFFFFU;
 constexpr std::uint32_t kNoBend = 0xFFFFFFFEU;  // Search::last_bend: checked, there is none
 constexpr float kInf = std::numeric_limits<float>::infinity();
 
+/// Whether a search has settled a particle, from its open flag and distance: reached, and not open for repair.
+/// (Solver::seed reads only settled neighbours; settled_groups and the labelling of cut-off pieces use it.)
+constexpr bool settled(std::uint8_t open, float dist) { return open == 0 && dist < kInf; }
+
 /// Octile distance between two rest coordinates (cells): the length of the shortest path along a
 /// grid's structural and shear springs, which Dijkstra over an uncut grid measures.
 float octile(const Cloth& cloth, const Eigen::Vector2f& a, const Eigen::Vector2f& b) {
@@ -422,7 +426,7 @@ void Solver::seed(const Cloth& cloth, Search& search, std::uint32_t i) {
   for (const std::uint32_t k : cloth.springs_of(i)) {
     if (cloth.kind[k] == SpringKind::Bend) continue;
     const std::uint32_t j = cloth.spring_a[k] == i ? cloth.spring_b[k] : cloth.spring_a[k];
-    if (search.open[j] != 0 || !std::isfinite(search.dist[j])) continue;
+    if (!settled(search.open[j], search.dist[j])) continue;
     const float d = search.dist[j] + cloth.rest_length[k];
     if (d < search.dist[i]) {
       search.dist[i] = d;
@@ -933,7 +937,7 @@ std::uint32_t Solver::settled_groups(std::uint32_t i) const {
   std::uint32_t bits = 0;
   for (std::size_t s = 0; s < searches_.size(); ++s) {
     const Search& search = searches_[s];
-    if (search.open[i] == 0 && std::isfinite(search.dist[i])) bits |= 1U << s;
+    if (settled(search.open[i], search.dist[i])) bits |= 1U << s;
   }
   return bits;
 }
@@ -1007,8 +1011,8 @@ void Solver::release_cut_off_by_components(const Cloth& cloth) {
   // settled particles it touches.
   const std::size_t n = cloth.particle_count();
   const std::uint32_t all = (1U << searches_.size()) - 1U;
-  // open_groups and settled_groups of every particle, a search at a time (loops the compiler vectorises:
-  // per particle they were a quarter of this labelling at 256 x 256).
+  // open_groups and settled_groups of every particle, computed a search at a time (loops the compiler
+  // vectorises: called per particle they were a quarter of this labelling at 256 x 256).
   flood_open_.assign(n, 0);
   flood_settled_.assign(n, 0);
   for (std::size_t s = 0; s < searches_.size(); ++s) {
@@ -1019,7 +1023,7 @@ void Solver::release_cut_off_by_components(const Cloth& cloth) {
     std::uint8_t* settled_bits = flood_settled_.data();
     for (std::size_t i = 0; i < n; ++i) {
       open_bits[i] |= open[i] != 0 ? bit : std::uint8_t{0};
-      settled_bits[i] |= open[i] == 0 && dist[i] < kInf ? bit : std::uint8_t{0};
+      settled_bits[i] |= settled(open[i], dist[i]) ? bit : std::uint8_t{0};
     }
   }
   auto& parent = flood_parent_;

@@ -9,8 +9,9 @@ seconds=${1:-20}
 shift || true
 targets=("$@")
 [ ${#targets[@]} -gt 0 ] || targets=(recording stroke_csv config cut_engine)
-cmake -S . -B build-fuzz -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_C_COMPILER=clang \
-  -DCMAKE_CXX_COMPILER=clang++ -DTACHI_FUZZ=ON -DBUILD_TESTING=OFF >/dev/null
+source scripts/build_env.sh
+tachi_configure build-fuzz -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_C_COMPILER=clang \
+  -DCMAKE_CXX_COMPILER=clang++ -DTACHI_FUZZ=ON -DBUILD_TESTING=OFF
 cmake --build build-fuzz -j"$(nproc)" --target "${targets[@]/%/_fuzz}"
 mkdir -p build-fuzz/crashes
 for t in "${targets[@]}"; do

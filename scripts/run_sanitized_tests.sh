@@ -6,7 +6,11 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 tests=(common_test bus_test sim_test sim_cut_test filter_test viewer_test tachi_sensor_tests reliability_unit_test
        bad_files_test)
-cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DTACHI_SANITIZE=ON >/dev/null
+source scripts/build_env.sh
+# The recordings the Release tree rendered (run_tests.sh runs first); rendered here only without it.
+recordings=()
+[ -f build/recordings/straight_cut/ground_truth.csv ] && recordings=(-DTACHI_RECORDINGS_FROM="$PWD/build/recordings")
+tachi_configure build-asan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DTACHI_SANITIZE=ON "${recordings[@]}"
 cmake --build build-asan -j"$(nproc)" --target "${tests[@]}" tachi_recordings
 export ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
 failed=()

@@ -6,7 +6,7 @@ set -euo pipefail
 
 packages=(
   # toolchain
-  build-essential cmake pkg-config git
+  build-essential cmake ninja-build ccache pkg-config git
   # DDS
   cyclonedds-dev cyclonedds-tools
   # Kinect v1 (live driver + fakenect playback library)
@@ -19,6 +19,8 @@ packages=(
   libcli11-dev libspdlog-dev nlohmann-json3-dev
   # voice commands
   libpocketsphinx-dev libsphinxbase-dev pocketsphinx-en-us pocketsphinx-testdata flite sox
+  # every English voice the machine can speak, for the voice evaluation (docs/voice.md)
+  espeak-ng festival festvox-kallpc16k festvox-us-slt-hts
   # tests and benchmarks (Bullet is the simulator baseline)
   libgtest-dev libgmock-dev libbenchmark-dev libbullet-dev
   # multi-host tests in network namespaces; the capture that proves DDS stays on loopback

@@ -4,8 +4,13 @@
 # Fails loudly (non-zero, naming the package) when a package cannot be installed.
 set -euo pipefail
 
+# Usage: setup.sh [--demo]. --demo installs only what README command (1) needs to build and run the
+# pipeline on a recording; without it, also the tests', benchmarks' and fuzzers' toolchain.
+demo_only=false
+[ "${1:-}" = "--demo" ] && demo_only=true
+
 packages=(
-  # toolchain
+  # toolchain (Ninja and ccache: scripts/build_env.sh)
   build-essential cmake ninja-build ccache pkg-config git
   # DDS
   cyclonedds-dev cyclonedds-tools
@@ -18,9 +23,13 @@ packages=(
   # conventions shared by every executable
   libcli11-dev libspdlog-dev nlohmann-json3-dev
   # voice commands
-  libpocketsphinx-dev libsphinxbase-dev pocketsphinx-en-us pocketsphinx-testdata flite sox
-  # every English voice the machine can speak, for the voice evaluation (docs/voice.md)
-  espeak-ng festival festvox-kallpc16k festvox-us-slt-hts
+  libpocketsphinx-dev libsphinxbase-dev pocketsphinx-en-us
+  # the viewer's window (X11) and the run's plots (tachi run: latency.png, trajectory.png via scripts/plot_run.py)
+  libx11-dev libxfixes-dev python3-matplotlib
+)
+test_packages=(
+  # voice tests: recorded speech, synthesized speech in every English voice the machine can speak (docs/voice.md)
+  pocketsphinx-testdata flite sox espeak-ng festival festvox-kallpc16k festvox-us-slt-hts
   # tests and benchmarks (Bullet is the simulator baseline)
   libgtest-dev libgmock-dev libbenchmark-dev libbullet-dev
   # multi-host tests in network namespaces; the capture that proves DDS stays on loopback
@@ -28,10 +37,9 @@ packages=(
   # DDS Security test PKI (scripts/make_test_pki.sh); libFuzzer targets and sanitizer builds (-DTACHI_FUZZ=ON)
   openssl clang
   # viewer under a virtual display
-  xvfb xdotool imagemagick libx11-dev libxfixes-dev
-  # the run's plots (tachi run: latency.png, trajectory.png via scripts/plot_run.py)
-  python3-matplotlib
+  xvfb xdotool imagemagick
 )
+$demo_only || packages+=("${test_packages[@]}")
 
 missing=()
 for p in "${packages[@]}"; do

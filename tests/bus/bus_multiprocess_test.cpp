@@ -44,7 +44,6 @@ TEST(BusMultiProcess, LateJoinerReceivesTheLastTopology) {
   ChildProcess pub(peer("topology-pub", 22, {"--linger", "20"}));
   // Join only after the publisher has written all versions.
   ASSERT_TRUE(pub.wait_for_output("published", 20s)) << pub.err();
-  std::this_thread::sleep_for(500ms);
   const auto late = tachi::test::run(peer("topology-sub", 22, {"--timeout", "20"}), 30s);
   pub.signal(SIGTERM);
   EXPECT_EQ(pub.wait(10s), 0) << pub.err();

@@ -112,7 +112,10 @@ TEST(SimLive, CutsOffTheLowerPieceFromStrokesOverDdsAndReportsIt) {
 
 TEST(SimLive, StopsCleanlyOnSigint) {
   tachi::test::ChildProcess sim({TACHI_SIM_EXE, "--grid", "8", "--domain", std::to_string(kDomain + 1)});
-  std::this_thread::sleep_for(1s);
+  // In its loop: it publishes the cloth.
+  tachi::bus::Participant dds{kDomain + 1};
+  tachi::bus::Reader<tachi_msg_ClothState> states{dds, tachi::bus::topics::cloth_state};
+  ASSERT_TRUE(states.wait_for_data(20s)) << sim.err();
   sim.signal(SIGINT);
   EXPECT_EQ(sim.wait(10s), 0) << sim.err();
 }

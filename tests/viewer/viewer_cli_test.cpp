@@ -2,6 +2,7 @@
 // viewer that writes nothing or sees no cloth, a video of a live simulator, and bad inputs replayed
 // over DDS while the real cloth stays on screen. Domain ids 150-154 (docs/testing.md).
 #include "viewer_process.hpp"
+#include "node_status.hpp"
 #include "process.hpp"
 #include "scratch_dir.hpp"
 #include "tachi/bus/topics.hpp"
@@ -112,7 +113,18 @@ TEST(ViewerCli, BadInputsAreRejectedAndTheVideoKeepsShowingTheRealCloth) {
   ASSERT_FALSE(real.empty());
   const tachi_msg_ClothTopology& t = *real.back();
   ASSERT_TRUE(bad_state.wait_for_readers(1, 20s)) << viewer.err();
-  std::this_thread::sleep_for(1s);  // the viewer has the real cloth
+  // The viewer has the real cloth: its heartbeat no longer says it waits for one, and it has drawn it.
+  ASSERT_TRUE(tachi::test::wait_for_status(status, "tachi-viewer", [](const tachi_msg_NodeStatus& s) {
+    return std::string(s.detail).empty() && tachi::test::metric(s, "frames").value_or(0) > 0;
+  }, 20s)) << viewer.err();
+  // Each bad topology is written once its predecessor was counted: the topic keeps only the last one.
+  std::uint64_t rejected = 0;
+  const auto rejected_at_least = [&](std::uint64_t n) {
+    return tachi::test::wait_for_status(status, "tachi-viewer", [&](const tachi_msg_NodeStatus& s) {
+      rejected = std::max(rejected, s.rejected);
+      return s.rejected >= n;
+    }, 10s);
+  };
 
   // A topology whose version jumps by 1000, one indexing particles that do not exist, one with triangles
   // not in threes; states with NaN positions and with the wrong number of them. The topic keeps the last
@@ -121,14 +133,14 @@ TEST(ViewerCli, BadInputsAreRejectedAndTheVideoKeepsShowingTheRealCloth) {
   tachi_msg_ClothTopology jump = t;
   jump.version = t.version + 1000;
   bad_topology.write(jump);
-  std::this_thread::sleep_for(300ms);
+  ASSERT_TRUE(rejected_at_least(1)) << viewer.err();
   std::vector<std::uint32_t> far = triangles;
   far[4] = 1u << 30;
   tachi_msg_ClothTopology out_of_range = t;
   out_of_range.version = t.version + 1;
   out_of_range.triangles._buffer = far.data();
   bad_topology.write(out_of_range);
-  std::this_thread::sleep_for(300ms);
+  ASSERT_TRUE(rejected_at_least(2)) << viewer.err();
   tachi_msg_ClothTopology ragged = t;
   ragged.version = t.version + 1;
   ragged.triangles._length = t.triangles._length - 1;
@@ -149,21 +161,21 @@ TEST(ViewerCli, BadInputsAreRejectedAndTheVideoKeepsShowingTheRealCloth) {
   // The state topic keeps the last 2 per cloth and the simulator writes the same cloth at 60 Hz: on a
   // loaded machine its next states can replace a bad one before the viewer reads it. Each bad state
   // goes out three times, so every kind is read at least once (the count below is a lower bound).
-  for (int i = 0; i < 3; ++i) {
-    bad_state.write(nan);
-    std::this_thread::sleep_for(50ms);
-    bad_state.write(short_state);
-    std::this_thread::sleep_for(50ms);
+  // Each bad state goes out until the viewer counted it (or three times: the count is a lower bound).
+  for (const auto* bad : {&nan, &short_state}) {
+    const std::uint64_t before = rejected;
+    for (int i = 0; i < 3 && rejected == before; ++i) {
+      bad_state.write(*bad);
+      rejected_at_least(before + 1);
+    }
   }
-
-  std::this_thread::sleep_for(1500ms);
+  // The viewer's heartbeat counted every bad input.
+  EXPECT_TRUE(rejected_at_least(5)) << "rejected " << rejected << '\n' << viewer.err();
+  // A second of video after the bad inputs (20 fps).
+  const double frames_now = tachi::test::latest_metric(status, "tachi-viewer", "frames", 10s).value_or(0);
+  ASSERT_TRUE(tachi::test::wait_for_metric(status, "tachi-viewer", "frames", frames_now + 21, 20s)) << viewer.err();
   viewer.signal(SIGINT);
   EXPECT_EQ(viewer.wait(2s), 0) << "stops within a second of SIGINT\n" << viewer.err();
-  // The viewer's heartbeat counted every bad input.
-  std::uint64_t rejected = 0;
-  for (const auto& s : status.take(256))
-    if (std::string(s->node) == "tachi-viewer") rejected = std::max(rejected, s->rejected);
-  EXPECT_GE(rejected, 5u) << viewer.err();
 
   // The last 20 frames of the video (the second after the bad inputs) show the cloth at its centre.
   cv::VideoCapture capture(video);
@@ -185,7 +197,10 @@ TEST(ViewerCli, BadInputsAreRejectedAndTheVideoKeepsShowingTheRealCloth) {
 
 TEST(ViewerCli, StopsWithinASecondOfSigintEvenAtOneFramePerSecond) {
   ChildProcess viewer({kViewer, "--headless", "--domain", "152", "--fps", "1", "--duration", "60"});
-  std::this_thread::sleep_for(1500ms);
+  bus::Participant dds{152};
+  bus::Reader<tachi_msg_NodeStatus> status{dds, bus::topics::node_status};
+  // The viewer is in its loop once it publishes a heartbeat.
+  ASSERT_TRUE(tachi::test::wait_for_status(status, "tachi-viewer", [](const auto&) { return true; }, 20s)) << viewer.err();
   const auto sent = std::chrono::steady_clock::now();
   viewer.signal(SIGINT);
   EXPECT_EQ(viewer.wait(3s), 0) << viewer.err();
@@ -223,13 +238,23 @@ TEST(ViewerCli, FollowsASimulatorRestart) {
   }
   strokes.write(sample(41, 0.7f, false));
   ASSERT_TRUE(cuts.wait_for_data(10s)) << first->err();
-  std::this_thread::sleep_for(2s);  // the piece falls away
   first->signal(SIGINT);
   EXPECT_EQ(first->wait(10s), 0);
 
-  // A new simulator: uncut cloth, topology version back to 0. The viewer shows it whole again.
+  // A new simulator: uncut cloth, topology version back to 0. The viewer shows it whole again: it has
+  // the new simulator's topology, and has drawn 30 frames since.
+  bus::Reader<tachi_msg_ClothTopology> topologies{dds, bus::topics::cloth_topology};
+  bus::Reader<tachi_msg_NodeStatus> status{dds, bus::topics::node_status};
+  topologies.take();
   ChildProcess second(sim_args);
-  std::this_thread::sleep_for(3s);
+  bool uncut = false;
+  for (const auto deadline = std::chrono::steady_clock::now() + 20s; !uncut && std::chrono::steady_clock::now() < deadline;) {
+    topologies.wait_for_data(1s);
+    for (const auto& t : topologies.take()) uncut = uncut || t->version == 0;
+  }
+  ASSERT_TRUE(uncut) << second.err();
+  const double frames_now = tachi::test::latest_metric(status, "tachi-viewer", "frames", 10s).value_or(0);
+  ASSERT_TRUE(tachi::test::wait_for_metric(status, "tachi-viewer", "frames", frames_now + 30, 20s)) << viewer.err();
   viewer.signal(SIGINT);
   ASSERT_EQ(viewer.wait(3s), 0) << viewer.err();
   const cv::Mat last = cv::imread(png);

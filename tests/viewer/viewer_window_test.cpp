@@ -3,6 +3,7 @@
 // xdotool with --mouse makes the real tachi-sim cut the cloth along the dragged line (seed 001 sec. 3).
 // Domain ids 155-159 (docs/testing.md).
 #include "viewer_process.hpp"
+#include "node_status.hpp"
 #include "process.hpp"
 #include "scratch_dir.hpp"
 #include "tachi/bus/topics.hpp"
@@ -13,6 +14,7 @@
 #include <cmath>
 #include <csignal>
 #include <filesystem>
+#include <functional>
 #include <regex>
 #include <thread>
 
@@ -105,6 +107,29 @@ bool tools_present() {
 // Light cloth pixels (front shade) vs the dark background.
 bool is_cloth(const cv::Vec3b& p) { return p[0] > 120 && p[1] > 110 && p[2] > 90; }
 
+// Polls `done` until it holds or `timeout` passes (what a window shows changes when Qt and X get to it,
+// with no event a test can wait on).
+bool eventually(const std::function<bool()>& done, std::chrono::milliseconds timeout) {
+  for (const auto deadline = std::chrono::steady_clock::now() + timeout; std::chrono::steady_clock::now() < deadline;) {
+    if (done()) return true;
+    std::this_thread::sleep_for(50ms);
+  }
+  return done();
+}
+
+// Waits until the viewer has drawn `frames` more frames than it had (its heartbeat's "frames" figure).
+bool frames_drawn(bus::Reader<tachi_msg_NodeStatus>& status, double frames) {
+  const double now = tachi::test::latest_metric(status, "tachi-viewer", "frames", 10s).value_or(0);
+  return tachi::test::wait_for_metric(status, "tachi-viewer", "frames", now + frames, 20s).has_value();
+}
+
+// Waits until the viewer has the cloth (its heartbeat no longer says it waits for one) and drew it.
+bool viewer_has_cloth(bus::Reader<tachi_msg_NodeStatus>& status) {
+  return tachi::test::wait_for_status(status, "tachi-viewer", [](const tachi_msg_NodeStatus& s) {
+    return std::string(s.detail).empty() && tachi::test::metric(s, "frames").value_or(0) > 0;
+  }, 20s) && frames_drawn(status, 2);
+}
+
 }  // namespace
 
 TEST(ViewerWindow, FitsASmallScreenShowsTheClothAndSavesASnapshotOnAKey) {
@@ -114,17 +139,16 @@ TEST(ViewerWindow, FitsASmallScreenShowsTheClothAndSavesASnapshotOnAKey) {
   const std::string domain = "155";
   ChildProcess sim({kSim, "--grid", "16", "--pin", "top-edge", "--domain", domain, "--duration", "30"});
   ChildProcess viewer({kViewer, "--domain", domain, "--size", "1000", "--snapshot-dir", dir.path().string()}, display.env());
+  bus::Participant dds{155};
+  bus::Reader<tachi_msg_NodeStatus> status{dds, bus::topics::node_status};
   const std::string window = display.viewer_window();
   ASSERT_FALSE(window.empty()) << viewer.err();
-  std::this_thread::sleep_for(2s);  // the cloth arrives and is drawn
+  ASSERT_TRUE(viewer_has_cloth(status)) << viewer.err();
 
   // Qt applies the fitted size asynchronously (seen once in a loaded ctest -j2 run: still 1000 px after
   // 2 s): the settled geometry is what a user sees, so it is read again for up to 3 s more.
-  cv::Rect where = display.geometry(window);
-  for (int i = 0; i < 30 && where.height > 700; ++i) {
-    std::this_thread::sleep_for(100ms);
-    where = display.geometry(window);
-  }
+  cv::Rect where;
+  eventually([&] { return (where = display.geometry(window)).height <= 700; }, 3s);
   EXPECT_LE(where.height, 700) << "a 1000 px window is shrunk to the 700 px screen";
   EXPECT_GT(where.height, 400);
   EXPECT_LE(where.br().y, 700);
@@ -139,7 +163,7 @@ TEST(ViewerWindow, FitsASmallScreenShowsTheClothAndSavesASnapshotOnAKey) {
 
   // Resized, the window draws at its new size: the cloth is again at the centre of the smaller side.
   display.run({kXdotool, "windowsize", "--sync", window, "500", "400"});
-  std::this_thread::sleep_for(1s);
+  ASSERT_TRUE(frames_drawn(status, 5)) << viewer.err();
   const cv::Rect resized = display.geometry(window);
   const cv::Mat small_shot = display.screenshot(dir / "resized.png");
   ASSERT_FALSE(small_shot.empty());
@@ -160,15 +184,13 @@ TEST(ViewerWindow, FitsASmallScreenShowsTheClothAndSavesASnapshotOnAKey) {
   };
   EXPECT_LT(white_text(small_shot), 20);
   display.run({kXdotool, "windowfocus", "--sync", window, "key", "h"});
-  std::this_thread::sleep_for(500ms);
-  EXPECT_GT(white_text(display.screenshot(dir / "help.png")), 60) << "the key list is shown";
+  EXPECT_TRUE(eventually([&] { return white_text(display.screenshot(dir / "help.png")) > 60; }, 5s)) << "the key list is shown";
 
   display.run({kXdotool, "mousemove", "--window", window, "100", "100"});
   EXPECT_TRUE(display.pointer_visible()) << "without --mouse the system pointer stays";
 
   display.run({kXdotool, "windowfocus", "--sync", window, "key", "p"});
-  for (int i = 0; i < 40 && !std::filesystem::exists(dir / "tachi_snapshot_1.png"); ++i) std::this_thread::sleep_for(50ms);
-  EXPECT_TRUE(std::filesystem::exists(dir / "tachi_snapshot_1.png")) << viewer.err();
+  EXPECT_TRUE(eventually([&] { return std::filesystem::exists(dir / "tachi_snapshot_1.png"); }, 5s)) << viewer.err();
   display.run({kXdotool, "windowfocus", "--sync", window, "key", "q"});
   EXPECT_EQ(viewer.wait(5s), 0) << viewer.err();
   sim.signal(SIGINT);
@@ -186,15 +208,15 @@ TEST(ViewerWindow, AMouseDragCutsTheClothAlongTheDraggedLine) {
   bus::Reader<tachi_msg_StrokeSample> strokes{dds, bus::topics::stroke};
   bus::Reader<tachi_msg_ClothState> states{dds, bus::topics::cloth_state};
   bus::Reader<tachi_msg_ClothTopology> topologies{dds, bus::topics::cloth_topology};
+  bus::Reader<tachi_msg_NodeStatus> status{dds, bus::topics::node_status};
   const std::string window = display.viewer_window();
   ASSERT_FALSE(window.empty()) << viewer.err();
   ASSERT_TRUE(states.wait_for_data(20s)) << sim.err();
-  std::this_thread::sleep_for(1500ms);  // the viewer has the cloth to cast the cursor onto
+  ASSERT_TRUE(viewer_has_cloth(status)) << viewer.err();  // the cloth to cast the cursor onto
 
   // Seed 001: the blade image drawn at the cursor replaces the system pointer.
   display.run({kXdotool, "mousemove", "--window", window, "100", "100"});
-  std::this_thread::sleep_for(300ms);
-  EXPECT_FALSE(display.pointer_visible());
+  EXPECT_TRUE(eventually([&] { return !display.pointer_visible(); }, 5s));
 
   // Drag from left of the cloth to right of it at y = -0.1 m: grid row (0.5 + 0.1) * 15 = 9.
   const cv::Rect where = display.geometry(window);
@@ -225,25 +247,27 @@ TEST(ViewerWindow, AMouseDragCutsTheClothAlongTheDraggedLine) {
   EXPECT_EQ(sensor, 1000u) << "the cut names the mouse blade as its hand source";
   for (const auto& [u, v] : line) EXPECT_NEAR(v, 9, 1) << "cell (" << u << ", " << v << ") is off the dragged line";
 
-  // Whatever the cut mode: the cloth parted along row 9 within a cell. A second later every particle of
-  // rows 0-7 still hangs where it was and every particle of rows 11-15 has fallen away.
-  std::this_thread::sleep_for(1s);
-  (void)states.take();
-  ASSERT_TRUE(states.wait_for_data(5s));
-  const auto latest = states.take();
-  const auto shapes = topologies.take();
-  ASSERT_FALSE(latest.empty());
-  ASSERT_FALSE(shapes.empty());
-  const tachi_msg_ClothState& now = *latest.back();
-  const tachi_msg_ClothTopology& shape = *shapes.back();
+  // Whatever the cut mode: the cloth parted along row 9 within a cell. Soon every particle of rows 0-7
+  // still hangs where it was and every particle of rows 11-15 has fallen away.
   int hanging = 0, fallen = 0, misplaced = 0;
-  for (std::uint32_t i = 0; i < shape.particle_grid._length && 3 * i + 1 < now.positions._length; ++i) {
-    const int v = shape.particle_grid._buffer[i].v;
-    const float rest_y = 0.5f - static_cast<float>(v) / 15.0f;
-    const float y = now.positions._buffer[3 * i + 1];
-    if (v <= 7) (std::abs(y - rest_y) < 0.2f ? hanging : misplaced)++;
-    if (v >= 11) (y < rest_y - 0.5f ? fallen : misplaced)++;
-  }
+  std::vector<bus::Owned<tachi_msg_ClothTopology>> shapes;
+  const auto parted = [&] {
+    for (auto& t : topologies.take()) shapes.push_back(std::move(t));
+    const auto latest = states.take();
+    if (latest.empty() || shapes.empty()) return false;
+    const tachi_msg_ClothState& now = *latest.back();
+    const tachi_msg_ClothTopology& shape = *shapes.back();
+    hanging = fallen = misplaced = 0;
+    for (std::uint32_t i = 0; i < shape.particle_grid._length && 3 * i + 1 < now.positions._length; ++i) {
+      const int v = shape.particle_grid._buffer[i].v;
+      const float rest_y = 0.5f - static_cast<float>(v) / 15.0f;
+      const float y = now.positions._buffer[3 * i + 1];
+      if (v <= 7) (std::abs(y - rest_y) < 0.2f ? hanging : misplaced)++;
+      if (v >= 11) (y < rest_y - 0.5f ? fallen : misplaced)++;
+    }
+    return misplaced == 0 && hanging >= 8 * 16 && fallen >= 5 * 16;
+  };
+  eventually(parted, 10s);
   EXPECT_EQ(misplaced, 0);
   EXPECT_GE(hanging, 8 * 16);
   EXPECT_GE(fallen, 5 * 16);

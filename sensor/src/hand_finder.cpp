@@ -215,6 +215,8 @@ struct HandFinder::Impl {
                        cv::Point seed_cell, Palm& palm, int grow);
   int touched = 0;
   bool reaches_back(cv::Point seed, std::uint16_t near_raw);
+  bool is_joint(cv::Point seed, std::uint16_t near_raw);
+  std::vector<cv::Point> slab;  // is_joint's cells 5-10 cm behind the candidate
   /// A plane (camera frame, metres) through the readings under a mask.
   struct Plane {
     Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
@@ -926,6 +928,63 @@ bool HandFinder::Impl::reaches_back(cv::Point seed, std::uint16_t near_raw) {
   return false;
 }
 
+/// Whether the candidate at grid cell `seed` (nearest reading `near_raw`) is a limb's joint rather
+/// than its end: on the surface connected to it without a depth jump, the cells 5-10 cm behind it
+/// form two separate groups (an elbow pointing at the camera, with the upper arm and the forearm
+/// running back from it), where a hand has one (its forearm; the torso behind a hand held against
+/// it is one ring).
+bool HandFinder::Impl::is_joint(cv::Point seed, std::uint16_t near_raw) {
+  constexpr float kStepM = 0.03f;
+  const float z0 = model.metres(near_raw);
+  const float slab_near = z0 + 0.05f, slab_far = z0 + 0.10f;
+  if (visit_generation > 0xfffffff0u) {  // three generations are used here; none may wrap to 0
+    std::fill(visited.begin(), visited.end(), 0u);
+    visit_generation = 0;
+  }
+  ++visit_generation;
+  const auto at = [](cv::Point p) { return static_cast<std::size_t>(p.y) * kGridW + static_cast<std::size_t>(p.x); };
+  queue.clear();
+  slab.clear();
+  visited[at(seed)] = visit_generation;
+  queue.push_back(seed);
+  for (std::size_t head = 0; head < queue.size(); ++head) {
+    const cv::Point c = queue[head];
+    const float zc = model.metres(grid.at<std::uint16_t>(c));
+    if (zc >= slab_near) slab.push_back(c);
+    for (int dy = -1; dy <= 1; ++dy)
+      for (int dx = -1; dx <= 1; ++dx) {
+        const cv::Point n{c.x + dx, c.y + dy};
+        if (n.x < 0 || n.y < 0 || n.x >= kGridW || n.y >= kGridH || visited[at(n)] == visit_generation) continue;
+        const std::uint16_t d = grid.at<std::uint16_t>(n);
+        if (d >= kNoReading) continue;
+        const float zn = model.metres(d);
+        if (zn <= 0 || std::abs(zn - zc) > kStepM || zn > slab_far) continue;
+        visited[at(n)] = visit_generation;
+        queue.push_back(n);
+      }
+  }
+  // Groups of the slab's cells (8-connected among themselves), those of 3 cells or more.
+  const std::uint32_t in_slab = ++visit_generation, grouped = ++visit_generation;
+  for (const auto& c : slab) visited[at(c)] = in_slab;
+  int groups = 0;
+  for (const auto& start : slab) {
+    if (visited[at(start)] != in_slab) continue;
+    queue.clear();
+    queue.push_back(start);
+    visited[at(start)] = grouped;
+    for (std::size_t head = 0; head < queue.size(); ++head)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx) {
+          const cv::Point n{queue[head].x + dx, queue[head].y + dy};
+          if (n.x < 0 || n.y < 0 || n.x >= kGridW || n.y >= kGridH || visited[at(n)] != in_slab) continue;
+          visited[at(n)] = grouped;
+          queue.push_back(n);
+        }
+    if (queue.size() >= 3 && ++groups >= 2) return true;
+  }
+  return false;
+}
+
 /// Acquisition without a background: the nearest readings of the grid in turn (up to
 /// kCandidates regions), each taken with its depth band as a hand if it is palm-shaped, clear of the
 /// border, and an arm's end (reaches_back). Finds a hand held still since the first frame, which
@@ -1065,6 +1124,7 @@ HandObservation HandFinder::Impl::find(std::span<const std::uint16_t> raw) {
   bool found = false;
   if (chosen != 0) {
     const std::uint16_t near_raw = nearest[static_cast<std::size_t>(chosen)];
+    const cv::Point seed = nearest_at[static_cast<std::size_t>(chosen)];
     const std::uint16_t far_raw = band_limit[near_raw];
     // The hand's cells: the chosen component within the depth band; their bounding box is the ROI.
     int x0 = kGridW, y0 = kGridH, x1 = -1, y1 = -1;
@@ -1082,7 +1142,6 @@ HandObservation HandFinder::Impl::find(std::span<const std::uint16_t> raw) {
     cv::compare(labels, chosen, arm, cv::CMP_EQ);
     cv::dilate(arm, arm, kernel3);
     excluded = true;
-    const cv::Point seed = nearest_at[static_cast<std::size_t>(chosen)];
     const cv::Rect cells(x0, y0, x1 - x0 + 1, y1 - y0 + 1);
     if (measure(raw, cells, near_raw, seed, palm)) {
       previous_cell = {static_cast<int>(palm.u) / kStep, static_cast<int>(palm.v) / kStep};
@@ -1092,7 +1151,8 @@ HandObservation HandFinder::Impl::find(std::span<const std::uint16_t> raw) {
       found = palm_accepted(palm) && !jump &&
               (continuing || (palm.radius_m <= params.max_new_palm_radius_m &&
                               (palm.z <= params.max_acquire_depth_m ||
-                               (palm.z <= params.max_track_depth_m && reaches_back(seed, near_raw)))));
+                               (palm.z <= params.max_track_depth_m && reaches_back(seed, near_raw))) &&
+                              !is_joint(seed, near_raw)));
       if (jump || (!found && !continuing)) tracking = false;
     } else {
       tracking = false;

@@ -43,6 +43,7 @@ constexpr double kTipQuantile = 0.995;       // the far end: robust to a few str
 constexpr double kEdgeQuantile = 0.99;       // the palm's far edge, likewise
 constexpr double kPalmHalfLengthM = 0.045;   // the palm spans this either side of its centre along the hand
 constexpr double kArmSearchM = 0.25;         // the forearm: the surface that runs on from the hand, this near it
+constexpr double kFrontSurfaceM = 0.02;     // a candidate's front surface (find_arm_end's border test): a palm is flat within ~1 cm
 constexpr double kSurfaceStepM = 0.03;       // a step between grid neighbours on one surface (as reaches_back)
 constexpr int kMinArmCells = 3;              // fewer: which end is the wrist is not known, no estimate
 constexpr int kMinBorderReadings = 5;        // a hand leaving the image: this many readings at its border
@@ -145,6 +146,7 @@ struct HandFinder::Impl {
   HandFinderParams params;
   std::array<std::uint16_t, 2048> foreground_below{};  // raw < this[bg] means foreground
   std::array<std::uint16_t, 2048> band_limit{};        // hand band: raw <= this[nearest raw]
+  std::array<std::uint16_t, 2048> front_limit{};       // a candidate's front surface: raw <= this[nearest raw]
   // Per cell: the nearest depth that has stayed put for a while (what "static" means here: the
   // scene at start, furniture, a resting arm), the farthest depth seen (fallback where nothing was
   // stable yet), and the current run of steady readings.
@@ -157,7 +159,7 @@ struct HandFinder::Impl {
   cv::Mat grid = cv::Mat(kGridH, kGridW, CV_16U);
   cv::Mat fg = cv::Mat(kGridH, kGridW, CV_8U);
   cv::Mat fg_open, labels, arm;
-  cv::Mat candidate_mask, band_cells, band_region;  // find_arm_end's candidates
+  cv::Mat candidate_mask, band_cells, band_region, front_cells;  // find_arm_end's candidates
   std::vector<std::uint16_t> nearest;  // per component: nearest reading, and where
   std::vector<cv::Point> nearest_at;
   std::vector<int> area;  // per component: cells
@@ -180,6 +182,7 @@ struct HandFinder::Impl {
       const double z = model.metres(static_cast<std::uint16_t>(raw));
       foreground_below[raw] = raw_limit(z > 0 ? z - params.foreground_m : 0.0, false);
       band_limit[raw] = raw_limit(z > 0 ? z + params.hand_depth_band_m : 0.0, true);
+      front_limit[raw] = raw_limit(z > 0 ? z + kFrontSurfaceM : 0.0, true);
     }
   }
 
@@ -212,6 +215,8 @@ struct HandFinder::Impl {
                        cv::Point seed_cell, Palm& palm, int grow);
   int touched = 0;
   bool reaches_back(cv::Point seed, std::uint16_t near_raw);
+  bool is_joint(cv::Point seed, std::uint16_t near_raw);
+  std::vector<cv::Point> slab;  // is_joint's cells 5-10 cm behind the candidate
   /// A plane (camera frame, metres) through the readings under a mask.
   struct Plane {
     Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
@@ -252,6 +257,14 @@ struct HandFinder::Impl {
   bool find_arm_end(std::span<const std::uint16_t> raw, Palm& palm, cv::Point& seed);
   bool palm_accepted(const Palm& palm) const;
   bool jumped(const Palm& palm) const;
+  /// Whether a candidate's hand cells (the band's region, on the grid) reach the image's border
+  /// (the invalid band at the left included). A new track does not start there: what the border
+  /// cuts may be anything (the corner of a table or a box shows a palm-sized face and a side
+  /// running back like an arm), and a hand is reported only whole in view anyway.
+  bool touches_border(const cv::Rect& cells) const {
+    const int left = (params.invalid_left_columns + kStep - 1) / kStep;
+    return cells.x <= left || cells.y <= 0 || cells.x + cells.width >= kGridW || cells.y + cells.height >= kGridH;
+  }
   bool palm_sized(const Palm& palm) const {
     return palm.radius_m >= params.min_palm_radius_m && palm.radius_m <= params.max_palm_radius_m;
   }
@@ -885,7 +898,8 @@ bool HandFinder::Impl::make_plane_grid(const Roi& roi, const Plane& plane, Plane
 bool HandFinder::Impl::reaches_back(cv::Point seed, std::uint16_t near_raw) {
   constexpr float kStepM = 0.03f;
   const float z0 = model.metres(near_raw);
-  const float goal = z0 + static_cast<float>(params.arm_protrusion_m);
+  const double protrusion = z0 > params.max_acquire_depth_m ? params.far_arm_protrusion_m : params.arm_protrusion_m;
+  const float goal = z0 + static_cast<float>(protrusion);
   if (++visit_generation == 0) {
     std::fill(visited.begin(), visited.end(), 0u);
     visit_generation = 1;
@@ -910,6 +924,63 @@ bool HandFinder::Impl::reaches_back(cv::Point seed, std::uint16_t near_raw) {
         visited[at(n)] = visit_generation;
         queue.push_back(n);
       }
+  }
+  return false;
+}
+
+/// Whether the candidate at grid cell `seed` (nearest reading `near_raw`) is a limb's joint rather
+/// than its end: on the surface connected to it without a depth jump, the cells 5-10 cm behind it
+/// form two separate groups (an elbow pointing at the camera, with the upper arm and the forearm
+/// running back from it), where a hand has one (its forearm; the torso behind a hand held against
+/// it is one ring).
+bool HandFinder::Impl::is_joint(cv::Point seed, std::uint16_t near_raw) {
+  constexpr float kStepM = 0.03f;
+  const float z0 = model.metres(near_raw);
+  const float slab_near = z0 + 0.05f, slab_far = z0 + 0.10f;
+  if (visit_generation > 0xfffffff0u) {  // three generations are used here; none may wrap to 0
+    std::fill(visited.begin(), visited.end(), 0u);
+    visit_generation = 0;
+  }
+  ++visit_generation;
+  const auto at = [](cv::Point p) { return static_cast<std::size_t>(p.y) * kGridW + static_cast<std::size_t>(p.x); };
+  queue.clear();
+  slab.clear();
+  visited[at(seed)] = visit_generation;
+  queue.push_back(seed);
+  for (std::size_t head = 0; head < queue.size(); ++head) {
+    const cv::Point c = queue[head];
+    const float zc = model.metres(grid.at<std::uint16_t>(c));
+    if (zc >= slab_near) slab.push_back(c);
+    for (int dy = -1; dy <= 1; ++dy)
+      for (int dx = -1; dx <= 1; ++dx) {
+        const cv::Point n{c.x + dx, c.y + dy};
+        if (n.x < 0 || n.y < 0 || n.x >= kGridW || n.y >= kGridH || visited[at(n)] == visit_generation) continue;
+        const std::uint16_t d = grid.at<std::uint16_t>(n);
+        if (d >= kNoReading) continue;
+        const float zn = model.metres(d);
+        if (zn <= 0 || std::abs(zn - zc) > kStepM || zn > slab_far) continue;
+        visited[at(n)] = visit_generation;
+        queue.push_back(n);
+      }
+  }
+  // Groups of the slab's cells (8-connected among themselves), those of 3 cells or more.
+  const std::uint32_t in_slab = ++visit_generation, grouped = ++visit_generation;
+  for (const auto& c : slab) visited[at(c)] = in_slab;
+  int groups = 0;
+  for (const auto& start : slab) {
+    if (visited[at(start)] != in_slab) continue;
+    queue.clear();
+    queue.push_back(start);
+    visited[at(start)] = grouped;
+    for (std::size_t head = 0; head < queue.size(); ++head)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx) {
+          const cv::Point n{queue[head].x + dx, queue[head].y + dy};
+          if (n.x < 0 || n.y < 0 || n.x >= kGridW || n.y >= kGridH || visited[at(n)] != in_slab) continue;
+          visited[at(n)] = grouped;
+          queue.push_back(n);
+        }
+    if (queue.size() >= 3 && ++groups >= 2) return true;
   }
   return false;
 }
@@ -950,9 +1021,17 @@ bool HandFinder::Impl::find_arm_end(std::span<const std::uint16_t> raw, Palm& pa
     const double z = model.metres(near_raw);
     const double w_m = box.width * kStep * z / k.fx, h_m = box.height * kStep * z / k.fy;
     if (std::max(w_m, h_m) < 0.05 || std::min(w_m, h_m) > 0.35) continue;
-    if (z > params.max_acquire_depth_m) continue;  // nor here: a person walking by behind the user
+    if (z > params.max_track_depth_m) continue;  // nor here: beyond the room a user stands in
+    // What the border cuts is not taken: the candidate's front surface (within kFrontSurfaceM of
+    // its nearest reading: a palm and its fingers, or the face of a box) must be whole in view. A
+    // hand held against the chest keeps the torso out of it (4-8 cm behind).
+    cv::compare(grid, front_limit[near_raw], front_cells, cv::CMP_LE);
+    cv::Rect front;
+    cv::floodFill(front_cells, seed, cv::Scalar(128), &front, cv::Scalar(0), cv::Scalar(0), 8);
     // The grid test first: it is cheap, the full-resolution measure is not.
-    if (!reaches_back(seed, near_raw) || !measure(raw, box, near_raw, seed, palm) || !palm_accepted(palm)) continue;
+    if (touches_border(front) || !reaches_back(seed, near_raw) || !measure(raw, box, near_raw, seed, palm) || !palm_accepted(palm) ||
+        palm.radius_m > params.max_new_palm_radius_m)
+      continue;
     band_region.copyTo(arm);
     cv::dilate(arm, arm, kernel3);
     seed_out = seed;
@@ -1045,6 +1124,7 @@ HandObservation HandFinder::Impl::find(std::span<const std::uint16_t> raw) {
   bool found = false;
   if (chosen != 0) {
     const std::uint16_t near_raw = nearest[static_cast<std::size_t>(chosen)];
+    const cv::Point seed = nearest_at[static_cast<std::size_t>(chosen)];
     const std::uint16_t far_raw = band_limit[near_raw];
     // The hand's cells: the chosen component within the depth band; their bounding box is the ROI.
     int x0 = kGridW, y0 = kGridH, x1 = -1, y1 = -1;
@@ -1062,13 +1142,17 @@ HandObservation HandFinder::Impl::find(std::span<const std::uint16_t> raw) {
     cv::compare(labels, chosen, arm, cv::CMP_EQ);
     cv::dilate(arm, arm, kernel3);
     excluded = true;
-    const cv::Point seed = nearest_at[static_cast<std::size_t>(chosen)];
-    if (measure(raw, cv::Rect(x0, y0, x1 - x0 + 1, y1 - y0 + 1), near_raw, seed, palm)) {
+    const cv::Rect cells(x0, y0, x1 - x0 + 1, y1 - y0 + 1);
+    if (measure(raw, cells, near_raw, seed, palm)) {
       previous_cell = {static_cast<int>(palm.u) / kStep, static_cast<int>(palm.v) / kStep};
       tracking = palm_sized(palm);  // keep following an arm whose palm is at the edge
       // A new track does not start on a person walking by behind the user.
       const bool jump = jumped(palm);
-      found = palm_accepted(palm) && (continuing || palm.z <= params.max_acquire_depth_m) && !jump;
+      found = palm_accepted(palm) && !jump &&
+              (continuing || (palm.radius_m <= params.max_new_palm_radius_m &&
+                              (palm.z <= params.max_acquire_depth_m ||
+                               (palm.z <= params.max_track_depth_m && reaches_back(seed, near_raw))) &&
+                              !is_joint(seed, near_raw)));
       if (jump || (!found && !continuing)) tracking = false;
     } else {
       tracking = false;

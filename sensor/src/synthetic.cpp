@@ -19,7 +19,6 @@ namespace {
 
 using Vec3 = Eigen::Vector3d;
 
-constexpr double kWallZ = 2.8;
 constexpr double kProjectorBaseline = 0.075;  // IR projector to the camera's right (+x)
 constexpr double kUpperArm = 0.31;
 constexpr double kForearm = 0.28;
@@ -37,6 +36,14 @@ struct Primitive {
   Vec3 radii;     // ellipsoid radii; sphere/capsule radius in x; disc half-axes in x (along u), y (along v)
   Vec3 u, v, n;   // disc axes and normal
 };
+
+/// SplitMix64's output function (Steele, Lea & Flood 2014): a well-mixed 64-bit hash.
+std::uint64_t splitmix64(std::uint64_t x) {
+  x += 0x9E3779B97F4A7C15ULL;
+  x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ULL;
+  x = (x ^ (x >> 27)) * 0x94D049BB133111EBULL;
+  return x ^ (x >> 31);
+}
 
 /// Ray (origin o, unit direction d) against one primitive; returns t > 0 or -1.
 double intersect(const Primitive& p, const Vec3& o, const Vec3& d) {
@@ -256,7 +263,9 @@ struct SyntheticScene::Impl {
   std::array<std::vector<Tremor>, 3> tremor;
   std::uint64_t frames = 0;
 
-  static Vec3 rest_palm() { return {-0.27, 0.72, 1.40}; }
+  /// -1: the active arm is the user's right (camera left, x < 0); +1: the left.
+  double side() const { return spec.left_handed ? 1.0 : -1.0; }
+  Vec3 rest_palm() const { return Vec3(side() * 0.27, 0.72, 1.40) + spec.user_offset; }
 
   Vec3 intended_at(double t) const { return pchip(spec.path, path_points, t); }
 
@@ -273,6 +282,12 @@ struct SyntheticScene::Impl {
     return std::clamp((rest_palm() - p).norm() / 0.3, 0.0, 1.0);
   }
 
+  /// How far the hand is off its resting pose: more than 5 cm is raised (a tracked point while it
+  /// hangs is a capture), 15 cm lifted (for the bundled user that is above the image's bottom edge;
+  /// a far user's hanging hand is in view, and only a lifted one is a hand to find).
+  double off_rest(double t) const { return (rest_palm() - intended_at(t)).norm();
+  }
+
   void render_view(const std::vector<Primitive>& prims, const Vec3& origin, std::vector<float>& z,
                    std::vector<std::uint8_t>* labels) const {
     std::fill(z.begin(), z.end(), std::numeric_limits<float>::infinity());
@@ -281,7 +296,7 @@ struct SyntheticScene::Impl {
     // The wall: a plane everywhere.
     for (int i = 0; i < kDepthPixels; ++i) {
       const Vec3& d = rays[static_cast<std::size_t>(i)];
-      const double t = (kWallZ - origin.z()) / d.z();
+      const double t = (spec.wall_z - origin.z()) / d.z();
       z[static_cast<std::size_t>(i)] = static_cast<float>(t * d.z());
       if (labels) (*labels)[static_cast<std::size_t>(i)] = kWall;
     }
@@ -330,36 +345,40 @@ struct SyntheticScene::Impl {
     std::vector<Primitive> prims;
     const Vec3 sway(0.010 * std::sin(2 * std::numbers::pi * 0.31 * t), 0.004 * std::sin(2 * std::numbers::pi * 0.47 * t),
                     0.008 * std::sin(2 * std::numbers::pi * 0.23 * t + 1.0));
-    Vec3 shoulder = Vec3(-0.19, 0.0, 1.44) + sway;
+    const double s = side();
+    const Vec3 user = spec.user_offset;
+    Vec3 shoulder = Vec3(s * 0.19, 0.0, 1.44) + user + sway;
     // Hand frame: n toward the sensor, w along the fingers, r across the palm.
     const double deg = std::numbers::pi / 180.0;
     const Eigen::Matrix3d rot = (Eigen::AngleAxisd(spec.palm_yaw_deg * deg, Vec3::UnitY()) *
                                  Eigen::AngleAxisd(spec.palm_pitch_deg * deg, Vec3::UnitX()) *
                                  Eigen::AngleAxisd(spec.palm_roll_deg * deg, Vec3::UnitZ()))
                                     .toRotationMatrix();
-    const Vec3 n = rot * Vec3(0, 0, -1), w = rot * Vec3(0, -1, 0), r = w.cross(n);
+    const Vec3 n = rot * Vec3(0, 0, -1), w = rot * Vec3(0, -1, 0), r = -s * w.cross(n);  // r: toward the thumb
     const Vec3 wrist = palm - 0.055 * w - 0.034 * n;
     // The body leans toward a target out of reach (a person steps or leans in).
-    const double reach = kUpperArm + kForearm - 0.01;
+    const double upper_arm = kUpperArm * spec.arm_scale, forearm = kForearm * spec.arm_scale;
+    const double reach = upper_arm + forearm - 0.01;
     Vec3 lean = Vec3::Zero();
     if (const double d = (wrist - shoulder).norm(); d > reach) lean = (wrist - shoulder).normalized() * (d - reach);
     lean.y() = 0;
-    const Vec3 body = sway + lean;
-    shoulder = Vec3(-0.19, 0.0, 1.44) + body;
+    const Vec3 body = sway + lean + user;
+    shoulder = Vec3(s * 0.19, 0.0, 1.44) + body;
     // Torso, neck, head, the hanging arm.
     prims.push_back({Primitive::Ellipsoid, kBody, Vec3(0, 0.30, 1.47) + body, Vec3::Zero(), Vec3(0.18, 0.34, 0.11), {}, {}, {}});
     prims.push_back(capsule(kBody, Vec3(0, -0.20, 1.47) + body, Vec3(0, 0.0, 1.47) + body, 0.05));
     prims.push_back(sphere(kBody, Vec3(0, -0.30, 1.47) + body, 0.10));
-    const Vec3 ls = Vec3(0.19, 0.0, 1.44) + body, le = Vec3(0.23, 0.31, 1.46) + body, lw = Vec3(0.25, 0.58, 1.43) + body;
+    const Vec3 ls = Vec3(-s * 0.19, 0.0, 1.44) + body, le = Vec3(-s * 0.23, 0.31, 1.46) + body,
+               lw = Vec3(-s * 0.25, 0.58, 1.43) + body;
     prims.push_back(capsule(kBody, ls, le, 0.045));
     prims.push_back(capsule(kBody, le, lw, 0.033));
-    prims.push_back(sphere(kBody, lw + Vec3(0.01, 0.1, -0.01), 0.045));
+    prims.push_back(sphere(kBody, lw + Vec3(-s * 0.01, 0.1, -0.01), 0.045));
     // Active arm: two-bone IK with the elbow pointing down and out.
     const double d = std::min((wrist - shoulder).norm(), reach);
     const Vec3 dir = (wrist - shoulder).normalized();
-    const double a = (kUpperArm * kUpperArm - kForearm * kForearm + d * d) / (2 * d);
-    const double h = std::sqrt(std::max(0.0, kUpperArm * kUpperArm - a * a));
-    Vec3 pole = Vec3(-0.4, 1.0, 0.25);
+    const double a = (upper_arm * upper_arm - forearm * forearm + d * d) / (2 * d);
+    const double h = std::sqrt(std::max(0.0, upper_arm * upper_arm - a * a));
+    Vec3 pole = Vec3(s * 0.4, 1.0, 0.25);
     pole = (pole - pole.dot(dir) * dir).normalized();
     const Vec3 elbow = shoulder + a * dir + h * pole;
     const Vec3 wrist_reached = shoulder + d * dir;
@@ -389,8 +408,10 @@ struct SyntheticScene::Impl {
     if (spec.second_person) {
       // Walks behind the user from left to right at 0.6 m/s, arms hanging, swinging a little.
       const double duration = spec.path.back().t;
-      const Vec3 c(-0.9 + 1.8 * t / std::max(duration, 1e-3), 0.0, spec.second_person_z);
-      const double swing = 0.06 * std::sin(2 * std::numbers::pi * 0.9 * t);
+      const Vec3 c = spec.second_person_standing
+                         ? Vec3(spec.second_person_x + 0.01 * std::sin(2 * std::numbers::pi * 0.27 * t), 0.0, spec.second_person_z)
+                         : Vec3(-0.9 + 1.8 * t / std::max(duration, 1e-3), 0.0, spec.second_person_z);
+      const double swing = spec.second_person_standing ? 0.0 : 0.06 * std::sin(2 * std::numbers::pi * 0.9 * t);
       prims.push_back({Primitive::Ellipsoid, kBody, c + Vec3(0, 0.30, 0), Vec3::Zero(), Vec3(0.17, 0.34, 0.11), {}, {}, {}});
       prims.push_back(sphere(kBody, c + Vec3(0, -0.30, 0), 0.10));
       for (const double side : {-1.0, 1.0}) {
@@ -400,6 +421,13 @@ struct SyntheticScene::Impl {
     }
     if (spec.distractor && t >= spec.distractor_from_s - 1e-9)
       prims.push_back({Primitive::Box, kDistractor, Vec3(0.28, 0.12, 0.66), Vec3(0.46, 0.60, 0.80), {}, {}, {}, {}});
+    for (const auto& o : spec.objects) {
+      if (t < o.from_s - o.slide_s - 1e-9) continue;
+      const double left = o.slide_s > 0 ? std::clamp((o.from_s - t) / o.slide_s, 0.0, 1.0) : 0.0;
+      const double eased = left * left * (3 - 2 * left);  // starts and stops gently
+      const Vec3 shift = eased * o.slide_from;
+      prims.push_back({Primitive::Box, kDistractor, o.min + shift, o.max + shift, {}, {}, {}, {}});
+    }
     return prims;
   }
 
@@ -435,7 +463,7 @@ SyntheticScene::SyntheticScene(ScenarioSpec spec, DepthModel model) : impl_(new 
   m.spec = std::move(spec);
   m.model = model;
   m.rng.seed(m.spec.seed);
-  for (const auto& k : m.spec.path) m.path_points.push_back(k.rest ? Impl::rest_palm() : k.p);
+  for (const auto& k : m.spec.path) m.path_points.push_back(k.rest ? m.rest_palm() : k.p);
   m.frames = static_cast<std::uint64_t>(std::floor(m.spec.path.back().t * m.spec.fps + 1e-9)) + 1;
   m.rays.resize(kDepthPixels);
   const auto& k = model.intrinsics();
@@ -455,6 +483,7 @@ SyntheticScene::SyntheticScene(ScenarioSpec spec, DepthModel model) : impl_(new 
 SyntheticScene::~SyntheticScene() { delete impl_; }
 std::uint64_t SyntheticScene::frame_count() const noexcept { return impl_->frames; }
 const ScenarioSpec& SyntheticScene::spec() const noexcept { return impl_->spec; }
+Eigen::Vector3d SyntheticScene::rest_palm() const { return impl_->rest_palm(); }
 
 DepthFrame SyntheticScene::render(std::uint64_t i, GroundTruth& truth) {
   Impl& m = *impl_;
@@ -477,12 +506,24 @@ DepthFrame SyntheticScene::render(std::uint64_t i, GroundTruth& truth) {
   const auto& k = m.model.intrinsics();
   std::normal_distribution<double> noise(0.0, m.spec.noise_raw);
   std::uniform_real_distribution<double> uni(0.0, 1.0);
+  const std::uint64_t frame_key = splitmix64(m.spec.seed ^ (i * 0xD1B54A32D192ED03ULL));
   for (int v = 0; v < kDepthHeight; ++v)
     for (int u = 0; u < kDepthWidth; ++u) {
       const std::size_t idx = static_cast<std::size_t>(v) * kDepthWidth + u;
       const double z = m.zbuf[idx];
-      const double n = noise(m.rng);  // drawn for every pixel, so the sequence does not depend on the scene
-      const double e = uni(m.rng);
+      double n, e;
+      if (m.spec.hashed_noise) {
+        // Counter-based: a hash of (seed, frame, pixel), so nothing is drawn in sequence. The
+        // Gaussian is Irwin-Hall's sum of four uniforms (unit variance, tails cut at 3.46 sigma).
+        const std::uint64_t h = splitmix64(frame_key + idx);
+        const double sum = static_cast<double>(h & 0xffff) + static_cast<double>((h >> 16) & 0xffff) +
+                           static_cast<double>((h >> 32) & 0xffff) + static_cast<double>(h >> 48);
+        n = m.spec.noise_raw * (sum / 65536.0 - 2.0) * std::sqrt(3.0);
+        e = static_cast<double>(splitmix64(h) >> 11) * 0x1.0p-53;
+      } else {
+        n = noise(m.rng);  // drawn for every pixel, so the sequence does not depend on the scene
+        e = uni(m.rng);
+      }
       if (u < m.spec.invalid_left_columns || !(z > 0.45 && z < 3.6)) continue;
       // IR shadow: the projector does not see this surface point.
       const Vec3 x = m.rays[idx] * (z / m.rays[idx].z()) - projector;
@@ -518,7 +559,10 @@ DepthFrame SyntheticScene::render(std::uint64_t i, GroundTruth& truth) {
   truth.stamp_ns = frame.stamp_ns;
   truth.palm = palm;
   truth.pixel = m.model.project(palm);
-  truth.visible = m.palm_visible(disc);
+  const double off_rest = m.off_rest(t);
+  truth.raised = off_rest > 0.05;
+  truth.rising = truth.raised && off_rest <= 0.15;
+  truth.visible = off_rest > 0.15 && m.palm_visible(disc);
   truth.intended = intended;
   return frame;
 }
@@ -540,7 +584,7 @@ std::uint64_t write_synthetic_recording(const ScenarioSpec& spec, const std::fil
     csv.precision(3);
     csv << gt.pixel.x() << ',' << gt.pixel.y() << ',' << (gt.visible ? 1 : 0) << ',';
     csv.precision(6);
-    csv << gt.intended.x() << ',' << gt.intended.y() << ',' << gt.intended.z() << '\n';
+    csv << gt.intended.x() << ',' << gt.intended.y() << ',' << gt.intended.z() << ',' << (gt.raised ? 1 : 0) << '\n';
   }
   writer.flush();
   if (!csv) throw std::runtime_error("cannot write " + (out_dir / "ground_truth.csv").string());

@@ -60,6 +60,17 @@ struct HandFinderParams {
   /// A new track starts only on a hand nearer than this: the user cuts at ~1 m in front of a body at
   /// ~1.45 m; a person walking by behind is not followed.
   double max_acquire_depth_m = 1.8;
+  /// Farther than max_acquire_depth_m, a new track starts only on an arm's end (the grid test of
+  /// arm_protrusion_m), up to this depth: a user standing 2-2.5 m away reaches out of the body, a
+  /// person walking behind the user does not (their arms hang).
+  double max_track_depth_m = 2.6;
+  /// ... and there the surface must run back this far (a far user's hand is 25-55 cm in front of
+  /// the torso; a person walking behind spans ~11 cm, or ~15 cm together with the user's arm).
+  double far_arm_protrusion_m = 0.22;
+  /// A new track starts only on a palm circle up to this radius (a whole palm holds 3.95-4.45 cm;
+  /// the front of a box, a monitor or a chair back holds more); a followed hand keeps
+  /// max_palm_radius_m.
+  double max_new_palm_radius_m = 0.052;
 };
 
 struct HandObservation {

@@ -29,6 +29,17 @@ struct Keyframe {
   bool rest = false;
 };
 
+/// A static thing of the room, an axis-aligned box (a box, a table top, a chair back, a monitor, a
+/// side wall). It is there from `from_s`; when `slide_s` > 0 it slides in over that long before,
+/// from `slide_from` (an offset, metres) to its place: an object moved in during the take.
+struct SceneObject {
+  std::string kind;
+  Eigen::Vector3d min = Eigen::Vector3d::Zero(), max = Eigen::Vector3d::Zero();
+  double from_s = 0.0;
+  double slide_s = 0.0;
+  Eigen::Vector3d slide_from = Eigen::Vector3d::Zero();
+};
+
 struct ScenarioSpec {
   std::string name;
   std::string description;
@@ -50,6 +61,18 @@ struct ScenarioSpec {
   bool fingers_together = false;  ///< fingers side by side, touching (default: spread)
   bool second_person = false;     ///< a second person walks behind the user, left to right
   double second_person_z = 2.2;   ///< their torso's depth, metres
+  // The randomized world (random_scene.hpp) sets these; the defaults are the bundled scenes' world.
+  bool second_person_standing = false;  ///< the second person stands at second_person_x instead of walking
+  double second_person_x = 0.0;
+  double wall_z = 2.8;                  ///< the back wall's depth, metres
+  Eigen::Vector3d user_offset = Eigen::Vector3d::Zero();  ///< the user moved by this (y: height, negative = taller; z: distance)
+  bool left_handed = false;             ///< the active arm is the user's left (camera right)
+  double arm_scale = 1.0;               ///< upper arm and forearm lengths times this
+  std::vector<SceneObject> objects;     ///< furniture besides the `distractor` box
+  /// Per-pixel noise from a hash of (seed, frame, pixel) instead of the sequential generator: the
+  /// same noise level at a fifth of the cost (the generator was half the render time). The bundled
+  /// scenes keep the sequence they were rendered with.
+  bool hashed_noise = false;
 };
 
 /// Reads a scenario spec (JSON, see recordings/README.md). Throws std::runtime_error naming the
@@ -62,7 +85,9 @@ struct GroundTruth {
   std::int64_t stamp_ns = 0;
   Eigen::Vector3d palm = Eigen::Vector3d::Zero();
   Eigen::Vector2d pixel = Eigen::Vector2d::Zero();
-  bool visible = false;  ///< the whole palm face is inside the image and at least 90% unoccluded
+  bool visible = false;  ///< lifted (>= 15 cm off its resting pose), the whole palm face inside the image, >= 90% unoccluded
+  bool raised = false;   ///< the hand is off its resting pose (more than 5 cm from it)
+  bool rising = false;   ///< raised but less than 15 cm: on its way up or down (whether to report it is left open)
   Eigen::Vector3d intended = Eigen::Vector3d::Zero();  ///< the path without tremor
 };
 
@@ -78,6 +103,8 @@ class SyntheticScene {
   /// Renders frame `i` (frames must be rendered in order for the noise to be reproducible).
   DepthFrame render(std::uint64_t i, GroundTruth& truth);
   const ScenarioSpec& spec() const noexcept;
+  /// Where the hand hangs at rest (camera frame): below the image for the bundled user.
+  Eigen::Vector3d rest_palm() const;
 
  private:
   struct Impl;
@@ -85,7 +112,7 @@ class SyntheticScene {
 };
 
 /// CSV header of ground_truth.csv.
-inline constexpr const char* kGroundTruthHeader = "frame,stamp_ns,x,y,z,u,v,visible,intended_x,intended_y,intended_z";
+inline constexpr const char* kGroundTruthHeader = "frame,stamp_ns,x,y,z,u,v,visible,intended_x,intended_y,intended_z,raised";
 
 /// Renders every frame of `spec` into a fakenect recording at `out_dir` (depth + accelerometer
 /// entries) and writes out_dir/ground_truth.csv. Returns the number of frames.

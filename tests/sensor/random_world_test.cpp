@@ -1,0 +1,151 @@
+#include "tachi/sensor/random_scene.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "tachi/sensor/clip_score.hpp"
+
+namespace tachi::sensor {
+namespace {
+
+TEST(RandomScene, SameSeedSameSceneOtherSeedOtherScene) {
+  const auto a = random_scenario(17), b = random_scenario(17), c = random_scenario(18);
+  ASSERT_EQ(a.path.size(), b.path.size());
+  for (std::size_t i = 0; i < a.path.size(); ++i) {
+    EXPECT_EQ(a.path[i].t, b.path[i].t);
+    EXPECT_EQ(a.path[i].p, b.path[i].p);
+  }
+  EXPECT_EQ(a.user_offset, b.user_offset);
+  EXPECT_EQ(a.objects.size(), b.objects.size());
+  EXPECT_NE(a.user_offset, c.user_offset);
+}
+
+// The distributions cover what issue 22 asks for (over the tuning range's first 300 seeds: only
+// the specs are drawn, nothing is rendered).
+TEST(RandomScene, DrawsEveryKindOfSceneTheIssueNames) {
+  int starts[3] = {0, 0, 0}, left = 0, near_objects = 0, moved_in = 0, walking = 0, standing = 0, turned = 0, tremor = 0;
+  double nearest_user = 10, farthest_user = 0;
+  for (std::uint64_t seed = 1; seed <= 300; ++seed) {
+    const auto s = random_scenario(seed);
+    ++starts[static_cast<int>(random_start(s))];
+    left += s.left_handed;
+    const double torso_z = 1.47 + s.user_offset.z();
+    nearest_user = std::min(nearest_user, torso_z);
+    farthest_user = std::max(farthest_user, torso_z);
+    double hand_min_z = 10;
+    for (const auto& k : s.path) {
+      ASSERT_TRUE(k.rest || (k.p.z() >= 0.5 && k.p.z() <= 2.5)) << "seed " << seed;
+      if (!k.rest) hand_min_z = std::min(hand_min_z, k.p.z());
+    }
+    for (std::size_t i = 1; i < s.path.size(); ++i) ASSERT_GT(s.path[i].t, s.path[i - 1].t) << "seed " << seed;
+    for (const auto& o : s.objects) {
+      near_objects += o.max.z() < hand_min_z;
+      moved_in += o.slide_s > 0;
+    }
+    walking += s.second_person && !s.second_person_standing;
+    standing += s.second_person && s.second_person_standing;
+    turned += std::abs(s.palm_yaw_deg) > 30;
+    tremor += s.jitter_m > 0;
+  }
+  EXPECT_GT(starts[0], 60);  // up from the first frame
+  EXPECT_GT(starts[1], 60);  // raised later
+  EXPECT_GT(starts[2], 10);  // never raised
+  EXPECT_GT(left, 10);
+  EXPECT_LT(nearest_user, 0.9);
+  EXPECT_GT(farthest_user, 2.4);
+  EXPECT_GT(near_objects, 50);
+  EXPECT_GT(moved_in, 30);
+  EXPECT_GT(walking, 20);
+  EXPECT_GT(standing, 10);
+  EXPECT_GT(turned, 20);
+  EXPECT_GT(tremor, 100);
+}
+
+TEST(RandomScene, ANeverRaisedHandIsNeverRaisedNorVisible) {
+  std::uint64_t seed = 1;
+  while (random_start(random_scenario(seed)) != HandStart::kNeverRaised) ++seed;
+  SyntheticScene scene(random_scenario(seed));
+  for (std::uint64_t i = 0; i < scene.frame_count(); i += 10) {
+    GroundTruth t;
+    scene.render(i, t);
+    EXPECT_FALSE(t.raised);
+    EXPECT_FALSE(t.visible);
+  }
+}
+
+HandObservation at(const Eigen::Vector3d& p) {
+  HandObservation h;
+  h.tracked = true;
+  h.position_m = p.cast<float>();
+  return h;
+}
+
+TEST(ClipScore, CapturedIsFarFromTheHandOrAnyPointWhenNoHandIsRaised) {
+  ClipScore score;
+  std::size_t run = 0;
+  double sum = 0;
+  GroundTruth up;
+  up.raised = up.visible = true;
+  up.palm = {0, 0, 1};
+  GroundTruth down;  // hanging: not raised
+  down.palm = {0, 0.7, 1.4};
+  score_frame(at({0, 0, 1.005}), up, score, run, sum);   // 5 mm off: fine
+  score_frame(at({0, 0.15, 1}), up, score, run, sum);    // 15 cm off: captured
+  score_frame(at({0, 0.7, 1.4}), down, score, run, sum); // on the hanging hand: captured all the same (and a phantom)
+  score_frame(at({0, 0.7, 1.4}), down, score, run, sum);
+  score_frame(HandObservation{}, down, score, run, sum); // nothing: the run ends
+  score_frame(at({0, 0.7, 1.4}), down, score, run, sum);
+  EXPECT_EQ(score.frames, 6u);
+  EXPECT_EQ(score.visible, 2u);
+  EXPECT_EQ(score.tracked_visible, 2u);
+  EXPECT_EQ(score.phantoms, 3u);
+  EXPECT_EQ(score.captured, 4u);
+  EXPECT_EQ(score.longest_captured_run, 3u);
+  EXPECT_NEAR(score.rms_m, std::sqrt((0.005 * 0.005 + 0.15 * 0.15) / 2), 1e-6);
+}
+
+TEST(ClipScore, AHandReportedWhereItIsWhileRisingIsNoPhantom) {
+  ClipScore score;
+  std::size_t run = 0;
+  double sum = 0;
+  GroundTruth rising;
+  rising.raised = rising.rising = true;
+  rising.palm = {0, 0.5, 1.3};
+  score_frame(at({0, 0.51, 1.3}), rising, score, run, sum);
+  EXPECT_EQ(score.phantoms, 0u);
+  EXPECT_EQ(score.captured, 0u);
+  score_frame(at({0, 0.1, 1.3}), rising, score, run, sum);  // 40 cm off: captured, and a phantom
+  EXPECT_EQ(score.phantoms, 1u);
+  EXPECT_EQ(score.captured, 1u);
+}
+
+TEST(Summary, FailsOnEachRateItMisses) {
+  ClipScore good;
+  good.visible = good.tracked_visible = 100;
+  good.rms_m = 0.004;
+  std::vector<ClipScore> clips(40, good);
+  EXPECT_TRUE(summarize(clips).passed);
+  auto bad_rms = clips;
+  bad_rms[0].rms_m = bad_rms[1].rms_m = bad_rms[2].rms_m = 0.02;  // 37 of 40 = 92.5% < 97%
+  EXPECT_FALSE(summarize(bad_rms).passed);
+  auto untracked = clips;
+  untracked[0].tracked_visible = 50;  // 3950 of 4000 = 98.75% < 99%
+  EXPECT_FALSE(summarize(untracked).passed);
+  auto phantom = clips;
+  phantom[3].phantoms = 1;
+  EXPECT_FALSE(summarize(phantom).passed);
+  auto captured = clips;
+  captured[5].captured = captured[5].longest_captured_run = 4;
+  EXPECT_FALSE(summarize(captured).passed);
+  captured[5].captured = captured[5].longest_captured_run = 3;
+  EXPECT_TRUE(summarize(captured).passed);
+  const auto s = summarize(bad_rms);
+  EXPECT_NEAR(s.p95_rms_m, 0.02, 1e-12);  // nearest rank: the 38th of 40 sorted values
+  EXPECT_NEAR(summarize(clips).p95_rms_m, 0.004, 1e-12);
+  ASSERT_EQ(s.failures.size(), 1u);
+}
+
+}  // namespace
+}  // namespace tachi::sensor

@@ -193,8 +193,9 @@ dds_entity_t create_writer(const Participant& participant, dds_entity_t topic, Q
 }
 
 dds_entity_t create_reader(const Participant& participant, dds_entity_t topic, QosProfile profile,
-                           const char* name) {
+                           const char* name, bool keep_all) {
   const auto qos = make_qos(profile);
+  if (keep_all) dds_qset_history(qos.get(), DDS_HISTORY_KEEP_ALL, DDS_LENGTH_UNLIMITED);
   return check(dds_create_reader(participant.handle(), topic, qos.get(), nullptr),
                std::string("create reader on topic ") + name + ": dds_create_reader");
 }

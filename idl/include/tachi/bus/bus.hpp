@@ -53,6 +53,7 @@ enum class QosProfile {
 /// A topic: its DDS name, its QoS profile and (through T) its type.
 template <class T>
 struct TopicSpec {
+  using Type = T;
   const char* name;
   QosProfile profile;
 };
@@ -92,7 +93,9 @@ class Participant {
 namespace detail {
 dds_entity_t create_topic(const Participant& participant, const dds_topic_descriptor_t* descriptor, const char* name);
 dds_entity_t create_writer(const Participant& participant, dds_entity_t topic, QosProfile profile, const char* name);
-dds_entity_t create_reader(const Participant& participant, dds_entity_t topic, QosProfile profile, const char* name);
+/// `keep_all`: the profile's reliability and durability, but every sample kept until taken (a recorder's reader).
+dds_entity_t create_reader(const Participant& participant, dds_entity_t topic, QosProfile profile, const char* name,
+                           bool keep_all = false);
 void delete_entity(dds_entity_t entity) noexcept;
 std::uint32_t matched_readers(dds_entity_t writer);
 std::uint32_t matched_writers(dds_entity_t reader);
@@ -217,8 +220,9 @@ class WaitSet {
   WaitSet(const WaitSet&) = delete;
   WaitSet& operator=(const WaitSet&) = delete;
 
-  template <class T>
-  void attach(const Reader<T>& reader) {
+  /// Any reader with a handle(): Reader<T>, SerializedReader.
+  template <class AnyReader>
+  void attach(const AnyReader& reader) {
     attach_reader(reader.handle());
   }
   /// True when at least one attached reader has data; false on timeout.

@@ -1,0 +1,167 @@
+// `tachi record` / `tachi play` / `tachi run --record` as a user runs them, with the real executables:
+// a recorded run's hand samples played into a fresh filter and simulator cut the cloth the same way,
+// and Foxglove's own MCAP reader (@mcap/core from npm, run by node) reads the file the project wrote.
+// Domain ids 140-145 (tests/launcher owns 120-149; docs/testing.md).
+#include "process.hpp"
+#include "scratch_dir.hpp"
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <filesystem>
+#include <fstream>
+#include <set>
+
+using namespace std::chrono_literals;
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+const std::string kBin = TACHI_BIN_DIR;
+const std::string kRecordings = TACHI_RECORDINGS_DIR;
+const fs::path kNpmDir = fs::path(TACHI_BINARY_DIR) / "npm_mcap";
+
+json read_json(const fs::path& path) {
+  std::ifstream in(path);
+  return in ? json::parse(in, nullptr, false) : json();
+}
+
+std::size_t depth_frames(const std::string& recording) {
+  std::ifstream in(kRecordings + "/" + recording + "/INDEX.txt");
+  std::size_t n = 0;
+  for (std::string line; std::getline(in, line);) n += line.starts_with("d-") ? 1 : 0;
+  return n;
+}
+
+std::vector<std::string> run_args(unsigned domain, const fs::path& out, std::vector<std::string> extra) {
+  std::vector<std::string> args{kBin + "/tachi", "run", "--recording", kRecordings + "/straight_cut", "--grid", "32",
+                                "--domain", std::to_string(domain), "--out", out.string(), "--headless", "--settle", "1.5",
+                                "--set", "sim.cut-mode=grid"};
+  args.insert(args.end(), extra.begin(), extra.end());
+  return args;
+}
+
+// One recorded run shared by the tests of this file (a run costs ~15 s of both cores).
+class RecordedRun : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir_ = new tachi::test::ScratchDir("tachi_record");
+    result_ = new tachi::test::RunResult(tachi::test::run(run_args(140, dir_->path() / "a", {"--record"}), 180s));
+  }
+  static void TearDownTestSuite() {
+    delete result_;
+    delete dir_;
+  }
+  static fs::path out() { return dir_->path() / "a"; }
+  static inline tachi::test::ScratchDir* dir_ = nullptr;
+  static inline tachi::test::RunResult* result_ = nullptr;
+};
+
+}  // namespace
+
+TEST_F(RecordedRun, RecordsEverySampleOfTheRun) {
+  ASSERT_EQ(result_->exit_code, 0) << result_->err;
+  const auto s = read_json(out() / "summary.json");
+  ASSERT_TRUE(s.contains("recording")) << s.dump();
+  EXPECT_EQ(s["recording"]["lost"], 0) << s["recording"];
+  EXPECT_EQ(s["recording"]["messages"]["tachi/hand/raw"], depth_frames("straight_cut")) << "one raw hand sample per depth frame";
+  EXPECT_EQ(s["recording"]["messages"]["tachi/hand/stroke"], depth_frames("straight_cut"));
+  EXPECT_EQ(s["recording"]["messages"]["tachi/cloth/cut"], s["cuts"]);
+  EXPECT_GT(s["recording"]["messages"]["tachi/cloth/state"].get<int>(), 60) << "the simulator's states";
+  EXPECT_GT(s["recording"]["messages"]["tachi/node/status"].get<int>(), 4) << "every node's heartbeats";
+}
+
+TEST_F(RecordedRun, PlayingTheRawHandIntoAFreshFilterAndSimulatorReproducesTheCut) {
+  ASSERT_EQ(result_->exit_code, 0) << result_->err;
+  const auto recorded = read_json(out() / "summary.json");
+  ASSERT_EQ(recorded["cuts"], 1) << recorded.dump();
+  // A fresh filter and simulator (no sensor), fed only the recorded tachi/hand/raw.
+  const fs::path b = dir_->path() / "b";
+  tachi::test::ChildProcess replay(run_args(141, b, {"--nodes", "filter,sim"}));
+  const auto play = tachi::test::run({kBin + "/tachi", "play", (out() / "run.mcap").string(), "--topics", "tachi/hand/raw",
+                                      "--domain", "141", "--wait", "60"},
+                                     120s);
+  ASSERT_EQ(play.exit_code, 0) << play.err;
+  EXPECT_EQ(json::parse(play.out)["published"]["tachi/hand/raw"], depth_frames("straight_cut")) << play.out;
+  ASSERT_EQ(replay.wait(120s), 0) << replay.err();
+  const auto replayed = read_json(b / "summary.json");
+  EXPECT_EQ(replayed["cuts"], recorded["cuts"]);
+  EXPECT_EQ(replayed["pieces"], recorded["pieces"]);
+  EXPECT_EQ(replayed["fallen_pieces"], recorded["fallen_pieces"]);
+  // The cut line: every cut cell of one run lies within one cell of a cut cell of the other.
+  const auto cells = [](const json& s) {
+    std::vector<std::pair<int, int>> v;
+    for (const auto& g : s["cut_line"]) v.emplace_back(g[0].get<int>(), g[1].get<int>());
+    return v;
+  };
+  const auto a_cells = cells(recorded), b_cells = cells(replayed);
+  ASSERT_FALSE(a_cells.empty());
+  ASSERT_FALSE(b_cells.empty()) << replayed.dump();
+  const auto within_a_cell = [](const auto& from, const auto& to) {
+    for (const auto& [u, v] : from) {
+      bool near = false;
+      for (const auto& [p, q] : to) near = near || (std::abs(u - p) <= 1 && std::abs(v - q) <= 1);
+      if (!near) return false;
+    }
+    return true;
+  };
+  EXPECT_TRUE(within_a_cell(a_cells, b_cells)) << recorded["cut_line"] << "\nvs\n" << replayed["cut_line"];
+  EXPECT_TRUE(within_a_cell(b_cells, a_cells)) << recorded["cut_line"] << "\nvs\n" << replayed["cut_line"];
+  EXPECT_NEAR(replayed["cut_length_m"].get<double>(), recorded["cut_length_m"].get<double>(), 1.5 / 32);
+}
+
+TEST_F(RecordedRun, FoxglovesOwnMcapReaderReadsEveryChannelSchemaAndMessage) {
+  ASSERT_EQ(result_->exit_code, 0) << result_->err;
+  if (!fs::exists(kNpmDir / "node_modules" / "@mcap" / "core")) {
+    fs::create_directories(kNpmDir);
+    const auto npm = tachi::test::run({"/usr/bin/env", "npm", "install", "--prefix", kNpmDir.string(), "--no-audit", "--no-fund",
+                                       "@mcap/core", "@foxglove/schemas", "ajv"},
+                                      300s);
+    if (npm.exit_code != 0) GTEST_SKIP() << "npm install @mcap/core failed (offline?): " << npm.err;
+  }
+  const auto node = tachi::test::run({"/usr/bin/env", "node", std::string(TACHI_SOURCE_DIR) + "/tests/launcher/mcap_check.cjs",
+                                      (out() / "run.mcap").string()},
+                                     120s, {{"NODE_PATH", (kNpmDir / "node_modules").string()}});
+  ASSERT_EQ(node.exit_code, 0) << node.err;
+  const auto r = json::parse(node.out, nullptr, false);
+  ASSERT_TRUE(r.is_object()) << node.out;
+  const auto recorded = read_json(out() / "summary.json")["recording"]["messages"];
+
+  // Every tachi topic is a channel, with its DDS type's OMG IDL schema and CDR messages.
+  const std::map<std::string, std::string> types{
+      {"tachi/hand/raw", "tachi::msg::RawHandSample"},       {"tachi/voice/command", "tachi::msg::VoiceCommand"},
+      {"tachi/hand/stroke", "tachi::msg::StrokeSample"},     {"tachi/cloth/topology", "tachi::msg::ClothTopology"},
+      {"tachi/cloth/topology_delta", "tachi::msg::ClothTopologyDelta"}, {"tachi/cloth/state", "tachi::msg::ClothState"},
+      {"tachi/cloth/cut", "tachi::msg::CutEvent"},           {"tachi/node/status", "tachi::msg::NodeStatus"},
+      {"tachi/scene/object", "tachi::msg::SceneObject"}};
+  EXPECT_EQ(r["channels"].size(), types.size()) << r["channels"];
+  for (const auto& [topic, type] : types) {
+    ASSERT_TRUE(r["channels"].contains(topic)) << topic;
+    EXPECT_EQ(r["channels"][topic]["schema"], type);
+    EXPECT_EQ(r["channels"][topic]["schemaEncoding"], "omgidl");
+    EXPECT_EQ(r["channels"][topic]["messageEncoding"], "cdr");
+    // What the recorder counted = what both of Foxglove's readers found = the file's statistics.
+    const auto n = recorded[topic].get<int>();
+    EXPECT_EQ(r["stream"].value(topic, 0), n) << topic;
+    EXPECT_EQ(r["indexed"].value(topic, 0), n) << topic;
+    EXPECT_EQ(r["statistics"]["channelMessageCounts"].value(topic, 0), n) << topic;
+  }
+  EXPECT_EQ(r["stream"]["tachi/hand/raw"], depth_frames("straight_cut"));
+  EXPECT_EQ(r["schemas"].size(), types.size()) << "one schema per type";
+  for (const auto& [id, schema] : r["schemas"].items()) EXPECT_GT(schema["bytes"].get<int>(), 1000) << "tachi.idl, whole";
+  EXPECT_EQ(r["statistics"]["schemaCount"], types.size());
+  EXPECT_EQ(r["statistics"]["channelCount"], types.size());
+  EXPECT_GE(r["chunkIndexes"].get<int>(), 1);
+  EXPECT_EQ(r["statistics"]["chunkCount"], r["chunkIndexes"]);
+  EXPECT_TRUE(r["indexedInLogTimeOrder"].get<bool>());
+}
+
+TEST(TachiRecord, RefusesAnUnknownTopicAndNamesTheSubcommandsItKnows) {
+  const auto bad_topic = tachi::test::run({kBin + "/tachi", "record", "x.mcap", "--topics", "tachi/hand/rwa", "--domain", "142"}, 30s);
+  EXPECT_EQ(bad_topic.exit_code, 2);
+  EXPECT_NE(bad_topic.err.find("--topics: unknown topic tachi/hand/rwa"), std::string::npos) << bad_topic.err;
+  const auto bad_sub = tachi::test::run({kBin + "/tachi", "hetz", "tachi/hand/raw"}, 30s);
+  EXPECT_EQ(bad_sub.exit_code, 2);
+  EXPECT_NE(bad_sub.err.find("unknown subcommand hetz"), std::string::npos) << bad_sub.err;
+  EXPECT_NE(bad_sub.err.find("record"), std::string::npos) << bad_sub.err;
+}

@@ -74,6 +74,20 @@ json effective_config(const CLI::App& run, const RunFlags& f) {
   return config;
 }
 
+// The nodes of another pipeline on this run's domain that this run would start again ("tachi-sim on
+// host h, pid 123, ..."), from DDS discovery (Cyclone announces each participant's process, host and
+// pid). Only the same nodes conflict: one pipeline split over two hosts (`--nodes`) shares a domain.
+std::string live_pipeline_nodes(const launcher::RunConfig& config) {
+  tachi::bus::Participant dds{config.domain, config.dds_config, {config.secure, "monitor"}};
+  const auto snapshot = tachi::bus::discover(dds, std::chrono::milliseconds(500));
+  std::string live;
+  for (const auto& p : snapshot.participants) {
+    if (p.self || !p.process.starts_with("tachi-") || !config.has(p.process.substr(6))) continue;
+    live += (live.empty() ? "" : ", ") + p.process + " on host " + p.host + ", pid " + p.pid;
+  }
+  return live;
+}
+
 int cmd_run(const CLI::App& run, const RunFlags& f, const fs::path& bin_dir) {
   launcher::RunConfig config;
   json effective;
@@ -94,6 +108,11 @@ int cmd_run(const CLI::App& run, const RunFlags& f, const fs::path& bin_dir) {
   }
   if (!config.recording.empty()) config.recording = fs::absolute(config.recording).string();
   tachi::common::install_stop_handlers();
+  if (const auto live = live_pipeline_nodes(config); !live.empty()) {
+    std::cerr << "tachi run: DDS domain " << config.domain << " already has a live tachi pipeline: " << live
+              << "; two pipelines on one domain would mix their samples. Stop it, or give this run another --domain\n";
+    return launcher::kRunFailure;
+  }
   if (!f.record) return launcher::run(config, {bin_dir, fs::path(TACHI_SCRIPTS_DIR) / "plot_run.py"});
 
   // --record: the whole bus of the run into <out>/run.mcap, from before the first node starts until

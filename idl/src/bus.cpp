@@ -193,9 +193,10 @@ dds_entity_t create_writer(const Participant& participant, dds_entity_t topic, Q
 }
 
 dds_entity_t create_reader(const Participant& participant, dds_entity_t topic, QosProfile profile,
-                           const char* name, bool keep_all) {
+                           const char* name, ReaderQos change) {
   const auto qos = make_qos(profile);
-  if (keep_all) dds_qset_history(qos.get(), DDS_HISTORY_KEEP_ALL, DDS_LENGTH_UNLIMITED);
+  if (change == ReaderQos::KeepAll) dds_qset_history(qos.get(), DDS_HISTORY_KEEP_ALL, DDS_LENGTH_UNLIMITED);
+  if (change == ReaderQos::Volatile) dds_qset_durability(qos.get(), DDS_DURABILITY_VOLATILE);
   return check(dds_create_reader(participant.handle(), topic, qos.get(), nullptr),
                std::string("create reader on topic ") + name + ": dds_create_reader");
 }

@@ -33,10 +33,11 @@ std::optional<Encapsulation> encapsulation(std::span<const std::byte> cdr) {
 
 }  // namespace
 
-SerializedReader::SerializedReader(const Participant& participant, const TopicInfo& topic, History history)
+SerializedReader::SerializedReader(const Participant& participant, const TopicInfo& topic, ReaderRole role)
     : topic_(topic),
       topic_entity_(detail::create_topic(participant, topic.descriptor, topic.name)),
-      reader_(detail::create_reader(participant, topic_entity_, topic.profile, topic.name, history == History::KeepAll)) {}
+      reader_(detail::create_reader(participant, topic_entity_, topic.profile, topic.name,
+                                    role == ReaderRole::Recorder ? detail::ReaderQos::KeepAll : detail::ReaderQos::Volatile)) {}
 
 SerializedReader::~SerializedReader() { detail::delete_entity(reader_); }
 

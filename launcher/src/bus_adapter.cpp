@@ -213,7 +213,7 @@ std::uint64_t echo(const bus::Participant& p, const std::string& topic, const Ec
 std::optional<TopicRate> watch_rate(const bus::Participant& participant, const bus::TopicInfo& topic, bool bandwidth,
                                     std::size_t window, std::chrono::milliseconds duration) {
   using Clock = std::chrono::steady_clock;
-  bus::SerializedReader reader{participant, topic};
+  bus::SerializedReader reader{participant, topic, bus::ReaderRole::RateMeter};
   bus::WaitSet waitset{participant};
   waitset.attach(reader);
   TopicRateWindow rates(window);

@@ -48,7 +48,7 @@ Recorder::Recorder(const bus::Participant& participant, const RecordOptions& opt
     if (!schema_ids.contains(type)) schema_ids[type] = writer_.add_schema(type, "omgidl", bus::kTachiIdl);
     channels_.push_back(writer_.add_channel(schema_ids[type], topic->name, "cdr", {{"qos_profile", profile_name(topic->profile)}}));
     sequences_.push_back(0);
-    readers_.push_back(std::make_unique<bus::SerializedReader>(participant, *topic, bus::History::KeepAll));
+    readers_.push_back(std::make_unique<bus::SerializedReader>(participant, *topic, bus::ReaderRole::Recorder));
     waitset_.attach(*readers_.back());
     result_.messages[topic->name] = 0;
   }

@@ -93,9 +93,11 @@ class Participant {
 namespace detail {
 dds_entity_t create_topic(const Participant& participant, const dds_topic_descriptor_t* descriptor, const char* name);
 dds_entity_t create_writer(const Participant& participant, dds_entity_t topic, QosProfile profile, const char* name);
-/// `keep_all`: the profile's reliability and durability, but every sample kept until taken (a recorder's reader).
+/// A tool's change to a profile's reader QoS: KeepAll keeps every sample until taken (a recorder);
+/// Volatile asks for no samples written before it joined (a rate meter).
+enum class ReaderQos { Profile, KeepAll, Volatile };
 dds_entity_t create_reader(const Participant& participant, dds_entity_t topic, QosProfile profile, const char* name,
-                           bool keep_all = false);
+                           ReaderQos change = ReaderQos::Profile);
 void delete_entity(dds_entity_t entity) noexcept;
 std::uint32_t matched_readers(dds_entity_t writer);
 std::uint32_t matched_writers(dds_entity_t reader);

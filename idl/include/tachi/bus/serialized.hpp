@@ -18,9 +18,10 @@ namespace tachi::bus {
 /// directives), which a recording stores as each channel's schema (MCAP schema encoding `omgidl`).
 extern const char* const kTachiIdl;
 
-/// Reader history for a tool's reader. A recorder keeps every sample until it took it (a slow disk
-/// costs memory, never a sample); a monitor keeps what the topic's profile keeps.
-enum class History { Profile, KeepAll };
+/// What a tool's reader is for. A recorder keeps every sample until it took it (a slow disk costs
+/// memory, never a sample) and gets what transient-local writers kept for late joiners; a rate meter
+/// wants only samples written from now on (a burst of kept ones is not a rate).
+enum class ReaderRole { Recorder, RateMeter };
 
 /// Takes samples of one topic as CDR bytes.
 class SerializedReader {
@@ -29,7 +30,7 @@ class SerializedReader {
   /// writer's source timestamp (ns since the epoch).
   using Each = std::function<void(std::span<const std::byte> cdr, std::int64_t source_ns)>;
 
-  SerializedReader(const Participant& participant, const TopicInfo& topic, History history = History::Profile);
+  SerializedReader(const Participant& participant, const TopicInfo& topic, ReaderRole role);
   ~SerializedReader();
   SerializedReader(const SerializedReader&) = delete;
   SerializedReader& operator=(const SerializedReader&) = delete;

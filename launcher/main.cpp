@@ -25,7 +25,7 @@ using nlohmann::json;
 
 struct RunFlags {
   std::string config_file, recording, rate, gate, voice_wav, voice_device, blade, out, nodes, dds_config, secure;
-  bool live = false, headless = false, print_config = false, mouse = false, record = false;
+  bool live = false, headless = false, print_config = false, mouse = false, record = false, foxglove = false;
   int grid = 0;
   unsigned domain = 0;
   double settle_s = 0;
@@ -122,6 +122,7 @@ int cmd_run(const CLI::App& run, const RunFlags& f, const fs::path& bin_dir) {
   tachi::bus::Participant dds{config.domain, config.dds_config, {config.secure, "monitor"}};
   launcher::RecordOptions record_options;
   record_options.file = out / "run.mcap";
+  record_options.foxglove = f.foxglove;
   launcher::BackgroundRecorder recorder{dds, record_options};
   const int rc = launcher::run(config, {bin_dir, fs::path(TACHI_SCRIPTS_DIR) / "plot_run.py"});
   const auto recorded = recorder.stop();
@@ -257,7 +258,8 @@ int main(int argc, char** argv) try {
   run->add_option("--settle", f.settle_s, "With a recording: end this many seconds after the last hand sample")
       ->check(CLI::Range(0.1, 60.0));
   run->add_option("--set", f.sets, "NODE.FLAG=VALUE passed to one node, e.g. sim.material=denim (repeatable)");
-  run->add_flag("--record", f.record, "Record the run's whole bus into <out>/run.mcap (as `tachi record`)");
+  auto* record_flag = run->add_flag("--record", f.record, "Record the run's whole bus into <out>/run.mcap (as `tachi record`)");
+  run->add_flag("--foxglove", f.foxglove, "With --record: add the Foxglove channels (as `tachi record --foxglove`)")->needs(record_flag);
 
   tachi::common::BusOptions bus;
   bus.identity = "monitor";  // with --secure: the identity that may read every topic (scripts/make_test_pki.sh)
@@ -307,6 +309,8 @@ int main(int argc, char** argv) try {
   record->add_option("--topics", record_options.topics, "Only these topics (comma separated; default: every tachi topic)")->delimiter(',');
   record->add_option("--duration", record_options.duration_s, "Stop after S seconds")->check(CLI::PositiveNumber);
   record->add_option("--max-bytes", record_options.max_bytes, "Stop before the file passes N bytes")->check(CLI::PositiveNumber);
+  record->add_flag("--foxglove", record_options.foxglove,
+                   "Add channels in Foxglove's schemas: /foxglove/cloth (SceneUpdate), /foxglove/hand (PoseInFrame), /foxglove/latency");
   tachi::common::add_bus_flags(*record, bus);
 
   launcher::PlayOptions play_options;

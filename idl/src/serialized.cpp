@@ -85,24 +85,29 @@ bool SerializedWriter::wait_for_readers(std::uint32_t n, std::chrono::nanosecond
   return detail::wait_until_count([this] { return detail::matched_readers(writer_); }, n, timeout);
 }
 
-void SerializedWriter::write(std::span<const std::byte> cdr) {
+void deserialize_into(const dds_topic_descriptor_t& descriptor, std::span<const std::byte> cdr, void* sample,
+                      std::vector<char>& scratch, const std::string& what) {
   const auto enc = encapsulation(cdr);
-  const std::string what = std::string("a sample of ") + topic_.name + " (" + std::string(topic_.type_name()) + ")";
   if (!enc) throw std::invalid_argument("not " + what + ": unknown CDR encapsulation header");
-  payload_.assign(reinterpret_cast<const char*>(cdr.data()) + 4, reinterpret_cast<const char*>(cdr.data() + cdr.size()));
+  scratch.assign(reinterpret_cast<const char*>(cdr.data()) + 4, reinterpret_cast<const char*>(cdr.data() + cdr.size()));
   const bool swap = enc->little_endian != (std::endian::native == std::endian::little);
   // Cyclone's normalizer checks every length and bound against the type's ops (and swaps bytes), so
   // a damaged file is refused here instead of being read past its end.
   std::uint32_t offset = 0;
-  const auto size = static_cast<std::uint32_t>(payload_.size());
-  if (dds_stream_normalize_data(payload_.data(), &offset, size, swap, enc->xcdr_version, topic_.descriptor->m_ops) == nullptr)
+  const auto size = static_cast<std::uint32_t>(scratch.size());
+  if (dds_stream_normalize_data(scratch.data(), &offset, size, swap, enc->xcdr_version, descriptor.m_ops) == nullptr)
     throw std::invalid_argument("not " + what + ": its CDR does not match the type");
+  dds_istream_t in{};
+  dds_istream_init(&in, size, scratch.data(), enc->xcdr_version);
+  dds_stream_read(&in, static_cast<char*>(sample), descriptor.m_ops);
+  dds_istream_fini(&in);
+}
+
+void SerializedWriter::write(std::span<const std::byte> cdr) {
   const auto free_sample = [this](void* s) { dds_sample_free(s, topic_.descriptor, DDS_FREE_ALL); };
   std::unique_ptr<void, decltype(free_sample)> sample(dds_alloc(topic_.descriptor->m_size), free_sample);
-  dds_istream_t in{};
-  dds_istream_init(&in, size, payload_.data(), enc->xcdr_version);
-  dds_stream_read(&in, static_cast<char*>(sample.get()), topic_.descriptor->m_ops);
-  dds_istream_fini(&in);
+  deserialize_into(*topic_.descriptor, cdr, sample.get(), payload_,
+                   std::string("a sample of ") + topic_.name + " (" + std::string(topic_.type_name()) + ")");
   check(dds_write(writer_, sample.get()), std::string("write on topic ") + topic_.name + ": dds_write");
 }
 

@@ -52,6 +52,43 @@ Recorder::Recorder(const bus::Participant& participant, const RecordOptions& opt
     waitset_.attach(*readers_.back());
     result_.messages[topic->name] = 0;
   }
+  if (options.foxglove) {
+    scene_.emplace();
+    std::uint16_t* ids[] = {&fox_cloth_, &fox_hand_, &fox_latency_};
+    for (std::size_t i = 0; i < foxglove_channels().size(); ++i) {
+      const auto& c = foxglove_channels()[i];
+      *ids[i] = writer_.add_channel(writer_.add_schema(c.schema_name, "jsonschema", c.schema), c.topic, "json");
+      result_.messages[c.topic] = 0;
+    }
+  }
+}
+
+void Recorder::write_json(std::uint16_t channel, const nlohmann::json& message, std::uint64_t now_ns) {
+  const std::string text = message.dump();
+  writer_.write({channel, fox_sequence_++, now_ns, now_ns, {reinterpret_cast<const std::byte*>(text.data()), text.size()}});
+  ++result_.messages[foxglove_channels()[channel == fox_cloth_ ? 0 : channel == fox_hand_ ? 1 : 2].topic];
+  ++result_.total;
+}
+
+// The derived Foxglove channels, from the samples as they are recorded (--foxglove only: this
+// deserializes what the plain recorder stores untouched).
+void Recorder::derive(const bus::TopicInfo& topic, std::span<const std::byte> cdr, std::uint64_t now_ns) {
+  namespace t = bus::topics;
+  const std::string_view name = topic.name;
+  if (name == t::cloth_topology.name) {
+    scene_->on_topology(*bus::deserialize<tachi_msg_ClothTopology>(cdr, scratch_));
+  } else if (name == t::cloth_topology_delta.name) {
+    scene_->on_topology_delta(*bus::deserialize<tachi_msg_ClothTopologyDelta>(cdr, scratch_));
+  } else if (name == t::node_status.name) {
+    scene_->on_status(*bus::deserialize<tachi_msg_NodeStatus>(cdr, scratch_));
+  } else if (name == t::stroke.name) {
+    write_json(fox_hand_, scene_->on_stroke(*bus::deserialize<tachi_msg_StrokeSample>(cdr, scratch_), now_ns), now_ns);
+  } else if (name == t::cloth_state.name) {
+    if (const auto frame = scene_->on_state(*bus::deserialize<tachi_msg_ClothState>(cdr, scratch_), now_ns)) {
+      write_json(fox_cloth_, frame->cloth, now_ns);
+      write_json(fox_latency_, frame->latency, now_ns);
+    }
+  }
 }
 
 bool Recorder::poll(std::chrono::milliseconds timeout) {
@@ -69,6 +106,13 @@ bool Recorder::poll(std::chrono::milliseconds timeout) {
       writer_.write({channels_[i], sequences_[i]++, now_ns, static_cast<std::uint64_t>(std::max<std::int64_t>(source_ns, 0)), cdr});
       ++result_.messages[readers_[i]->topic().name];
       ++result_.total;
+      if (scene_) {
+        try {
+          derive(readers_[i]->topic(), cdr, now_ns);
+        } catch (const std::invalid_argument& e) {
+          spdlog::warn("--foxglove: {}", e.what());
+        }
+      }
     });
   }
   if (!full_ && options_.duration_s > 0 && Clock::now() - started_ >= std::chrono::duration<double>(options_.duration_s)) {

@@ -4,6 +4,7 @@
 // source timestamp (publish_time), so Foxglove, `mcap` and ROS 2 tools read it as they read a bag.
 #pragma once
 
+#include "foxglove.hpp"
 #include "tachi/bus/serialized.hpp"
 #include "tachi/mcap/mcap.hpp"
 
@@ -24,6 +25,7 @@ struct RecordOptions {
   std::vector<std::string> topics;  ///< empty: every tachi topic
   double duration_s = 0;            ///< 0: until stopped
   std::uint64_t max_bytes = 0;      ///< 0: no limit; the recording stops once the file would pass it
+  bool foxglove = false;            ///< add the derived channels in Foxglove's schemas (foxglove.hpp)
 };
 
 struct RecordResult {
@@ -56,6 +58,12 @@ class Recorder {
   std::chrono::steady_clock::time_point started_;
   RecordResult result_;
   bool full_ = false;
+  std::optional<FoxgloveScene> scene_;
+  std::uint16_t fox_cloth_ = 0, fox_hand_ = 0, fox_latency_ = 0;
+  std::uint32_t fox_sequence_ = 0;
+  std::vector<char> scratch_;
+  void derive(const bus::TopicInfo& topic, std::span<const std::byte> cdr, std::uint64_t now_ns);
+  void write_json(std::uint16_t channel, const nlohmann::json& message, std::uint64_t now_ns);
 };
 
 /// A Recorder on its own thread, for `tachi run --record`: it records from construction until stop().

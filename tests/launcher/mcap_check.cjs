@@ -2,7 +2,9 @@
 // project's code) twice: record by record (McapStreamReader, every chunk CRC checked) and through the
 // summary's indexes (McapIndexedReader: footer -> summary -> chunk indexes -> message indexes).
 // Prints one JSON object: per topic its schema, encodings and message counts by both paths, and the
-// file's Statistics record. Usage: NODE_PATH=<dir>/node_modules node mcap_check.cjs FILE.mcap
+// file's Statistics record. JSON channels whose schema is one of Foxglove's (foxglove.SceneUpdate, ...)
+// are validated message by message against Foxglove's published JSON schemas (@foxglove/schemas) with
+// ajv: per topic, how many messages passed and the first error. Usage: NODE_PATH=<dir>/node_modules node mcap_check.cjs FILE.mcap
 "use strict";
 const fs = require("fs");
 const { McapStreamReader, McapIndexedReader } = require("@mcap/core");
@@ -48,15 +50,48 @@ async function main() {
       metadata: Object.fromEntries(ch.metadata),
     };
   }
+  const Ajv = require("ajv");
+  const foxgloveSchemas = require("@foxglove/schemas/jsonschema");
+  const ajv = new Ajv({ strict: false, allErrors: false });
+  const validators = new Map();
+  out.json = {};
   let lastLogTime = 0n;
   let ordered = true;
   for await (const m of indexed.readMessages()) {
     const topic = indexed.channelsById.get(m.channelId).topic;
     out.indexed[topic] = (out.indexed[topic] || 0) + 1;
+    const channel = indexed.channelsById.get(m.channelId);
+    if (channel.messageEncoding === "json") {
+      const schemaName = indexed.schemasById.get(channel.schemaId).name;
+      const j = (out.json[topic] = out.json[topic] || { schema: schemaName, valid: 0, invalid: 0, firstError: null });
+      const message = JSON.parse(Buffer.from(m.data).toString("utf8"));
+      const official = schemaName.startsWith("foxglove.") ? foxgloveSchemas[schemaName.slice("foxglove.".length)] : undefined;
+      if (official) {
+        if (!validators.has(schemaName)) validators.set(schemaName, ajv.compile(official));
+        const validate = validators.get(schemaName);
+        if (validate(message)) j.valid++;
+        else {
+          j.invalid++;
+          if (!j.firstError) j.firstError = ajv.errorsText(validate.errors);
+        }
+      } else if (typeof message === "object") j.valid++;
+      j.last = message;
+    }
     if (m.logTime < lastLogTime) ordered = false;
     lastLogTime = m.logTime;
   }
   out.indexedInLogTimeOrder = ordered;
+  // The last cloth and latency messages, reduced to what a test checks (the cloth's JSON is large).
+  for (const [topic, j] of Object.entries(out.json)) {
+    const m = j.last;
+    delete j.last;
+    if (j.schema === "foxglove.SceneUpdate" && m.entities.length > 0) {
+      const e = m.entities[0];
+      j.lastTriangles = e.triangles.length ? e.triangles[0].indices.length / 3 : 0;
+      j.lastPoints = e.triangles.length ? e.triangles[0].points.length : 0;
+      j.lastLines = e.lines.map((l) => l.points.length);
+    } else j.lastMessage = m;
+  }
   const s = indexed.statistics;
   if (s) {
     out.statistics = {

@@ -46,7 +46,7 @@ class RecordedRun : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
     dir_ = new tachi::test::ScratchDir("tachi_record");
-    result_ = new tachi::test::RunResult(tachi::test::run(run_args(140, dir_->path() / "a", {"--record"}), 180s));
+    result_ = new tachi::test::RunResult(tachi::test::run(run_args(140, dir_->path() / "a", {"--record", "--foxglove"}), 180s));
   }
   static void TearDownTestSuite() {
     delete result_;
@@ -134,7 +134,7 @@ TEST_F(RecordedRun, FoxglovesOwnMcapReaderReadsEveryChannelSchemaAndMessage) {
       {"tachi/cloth/topology_delta", "tachi::msg::ClothTopologyDelta"}, {"tachi/cloth/state", "tachi::msg::ClothState"},
       {"tachi/cloth/cut", "tachi::msg::CutEvent"},           {"tachi/node/status", "tachi::msg::NodeStatus"},
       {"tachi/scene/object", "tachi::msg::SceneObject"}};
-  EXPECT_EQ(r["channels"].size(), types.size()) << r["channels"];
+  EXPECT_EQ(r["channels"].size(), types.size() + 3) << "the tachi topics and the three Foxglove channels: " << r["channels"];
   for (const auto& [topic, type] : types) {
     ASSERT_TRUE(r["channels"].contains(topic)) << topic;
     EXPECT_EQ(r["channels"][topic]["schema"], type);
@@ -147,10 +147,13 @@ TEST_F(RecordedRun, FoxglovesOwnMcapReaderReadsEveryChannelSchemaAndMessage) {
     EXPECT_EQ(r["statistics"]["channelMessageCounts"].value(topic, 0), n) << topic;
   }
   EXPECT_EQ(r["stream"]["tachi/hand/raw"], depth_frames("straight_cut"));
-  EXPECT_EQ(r["schemas"].size(), types.size()) << "one schema per type";
-  for (const auto& [id, schema] : r["schemas"].items()) EXPECT_GT(schema["bytes"].get<int>(), 1000) << "tachi.idl, whole";
-  EXPECT_EQ(r["statistics"]["schemaCount"], types.size());
-  EXPECT_EQ(r["statistics"]["channelCount"], types.size());
+  EXPECT_EQ(r["schemas"].size(), types.size() + 3) << "one schema per type";
+  for (const auto& [id, schema] : r["schemas"].items())
+    if (schema["encoding"] == "omgidl") {
+      EXPECT_GT(schema["bytes"].get<int>(), 1000) << "tachi.idl, whole";
+    }
+  EXPECT_EQ(r["statistics"]["schemaCount"], types.size() + 3);
+  EXPECT_EQ(r["statistics"]["channelCount"], types.size() + 3);
   EXPECT_GE(r["chunkIndexes"].get<int>(), 1);
   EXPECT_EQ(r["statistics"]["chunkCount"], r["chunkIndexes"]);
   EXPECT_TRUE(r["indexedInLogTimeOrder"].get<bool>());
@@ -164,4 +167,36 @@ TEST(TachiRecord, RefusesAnUnknownTopicAndNamesTheSubcommandsItKnows) {
   EXPECT_EQ(bad_sub.exit_code, 2);
   EXPECT_NE(bad_sub.err.find("unknown subcommand hetz"), std::string::npos) << bad_sub.err;
   EXPECT_NE(bad_sub.err.find("record"), std::string::npos) << bad_sub.err;
+}
+
+TEST_F(RecordedRun, TheFoxgloveChannelsValidateAgainstFoxglovesPublishedSchemas) {
+  ASSERT_EQ(result_->exit_code, 0) << result_->err;
+  if (!fs::exists(kNpmDir / "node_modules" / "@foxglove" / "schemas")) GTEST_SKIP() << "npm packages missing (previous test)";
+  const auto node = tachi::test::run({"/usr/bin/env", "node", std::string(TACHI_SOURCE_DIR) + "/tests/launcher/mcap_check.cjs",
+                                      (out() / "run.mcap").string()},
+                                     120s, {{"NODE_PATH", (kNpmDir / "node_modules").string()}});
+  ASSERT_EQ(node.exit_code, 0) << node.err;
+  const auto r = json::parse(node.out, nullptr, false);
+  const auto recorded = read_json(out() / "summary.json")["recording"]["messages"];
+  for (const char* topic : {"/foxglove/cloth", "/foxglove/hand", "/foxglove/latency"}) {
+    ASSERT_TRUE(r["json"].contains(topic)) << topic << " " << r["json"];
+    EXPECT_EQ(r["json"][topic]["invalid"], 0) << topic << ": " << r["json"][topic]["firstError"];
+    EXPECT_EQ(r["json"][topic]["valid"], recorded[topic]) << topic;
+    EXPECT_EQ(r["indexed"][topic], recorded[topic]) << topic;
+  }
+  EXPECT_EQ(r["json"]["/foxglove/cloth"]["schema"], "foxglove.SceneUpdate");
+  EXPECT_EQ(r["json"]["/foxglove/hand"]["schema"], "foxglove.PoseInFrame");
+  EXPECT_EQ(recorded["/foxglove/hand"], recorded["tachi/hand/stroke"]) << "one pose per stroke sample";
+  EXPECT_GT(recorded["/foxglove/cloth"].get<int>(), 30) << "the cloth redrawn at up to 30 Hz while the run went on";
+  // The last cloth: every triangle of the cut 32 x 32 cloth over all its particles, and the blade's
+  // path while it cut as one line of many points.
+  const auto& cloth = r["json"]["/foxglove/cloth"];
+  EXPECT_GE(cloth["lastTriangles"].get<int>(), 2 * 31 * 31) << cloth;
+  EXPECT_GT(cloth["lastPoints"].get<int>(), 32 * 32) << "the cut duplicated particles: " << cloth;
+  ASSERT_EQ(cloth["lastLines"].size(), 1u) << cloth;
+  EXPECT_GT(cloth["lastLines"][0].get<int>(), 10) << cloth;
+  const auto& latency = r["json"]["/foxglove/latency"]["lastMessage"];
+  EXPECT_GT(latency["e2e_ms"].get<double>(), 0.0) << latency;
+  for (const char* node_name : {"tachi-sensor", "tachi-filter", "tachi-sim"})
+    EXPECT_TRUE(latency["stage_p50_ms"].contains(node_name)) << node_name << " in " << latency;
 }

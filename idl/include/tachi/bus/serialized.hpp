@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <functional>
 #include <span>
+#include <string>
 #include <vector>
 
 namespace tachi::bus {
@@ -70,6 +71,20 @@ class SerializedWriter {
   dds_entity_t writer_;
   std::vector<char> payload_;  ///< reused: the normalizer works in place
 };
+
+/// Reads `cdr` (encapsulation header + payload) into `sample` (zeroed memory of the descriptor's type;
+/// its sequences are allocated, to be freed with dds_sample_free), after Cyclone's normalizer checked
+/// it against the type. Throws std::invalid_argument naming `what` when it is not a sample of the type.
+void deserialize_into(const dds_topic_descriptor_t& descriptor, std::span<const std::byte> cdr, void* sample,
+                      std::vector<char>& scratch, const std::string& what);
+
+/// A typed sample from its CDR (e.g. a recorder deriving other channels from what it stores).
+template <class T>
+Owned<T> deserialize(std::span<const std::byte> cdr, std::vector<char>& scratch) {
+  Owned<T> sample;
+  deserialize_into(Descriptor<T>::value(), cdr, &*sample, scratch, Descriptor<T>::value().m_typename);
+  return sample;
+}
 
 /// Serializes a typed sample the way the bus does (XCDR1, this host's byte order, with the 4-byte
 /// encapsulation header): for tests and derived channels that need CDR without a round trip.

@@ -5,6 +5,7 @@
 #include "src/record.hpp"
 #include "src/run.hpp"
 #include "tachi/bus/discovery.hpp"
+#include "tachi/bus/run_partition.hpp"
 #include "tachi/common/app.hpp"
 #include "tachi/launcher/config.hpp"
 #include "tachi/launcher/supervision.hpp"
@@ -24,7 +25,7 @@ namespace launcher = tachi::launcher;
 using nlohmann::json;
 
 struct RunFlags {
-  std::string config_file, recording, rate, gate, voice_wav, voice_device, blade, out, nodes, dds_config, secure;
+  std::string config_file, recording, rate, gate, voice_wav, voice_device, blade, out, nodes, dds_config, secure, run_id;
   bool live = false, headless = false, print_config = false, mouse = false, record = false, foxglove = false;
   int grid = 0;
   unsigned domain = 0;
@@ -74,6 +75,16 @@ json effective_config(const CLI::App& run, const RunFlags& f) {
   return config;
 }
 
+// The launcher's own figures join the run's summary.json once the run wrote it.
+void add_to_summary(const fs::path& out, const json& figures) {
+  std::ifstream in(out / "summary.json");
+  json summary = json::parse(in, nullptr, false);
+  in.close();
+  if (!summary.is_object()) return;
+  for (const auto& [key, value] : figures.items()) summary[key] = value;
+  std::ofstream(out / "summary.json") << summary.dump(2) << '\n';
+}
+
 // The nodes of another pipeline on this run's domain that this run would start again ("tachi-sim on
 // host h, pid 123, ..."), from DDS discovery (Cyclone announces each participant's process, host and
 // pid). Only the same nodes conflict: one pipeline split over two hosts (`--nodes`) shares a domain.
@@ -108,12 +119,25 @@ int cmd_run(const CLI::App& run, const RunFlags& f, const fs::path& bin_dir) {
   }
   if (!config.recording.empty()) config.recording = fs::absolute(config.recording).string();
   tachi::common::install_stop_handlers();
+  // The run id names the DDS partition of every node of this run (bus/run_partition.hpp), passed down in
+  // the environment. A whole pipeline gets a fresh one; one split over launchers (--nodes) shares the
+  // default partition unless each is given the same --run-id; DDS Security grants name no partitions
+  // (scripts/make_test_pki.sh), so a secure run stays in the default one too.
+  std::string run_id = f.run_id;
+  if (run_id.empty() && !run.count("--nodes") && config.secure.empty())
+    run_id = fmt::format("{:016x}", tachi::bus::new_session_id());
+  if (!run_id.empty()) ::setenv(tachi::bus::kRunIdEnv, run_id.c_str(), 1);
+  else ::unsetenv(tachi::bus::kRunIdEnv);
   if (const auto live = live_pipeline_nodes(config); !live.empty()) {
     std::cerr << "tachi run: DDS domain " << config.domain << " already has a live tachi pipeline: " << live
               << "; two pipelines on one domain would mix their samples. Stop it, or give this run another --domain\n";
     return launcher::kRunFailure;
   }
-  if (!f.record) return launcher::run(config, {bin_dir, fs::path(TACHI_SCRIPTS_DIR) / "plot_run.py"});
+  if (!f.record) {
+    const int rc = launcher::run(config, {bin_dir, fs::path(TACHI_SCRIPTS_DIR) / "plot_run.py"});
+    add_to_summary(config.out, {{"run_id", run_id}});
+    return rc;
+  }
 
   // --record: the whole bus of the run into <out>/run.mcap, from before the first node starts until
   // the last one stopped; the recorder's own figures join summary.json.
@@ -127,13 +151,8 @@ int cmd_run(const CLI::App& run, const RunFlags& f, const fs::path& bin_dir) {
   const int rc = launcher::run(config, {bin_dir, fs::path(TACHI_SCRIPTS_DIR) / "plot_run.py"});
   const auto recorded = recorder.stop();
   spdlog::info("recorded {} messages ({} lost) into {}", recorded.total, recorded.lost, (out / "run.mcap").string());
-  std::ifstream in(out / "summary.json");
-  json summary = json::parse(in, nullptr, false);
-  in.close();
-  if (summary.is_object()) {
-    summary["recording"] = {{"file", "run.mcap"}, {"messages", recorded.messages}, {"lost", recorded.lost}, {"bytes", recorded.bytes}};
-    std::ofstream(out / "summary.json") << summary.dump(2) << '\n';
-  }
+  add_to_summary(out, {{"run_id", run_id},
+                       {"recording", {{"file", "run.mcap"}, {"messages", recorded.messages}, {"lost", recorded.lost}, {"bytes", recorded.bytes}}}});
   return rc;
 }
 
@@ -257,6 +276,7 @@ int main(int argc, char** argv) try {
   run->add_option("--nodes", f.nodes, "Start only these nodes, e.g. sensor,filter (the other host runs sim,viewer)");
   run->add_option("--settle", f.settle_s, "With a recording: end this many seconds after the last hand sample")
       ->check(CLI::Range(0.1, 60.0));
+  run->add_option("--run-id", f.run_id, "DDS partition of this run's nodes (default: a fresh one; none with --nodes or --secure)");
   run->add_option("--set", f.sets, "NODE.FLAG=VALUE passed to one node, e.g. sim.material=denim (repeatable)");
   auto* record_flag = run->add_flag("--record", f.record, "Record the run's whole bus into <out>/run.mcap (as `tachi record`)");
   run->add_flag("--foxglove", f.foxglove, "With --record: add the Foxglove channels (as `tachi record --foxglove`)")->needs(record_flag);
@@ -311,6 +331,8 @@ int main(int argc, char** argv) try {
   record->add_option("--max-bytes", record_options.max_bytes, "Stop before the file passes N bytes")->check(CLI::PositiveNumber);
   record->add_flag("--foxglove", record_options.foxglove,
                    "Add channels in Foxglove's schemas: /foxglove/cloth (SceneUpdate), /foxglove/hand (PoseInFrame), /foxglove/latency");
+  std::string tool_run_id;
+  record->add_option("--run-id", tool_run_id, "Record only this run's samples (default: every run on the domain)");
   tachi::common::add_bus_flags(*record, bus);
 
   launcher::PlayOptions play_options;
@@ -323,6 +345,7 @@ int main(int argc, char** argv) try {
   play->add_option("--start", play_options.start_s, "Skip the recording's first S seconds")->check(CLI::NonNegativeNumber);
   play->add_option("--wait", play_options.wait_s, "Wait up to S seconds for a reader of every played topic before starting")
       ->check(CLI::Range(0.0, 600.0));
+  play->add_option("--run-id", tool_run_id, "Publish into this run's partition (tachi run --run-id; default: the default partition)");
   tachi::common::add_bus_flags(*play, bus);
 
   // CLI11 answers an unknown subcommand with "A subcommand is required": name it instead.
@@ -344,6 +367,9 @@ int main(int argc, char** argv) try {
 
   if (run->parsed()) return cmd_run(*run, f, self_dir(argv[0]));
   tachi::common::install_stop_handlers();
+  // Bus tools read every run's partition; record and play may name one run.
+  if (!tool_run_id.empty()) ::setenv(tachi::bus::kRunIdEnv, tool_run_id.c_str(), 1);
+  else if (!play->parsed()) tachi::bus::read_every_run();
   if (topics->parsed()) return cmd_topics(bus, listen_s, verbose);
   if (status->parsed()) return cmd_status(bus, listen_s);
   if (record->parsed()) {

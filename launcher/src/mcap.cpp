@@ -209,6 +209,37 @@ std::uint16_t Writer::add_channel(std::uint16_t schema_id, const std::string& to
   return channels_.back().id;
 }
 
+std::uint64_t Writer::closed_size_with(std::uint16_t channel, std::size_t data_bytes) const {
+  const auto schema_size = [](const Schema& x) { return 1 + 8 + 2 + 12 + x.name.size() + x.encoding.size() + x.data.size(); };
+  const auto channel_size = [](const Channel& c) {
+    std::uint64_t n = 1 + 8 + 4 + 12 + c.topic.size() + c.message_encoding.size();
+    for (const auto& [k, v] : c.metadata) n += 8 + k.size() + v.size();
+    return n;
+  };
+  constexpr std::uint64_t kChunkHeader = 1 + 8 + 8 + 8 + 8 + 4 + 4 + 8;
+  constexpr std::uint64_t kChunkIndex = 1 + 8 + 8 + 8 + 8 + 8 + 4 + 8 + 4 + 8 + 8;
+  constexpr std::uint64_t kMessageIndexHeader = 1 + 8 + 2 + 4;
+  const std::size_t channels_in_chunk = chunk_index_.size() + (chunk_index_.contains(channel) ? 0 : 1);
+  std::uint64_t messages_in_chunk = 1;
+  for (const auto& [c, entries] : chunk_index_) messages_in_chunk += entries.size();
+  // The open chunk with the message (and its channel's records if not yet written), and its indexes.
+  std::uint64_t n = file_offset_ + kChunkHeader + chunk_.size() + 1 + 8 + 2 + 4 + 8 + 8 + data_bytes;
+  if (!channel_written_.at(channel)) {
+    n += channel_size(channels_[channel]);
+    if (channels_[channel].schema_id != 0) n += schema_size(schemas_[channels_[channel].schema_id - 1]);
+  }
+  n += channels_in_chunk * (kMessageIndexHeader + 10) + messages_in_chunk * 16;
+  // Data end, summary (every schema and channel again, statistics, chunk indexes), offsets, footer, magic.
+  n += 1 + 8 + 4;
+  for (const auto& x : schemas_) n += schema_size(x);
+  for (const auto& c : channels_) n += channel_size(c);
+  n += 1 + 8 + 8 + 2 + 4 * 4 + 8 + 8 + 4 + 10 * (stats_.channel_message_counts.size() + 1);
+  for (const auto& ci : chunk_indexes_) n += ci.size();
+  n += kChunkIndex + 10 * channels_in_chunk;
+  n += 4 * (1 + 8 + 1 + 8 + 8) + 1 + 8 + 20 + kMagic.size();
+  return n;
+}
+
 void Writer::put(std::span<const std::byte> bytes) {
   if (std::fwrite(bytes.data(), 1, bytes.size(), file_) != bytes.size())
     throw std::runtime_error("cannot write " + path_.string() + ": " + std::strerror(errno));

@@ -65,6 +65,11 @@ Recorder::Recorder(const bus::Participant& participant, const RecordOptions& opt
 
 void Recorder::write_json(std::uint16_t channel, const nlohmann::json& message, std::uint64_t now_ns) {
   const std::string text = message.dump();
+  if (full_ || (options_.max_bytes > 0 && writer_.closed_size_with(channel, text.size()) > options_.max_bytes)) {
+    full_ = true;
+    result_.ended = "--max-bytes reached";
+    return;
+  }
   writer_.write({channel, fox_sequence_++, now_ns, now_ns, {reinterpret_cast<const std::byte*>(text.data()), text.size()}});
   ++result_.messages[foxglove_channels()[channel == fox_cloth_ ? 0 : channel == fox_hand_ ? 1 : 2].topic];
   ++result_.total;
@@ -98,7 +103,7 @@ bool Recorder::poll(std::chrono::milliseconds timeout) {
   for (std::size_t i = 0; i < readers_.size() && !full_; ++i) {
     readers_[i]->take([&](std::span<const std::byte> cdr, std::int64_t source_ns) {
       if (full_) return;  // taken after the size limit: not stored, and not counted as stored
-      if (options_.max_bytes > 0 && writer_.bytes() + cdr.size() + 64 > options_.max_bytes) {
+      if (options_.max_bytes > 0 && writer_.closed_size_with(channels_[i], cdr.size()) > options_.max_bytes) {
         full_ = true;
         result_.ended = "--max-bytes reached";
         return;

@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <csignal>
 #include <filesystem>
 #include <fstream>
 #include <set>
@@ -199,4 +200,50 @@ TEST_F(RecordedRun, TheFoxgloveChannelsValidateAgainstFoxglovesPublishedSchemas)
   EXPECT_GT(latency["e2e_ms"].get<double>(), 0.0) << latency;
   for (const char* node_name : {"tachi-sensor", "tachi-filter", "tachi-sim"})
     EXPECT_TRUE(latency["stage_p50_ms"].contains(node_name)) << node_name << " in " << latency;
+}
+
+TEST(TachiRecord, StopsAtItsDurationOrSizeAndPlaysFromAStartAtARate) {
+  tachi::test::ScratchDir dir("tachi_record_limits");
+  tachi::test::ChildProcess sensor({kBin + "/tachi-sensor", "--recording", kRecordings + "/straight_cut", "--loop", "--domain", "142"});
+  const auto timed = tachi::test::run({kBin + "/tachi", "record", (dir / "timed.mcap").string(), "--topics", "tachi/hand/raw",
+                                       "--duration", "3", "--domain", "142"},
+                                      60s);
+  // The schemas alone (tachi.idl, ~8 KB per type, in the data section and the summary) take ~90 KB.
+  const auto sized = tachi::test::run({kBin + "/tachi", "record", (dir / "sized.mcap").string(), "--max-bytes", "100000",
+                                       "--domain", "142"},
+                                      60s);
+  sensor.signal(SIGINT);
+  EXPECT_EQ(sensor.wait(10s), 0) << sensor.err();
+
+  ASSERT_EQ(timed.exit_code, 0) << timed.err;
+  const auto t = json::parse(timed.out, nullptr, false);
+  EXPECT_EQ(t["ended"], "--duration reached") << timed.out;
+  EXPECT_EQ(t["topics"].size(), 1u) << "only --topics: " << timed.out;
+  const int recorded = t["topics"]["tachi/hand/raw"].get<int>();
+  EXPECT_GT(recorded, 30) << timed.out;
+  EXPECT_EQ(t["lost"], 0);
+
+  ASSERT_EQ(sized.exit_code, 0) << sized.err;
+  const auto s = json::parse(sized.out, nullptr, false);
+  EXPECT_EQ(s["ended"], "--max-bytes reached") << sized.out;
+  EXPECT_LE(fs::file_size(dir / "sized.mcap"), 100000u);
+  EXPECT_GT(s["topics"]["tachi/hand/raw"].get<int>(), 0) << sized.out;
+  EXPECT_EQ(s["bytes"], fs::file_size(dir / "sized.mcap"));
+
+  // Played whole at 4x, then from 1 s in: the second publishes the samples after its first second only.
+  const auto whole = tachi::test::run({kBin + "/tachi", "play", (dir / "timed.mcap").string(), "--rate", "4", "--domain", "142"}, 60s);
+  const auto later = tachi::test::run(
+      {kBin + "/tachi", "play", (dir / "timed.mcap").string(), "--rate", "4", "--start", "1", "--domain", "142"}, 60s);
+  ASSERT_EQ(whole.exit_code, 0) << whole.err;
+  ASSERT_EQ(later.exit_code, 0) << later.err;
+  EXPECT_EQ(json::parse(whole.out)["published"]["tachi/hand/raw"], recorded) << whole.out;
+  const int after_start = json::parse(later.out)["published"]["tachi/hand/raw"].get<int>();
+  EXPECT_LT(after_start, recorded - 20) << "about 30 samples a second fewer: " << later.out;
+  EXPECT_GT(after_start, 0) << later.out;
+
+  // A file that is not MCAP is refused naming it.
+  std::ofstream(dir / "not.mcap") << "hello";
+  const auto bad = tachi::test::run({kBin + "/tachi", "play", (dir / "not.mcap").string(), "--domain", "142"}, 30s);
+  EXPECT_EQ(bad.exit_code, 1);
+  EXPECT_NE(bad.err.find((dir / "not.mcap").string() + ": not a valid MCAP file"), std::string::npos) << bad.err;
 }

@@ -73,6 +73,9 @@ class Writer {
   void close();
   /// Bytes in the file so far plus those buffered in the open chunk.
   [[nodiscard]] std::uint64_t bytes() const noexcept { return file_offset_ + chunk_.size(); }
+  /// At most the size the file would have if a message of `data_bytes` on `channel` were written and the
+  /// file closed right after (open chunk, its indexes, data end, summary, footer): what a size limit checks.
+  [[nodiscard]] std::uint64_t closed_size_with(std::uint16_t channel, std::size_t data_bytes) const;
   [[nodiscard]] const Statistics& statistics() const noexcept { return stats_; }
 
  private:

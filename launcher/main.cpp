@@ -134,6 +134,8 @@ int cmd_run(const CLI::App& run, const RunFlags& f, const fs::path& bin_dir) {
     return launcher::kRunFailure;
   }
   if (!f.record) {
+    std::error_code ignored;
+    fs::remove(fs::path(config.out) / "run.mcap", ignored);  // a previous run's recording must not pass for this run's
     const int rc = launcher::run(config, {bin_dir, fs::path(TACHI_SCRIPTS_DIR) / "plot_run.py"});
     add_to_summary(config.out, {{"run_id", run_id}});
     return rc;
@@ -152,7 +154,8 @@ int cmd_run(const CLI::App& run, const RunFlags& f, const fs::path& bin_dir) {
   const auto recorded = recorder.stop();
   spdlog::info("recorded {} messages ({} lost) into {}", recorded.total, recorded.lost, (out / "run.mcap").string());
   add_to_summary(out, {{"run_id", run_id},
-                       {"recording", {{"file", "run.mcap"}, {"messages", recorded.messages}, {"lost", recorded.lost}, {"bytes", recorded.bytes}}}});
+                       {"recording", {{"file", "run.mcap"}, {"messages", recorded.messages}, {"lost", recorded.lost}, {"bytes", recorded.bytes},
+                                     {"ended", recorded.ended}}}});
   return rc;
 }
 

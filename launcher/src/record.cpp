@@ -138,7 +138,13 @@ RecordResult Recorder::finish(const std::string& ended) {
 
 BackgroundRecorder::BackgroundRecorder(const bus::Participant& participant, const RecordOptions& options)
     : recorder_(participant, options), thread_([this] {
-        while (!stop_ && recorder_.poll(std::chrono::milliseconds(50))) {
+        // A failure (a full disk) ends the recording, not the run it records.
+        try {
+          while (!stop_ && recorder_.poll(std::chrono::milliseconds(50))) {
+          }
+        } catch (const std::exception& e) {
+          error_ = e.what();
+          spdlog::error("recording stopped: {}", e.what());
         }
       }) {}
 
@@ -150,7 +156,9 @@ BackgroundRecorder::~BackgroundRecorder() {
 RecordResult BackgroundRecorder::stop() {
   stop_ = true;
   if (thread_.joinable()) thread_.join();
-  return recorder_.finish("stopped");
+  auto result = recorder_.finish("stopped");
+  if (!error_.empty()) result.ended = "failed: " + error_;
+  return result;
 }
 
 PlayResult play(const bus::Participant& participant, const PlayOptions& options) {

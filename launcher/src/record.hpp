@@ -76,6 +76,7 @@ class BackgroundRecorder {
  private:
   Recorder recorder_;
   std::atomic<bool> stop_{false};
+  std::string error_;  ///< written by the thread before it ends, read after join
   std::thread thread_;
 };
 

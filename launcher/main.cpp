@@ -1,6 +1,6 @@
 // tachi: the one command. `tachi run` starts and supervises the pipeline's processes and leaves the
-// run's outputs in a folder; `tachi topics`, `tachi echo` and `tachi status` show what is on a
-// domain's bus (docs/cli.md "tachi").
+// run's outputs in a folder; `tachi topics|echo|hz|bw|status` show what is on a domain's bus and
+// `tachi record|play` record it into MCAP and publish it again (docs/cli.md "tachi").
 #include "src/bus_adapter.hpp"
 #include "src/record.hpp"
 #include "src/run.hpp"
@@ -250,7 +250,7 @@ int cmd_status(const tachi::common::BusOptions& bus, double listen_s) {
 
 int main(int argc, char** argv) try {
   CLI::App app{"tachi: cut a virtual cloth with your hand. `tachi run` starts the whole pipeline; "
-               "`tachi topics|echo|status` show what is on the DDS bus"};
+               "`tachi topics|echo|hz|bw|status` show what is on the DDS bus; `tachi record|play` record and replay it (MCAP)"};
   app.name("tachi");
   app.require_subcommand(1);
   std::string log_level;

@@ -1,4 +1,5 @@
 #include "tachi/bus/bus.hpp"
+#include "tachi/bus/run_partition.hpp"
 
 #include "tachi/common/app.hpp"
 #include "tachi/common/text_file.hpp"
@@ -7,6 +8,8 @@
 #include <map>
 #include <memory>
 #include <mutex>
+#include <atomic>
+#include <cstdlib>
 #include <random>
 #include <thread>
 
@@ -97,6 +100,8 @@ void release_domain(std::uint32_t id) noexcept {
   }
 }
 
+std::atomic<bool> g_read_every_run{false};
+
 using QosPtr = std::unique_ptr<dds_qos_t, decltype(&dds_delete_qos)>;
 
 QosPtr make_qos(QosProfile profile) {
@@ -146,6 +151,16 @@ QosPtr make_qos(QosProfile profile) {
 DdsError::DdsError(std::string_view context, dds_return_t code)
     : std::runtime_error(std::string(context) + ": " + dds_strretcode(code)), code_(code) {}
 
+std::string run_partition() {
+  static const std::string partition = [] {
+    const char* id = std::getenv(kRunIdEnv);
+    return id != nullptr && *id != '\0' ? std::string("tachi.run.") + id : std::string();
+  }();
+  return partition;
+}
+
+void read_every_run() { g_read_every_run = true; }
+
 dds_return_t check(dds_return_t rc, std::string_view context) {
   if (rc < 0) throw DdsError(context, rc);
   return rc;
@@ -188,13 +203,18 @@ dds_entity_t create_topic(const Participant& participant, const dds_topic_descri
 dds_entity_t create_writer(const Participant& participant, dds_entity_t topic, QosProfile profile,
                            const char* name) {
   const auto qos = make_qos(profile);
+  if (const auto partition = run_partition(); !partition.empty()) dds_qset_partition1(qos.get(), partition.c_str());
   return check(dds_create_writer(participant.handle(), topic, qos.get(), nullptr),
                std::string("create writer on topic ") + name + ": dds_create_writer");
 }
 
 dds_entity_t create_reader(const Participant& participant, dds_entity_t topic, QosProfile profile,
-                           const char* name) {
+                           const char* name, ReaderQos change) {
   const auto qos = make_qos(profile);
+  if (change == ReaderQos::KeepAll) dds_qset_history(qos.get(), DDS_HISTORY_KEEP_ALL, DDS_LENGTH_UNLIMITED);
+  if (change == ReaderQos::Volatile) dds_qset_durability(qos.get(), DDS_DURABILITY_VOLATILE);
+  if (g_read_every_run) dds_qset_partition1(qos.get(), "*");
+  else if (const auto partition = run_partition(); !partition.empty()) dds_qset_partition1(qos.get(), partition.c_str());
   return check(dds_create_reader(participant.handle(), topic, qos.get(), nullptr),
                std::string("create reader on topic ") + name + ": dds_create_reader");
 }

@@ -40,7 +40,51 @@ void read_builtin(dds_entity_t participant, dds_entity_t topic, Each each) {
   dds_delete(reader);
 }
 
+std::string seconds(dds_duration_t d) {
+  if (d == DDS_INFINITY) return "infinite";
+  char text[32];
+  std::snprintf(text, sizeof text, "%g s", static_cast<double>(d) * 1e-9);
+  return text;
+}
+
 }  // namespace
+
+std::string describe_qos(const dds_qos_t* qos) {
+  if (qos == nullptr) return "?";
+  std::string text;
+  const auto add = [&](const std::string& part) { text += (text.empty() ? "" : ", ") + part; };
+  dds_reliability_kind_t reliability{};
+  dds_duration_t blocking = 0;
+  if (dds_qget_reliability(qos, &reliability, &blocking)) add(reliability == DDS_RELIABILITY_RELIABLE ? "reliable" : "best-effort");
+  dds_durability_kind_t durability{};
+  if (dds_qget_durability(qos, &durability)) {
+    static const char* const names[] = {"volatile", "transient-local", "transient", "persistent"};
+    add(names[static_cast<int>(durability) & 3]);
+  }
+  dds_history_kind_t history{};
+  int32_t depth = 0;
+  if (dds_qget_history(qos, &history, &depth))
+    add(history == DDS_HISTORY_KEEP_ALL ? std::string("keep-all") : "keep-last " + std::to_string(depth));
+  dds_duration_t deadline = 0;
+  if (dds_qget_deadline(qos, &deadline) && deadline != DDS_INFINITY) add("deadline " + seconds(deadline));
+  dds_liveliness_kind_t liveliness{};
+  dds_duration_t lease = 0;
+  if (dds_qget_liveliness(qos, &liveliness, &lease) && lease != DDS_INFINITY)
+    add(std::string("liveliness ") + (liveliness == DDS_LIVELINESS_AUTOMATIC ? "automatic " : "manual ") + seconds(lease));
+  uint32_t n = 0;
+  char** partitions = nullptr;
+  if (dds_qget_partition(qos, &n, &partitions) && n > 0) {
+    std::string names;
+    for (uint32_t i = 0; i < n; ++i) {
+      if (i > 0) names += ' ';
+      names += partitions[i];
+      dds_free(partitions[i]);
+    }
+    add("partition " + names);
+  }
+  dds_free(partitions);
+  return text;
+}
 
 DomainSnapshot discover(const Participant& participant, std::chrono::milliseconds listen) {
   // Built-in topic readers see what was discovered so far: give discovery its time first.
@@ -62,7 +106,7 @@ DomainSnapshot discover(const Participant& participant, std::chrono::millisecond
     read_builtin<dds_builtintopic_endpoint_t>(
         pp, writer ? DDS_BUILTIN_TOPIC_DCPSPUBLICATION : DDS_BUILTIN_TOPIC_DCPSSUBSCRIPTION, [&](const auto& e) {
           snapshot.endpoints.push_back({guid_text(e.participant_key), e.topic_name ? e.topic_name : "",
-                                        e.type_name ? e.type_name : "", writer});
+                                        e.type_name ? e.type_name : "", writer, describe_qos(e.qos)});
         });
   }
   return snapshot;

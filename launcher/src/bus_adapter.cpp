@@ -1,6 +1,7 @@
 #include "bus_adapter.hpp"
 
 #include "tachi/common/app.hpp"
+#include "tachi/bus/serialized.hpp"
 #include "tachi/common/latency.hpp"
 
 #include <iostream>
@@ -35,14 +36,19 @@ json sequence(const Seq& seq, bool full, Each each) {
 const auto same = [](auto v) { return json(v); };
 const auto grid = [](const tachi_msg_GridCoord& g) { return json::array({g.u, g.v}); };
 
+}  // namespace
+
+template <>
 json to_json(const tachi_msg_RawHandSample& m, bool) {
   return {{"sensor_id", m.sensor_id}, {"frame", m.frame},     {"capture_time_ns", m.capture_time_ns},
           {"acquired_ns", m.acquired_ns}, {"position_m", vec(m.position_m)}, {"pixel", {m.pixel_u, m.pixel_v}},
           {"confidence", m.confidence}, {"tracked", m.tracked}};
 }
+template <>
 json to_json(const tachi_msg_VoiceCommand& m, bool) {
   return {{"source_id", m.source_id}, {"time_ns", m.time_ns}, {"command", static_cast<int>(m.command)}, {"phrase", m.phrase}};
 }
+template <>
 json to_json(const tachi_msg_StrokeSample& m, bool) {
   return {{"sensor_id", m.sensor_id}, {"stroke_id", m.stroke_id}, {"frame", m.frame}, {"time_ns", m.time_ns},
           {"position_m", vec(m.position_m)}, {"tracked", m.tracked}, {"gate", static_cast<int>(m.gate)},
@@ -50,6 +56,7 @@ json to_json(const tachi_msg_StrokeSample& m, bool) {
           {"hand_outside_cloth", m.hand_outside_cloth}, {"distance_to_cloth_m", m.distance_to_cloth_m},
           {"acquired_ns", m.acquired_ns}, {"session_id", m.session_id}};
 }
+template <>
 json to_json(const tachi_msg_ClothTopology& m, bool full) {
   return {{"cloth_id", m.cloth_id}, {"version", m.version}, {"columns", m.columns}, {"rows", m.rows},
           {"triangles", sequence(m.triangles, full, same)}, {"particle_grid", sequence(m.particle_grid, full, grid)},
@@ -57,6 +64,7 @@ json to_json(const tachi_msg_ClothTopology& m, bool full) {
           {"duplicated_from", sequence(m.duplicated_from, full, same)},
           {"changed_triangles", sequence(m.changed_triangles, full, same)}, {"session_id", m.session_id}};
 }
+template <>
 json to_json(const tachi_msg_ClothTopologyDelta& m, bool full) {
   return {{"cloth_id", m.cloth_id}, {"session_id", m.session_id}, {"base_version", m.base_version}, {"version", m.version},
           {"new_particle_grid", sequence(m.new_particle_grid, full, grid)},
@@ -65,18 +73,25 @@ json to_json(const tachi_msg_ClothTopologyDelta& m, bool full) {
           {"added_triangles", sequence(m.added_triangles, full, same)},
           {"duplicated_from", sequence(m.duplicated_from, full, same)}};
 }
+template <>
 json to_json(const tachi_msg_ClothState& m, bool full) {
   return {{"cloth_id", m.cloth_id}, {"frame", m.frame}, {"sim_time_ns", m.sim_time_ns},
           {"topology_version", m.topology_version}, {"positions", sequence(m.positions, full, same)},
           {"session_id", m.session_id}, {"acquired_ns", m.acquired_ns}, {"published_ns", m.published_ns},
           {"held_particle", m.held_particle}};
 }
+template <>
 json to_json(const tachi_msg_CutEvent& m, bool full) {
   return {{"cloth_id", m.cloth_id}, {"stroke_id", m.stroke_id}, {"topology_version", m.topology_version},
           {"cut_line", sequence(m.cut_line, full, grid)}, {"particles_duplicated", m.particles_duplicated},
           {"pieces", m.pieces}, {"fallen_pieces", m.fallen_pieces}, {"cut_length_m", m.cut_length_m},
           {"session_id", m.session_id}, {"sensor_id", m.sensor_id}};
 }
+template <>
+json to_json(const tachi_msg_SceneObject& m, bool full) {
+  return {{"cloth_id", m.cloth_id}, {"points", sequence(m.points, full, same)}, {"session_id", m.session_id}};
+}
+template <>
 json to_json(const tachi_msg_NodeStatus& m, bool) {
   json metrics = json::object();
   for (std::uint32_t i = 0; i < m.metrics._length; ++i) metrics[m.metrics._buffer[i].name] = m.metrics._buffer[i].value;
@@ -85,21 +100,31 @@ json to_json(const tachi_msg_NodeStatus& m, bool) {
           {"detail", m.detail}, {"metrics", metrics}};
 }
 
+namespace {
 template <class T>
-std::uint64_t echo_topic(const bus::Participant& participant, const bus::TopicSpec<T>& topic, std::uint64_t count,
-                         bool full, std::chrono::milliseconds timeout) {
+std::uint64_t echo_topic(const bus::Participant& participant, const bus::TopicSpec<T>& topic, const EchoOptions& o) {
   bus::Reader<T> reader{participant, topic};
   std::uint64_t printed = 0;
-  const auto deadline = std::chrono::steady_clock::now() + timeout;
+  const auto deadline = std::chrono::steady_clock::now() + o.timeout;
   common::run_until_stopped([&] {
     reader.wait_for_data(std::chrono::milliseconds(100));
     for (const auto& sample : reader.take()) {
-      std::cout << to_json(*sample, full).dump() << '\n';
-      if (++printed == count) break;
+      // A field is printed whole: asking for positions means all of them.
+      const json j = to_json(*sample, o.full || !o.field.empty());
+      if (o.field.empty()) {
+        std::cout << j.dump() << '\n';
+      } else if (const json* value = field_at(j, o.field)) {
+        std::cout << value->dump() << '\n';
+      } else {
+        std::string fields;
+        for (const auto& [key, v] : j.items()) fields += (fields.empty() ? "" : ", ") + key;
+        throw std::invalid_argument("--field " + o.field + ": no such field in " + topic.name + " (its fields: " + fields + ")");
+      }
+      if (++printed == o.count) break;
     }
     std::cout.flush();
-    if (count > 0 && printed >= count) return false;
-    return timeout.count() == 0 || std::chrono::steady_clock::now() < deadline;
+    if (o.count > 0 && printed >= o.count) return false;
+    return o.timeout.count() == 0 || std::chrono::steady_clock::now() < deadline;
   });
   return printed;
 }
@@ -157,26 +182,58 @@ void RunMonitor::poll(StatusBoard& board, std::chrono::milliseconds timeout) {
   strokes_csv_.flush();
 }
 
-bool known_topic(const std::string& topic) {
-  namespace t = bus::topics;
-  for (const char* name : {t::raw_hand.name, t::voice_command.name, t::stroke.name, t::cloth_topology.name,
-                           t::cloth_topology_delta.name, t::cloth_state.name, t::cut_event.name, t::node_status.name})
-    if (topic == name) return true;
-  return false;
+bool known_topic(const std::string& topic) { return bus::find_topic(topic) != nullptr; }
+
+const json* field_at(const json& sample, const std::string& path) {
+  const json* at = &sample;
+  std::size_t from = 0;
+  while (from <= path.size()) {
+    const std::size_t dot = std::min(path.find('.', from), path.size());
+    const std::string key = path.substr(from, dot - from);
+    if (at->is_object() && at->contains(key)) {
+      at = &(*at)[key];
+    } else if (at->is_array() && !key.empty() && key.find_first_not_of("0123456789") == std::string::npos &&
+               std::stoul(key) < at->size()) {
+      at = &(*at)[std::stoul(key)];
+    } else {
+      return nullptr;
+    }
+    from = dot + 1;
+  }
+  return at;
 }
 
-std::uint64_t echo(const bus::Participant& p, const std::string& topic, std::uint64_t count, bool full,
-                   std::chrono::milliseconds timeout) {
-  namespace t = bus::topics;
-  if (topic == t::raw_hand.name) return echo_topic(p, t::raw_hand, count, full, timeout);
-  if (topic == t::voice_command.name) return echo_topic(p, t::voice_command, count, full, timeout);
-  if (topic == t::stroke.name) return echo_topic(p, t::stroke, count, full, timeout);
-  if (topic == t::cloth_topology.name) return echo_topic(p, t::cloth_topology, count, full, timeout);
-  if (topic == t::cloth_topology_delta.name) return echo_topic(p, t::cloth_topology_delta, count, full, timeout);
-  if (topic == t::cloth_state.name) return echo_topic(p, t::cloth_state, count, full, timeout);
-  if (topic == t::cut_event.name) return echo_topic(p, t::cut_event, count, full, timeout);
-  if (topic == t::node_status.name) return echo_topic(p, t::node_status, count, full, timeout);
-  throw std::invalid_argument("unknown topic " + topic);
+std::uint64_t echo(const bus::Participant& p, const std::string& topic, const EchoOptions& options) {
+  std::uint64_t printed = 0;
+  if (!bus::visit_topic(topic, [&](const auto& spec) { printed = echo_topic(p, spec, options); }))
+    throw std::invalid_argument("unknown topic " + topic + "; known: " + bus::topic_names());
+  return printed;
+}
+
+std::optional<TopicRate> watch_rate(const bus::Participant& participant, const bus::TopicInfo& topic, bool bandwidth,
+                                    std::size_t window, std::chrono::milliseconds duration) {
+  using Clock = std::chrono::steady_clock;
+  bus::SerializedReader reader{participant, topic, bus::ReaderRole::RateMeter};
+  bus::WaitSet waitset{participant};
+  waitset.attach(reader);
+  TopicRateWindow rates(window);
+  std::optional<TopicRate> last;
+  const auto start = Clock::now();
+  auto next_report = start + std::chrono::seconds(1);
+  common::run_until_stopped([&] {
+    waitset.wait(std::chrono::milliseconds(100));
+    // Arrival time: when this tool took the sample (as ros2 topic hz measures it).
+    const auto now_ns = std::chrono::duration_cast<std::chrono::nanoseconds>(Clock::now().time_since_epoch()).count();
+    reader.take([&](std::span<const std::byte> cdr, std::int64_t) { rates.add(now_ns, cdr.size()); });
+    const auto now = Clock::now();
+    if (now >= next_report) {
+      next_report += std::chrono::seconds(1);
+      last = rates.rate();
+      std::cout << (last ? (bandwidth ? bw_report(*last) : hz_report(*last)) : "no new messages") << std::endl;
+    }
+    return duration.count() == 0 || now - start < duration;
+  });
+  return last;
 }
 
 }  // namespace tachi::launcher

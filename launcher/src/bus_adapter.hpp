@@ -5,6 +5,7 @@
 
 #include "tachi/bus/topics.hpp"
 #include "tachi/launcher/status.hpp"
+#include "tachi/launcher/topic_rate.hpp"
 
 #include <nlohmann/json.hpp>
 
@@ -38,11 +39,30 @@ class RunMonitor {
   std::uint64_t cut_events_ = 0;
 };
 
-/// The topic names `tachi echo` knows, and one JSON line per sample of such a topic (sequences
-/// longer than 8 elements summarised as {"length": n, "first": [...]} unless `full`).
+/// Whether `topic` is one of tachi's topics (bus::for_each_topic).
 [[nodiscard]] bool known_topic(const std::string& topic);
-/// Prints up to `count` samples (0: until stopped) of `topic` as JSON lines on stdout; returns how many.
-std::uint64_t echo(const bus::Participant& participant, const std::string& topic, std::uint64_t count, bool full,
-                   std::chrono::milliseconds timeout);
+
+struct EchoOptions {
+  std::uint64_t count = 0;  ///< 0: until stopped
+  bool full = false;        ///< sequences whole, not {"length": n, "first": [8 elements]}
+  std::string field;        ///< a dotted path into the sample (e.g. position_m.0, metrics.fps); empty: the whole sample
+  std::chrono::milliseconds timeout{0};  ///< 0: no limit
+};
+
+/// A sample's JSON form, `tachi echo`'s line (sequences longer than 8 summarised unless `full`).
+template <class T>
+[[nodiscard]] nlohmann::json to_json(const T& msg, bool full);
+
+/// The value at a dotted path ("position_m.0", "metrics.fps") of a JSON sample; nullptr when there is none.
+[[nodiscard]] const nlohmann::json* field_at(const nlohmann::json& sample, const std::string& path);
+
+/// Prints samples of `topic` as JSON lines on stdout (or, with a field, that field's value); returns
+/// how many. Throws std::invalid_argument naming the path when a sample has no such field.
+std::uint64_t echo(const bus::Participant& participant, const std::string& topic, const EchoOptions& options);
+
+/// `tachi hz` / `tachi bw`: prints the topic's rate and jitter (or bandwidth) every second, over the
+/// last `window` samples, until stopped or `duration` passed (0: no limit). Returns the last figures.
+std::optional<TopicRate> watch_rate(const bus::Participant& participant, const bus::TopicInfo& topic, bool bandwidth,
+                                    std::size_t window, std::chrono::milliseconds duration);
 
 }  // namespace tachi::launcher

@@ -53,6 +53,7 @@ enum class QosProfile {
 /// A topic: its DDS name, its QoS profile and (through T) its type.
 template <class T>
 struct TopicSpec {
+  using Type = T;
   const char* name;
   QosProfile profile;
 };
@@ -92,7 +93,11 @@ class Participant {
 namespace detail {
 dds_entity_t create_topic(const Participant& participant, const dds_topic_descriptor_t* descriptor, const char* name);
 dds_entity_t create_writer(const Participant& participant, dds_entity_t topic, QosProfile profile, const char* name);
-dds_entity_t create_reader(const Participant& participant, dds_entity_t topic, QosProfile profile, const char* name);
+/// A tool's change to a profile's reader QoS: KeepAll keeps every sample until taken (a recorder);
+/// Volatile asks for no samples written before it joined (a rate meter).
+enum class ReaderQos { Profile, KeepAll, Volatile };
+dds_entity_t create_reader(const Participant& participant, dds_entity_t topic, QosProfile profile, const char* name,
+                           ReaderQos change = ReaderQos::Profile);
 void delete_entity(dds_entity_t entity) noexcept;
 std::uint32_t matched_readers(dds_entity_t writer);
 std::uint32_t matched_writers(dds_entity_t reader);
@@ -217,8 +222,9 @@ class WaitSet {
   WaitSet(const WaitSet&) = delete;
   WaitSet& operator=(const WaitSet&) = delete;
 
-  template <class T>
-  void attach(const Reader<T>& reader) {
+  /// Any reader with a handle(): Reader<T>, SerializedReader.
+  template <class AnyReader>
+  void attach(const AnyReader& reader) {
     attach_reader(reader.handle());
   }
   /// True when at least one attached reader has data; false on timeout.

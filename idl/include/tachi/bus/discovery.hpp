@@ -25,7 +25,12 @@ struct EndpointInfo {
   std::string topic;
   std::string type;
   bool writer = false;
+  std::string qos;  ///< e.g. "reliable, transient-local, keep-last 64, liveliness automatic 3 s" (`tachi topics --verbose`)
 };
+
+/// The QoS a writer offers or a reader requests, in words: reliability, durability, history, and
+/// deadline, liveliness and partitions when they are not the defaults.
+std::string describe_qos(const dds_qos_t* qos);
 
 struct DomainSnapshot {
   std::vector<ParticipantInfo> participants;

@@ -6,6 +6,9 @@
 // it is never timed asleep; its activation state is checked and printed.
 //
 // Usage: sim_bench [--grids 32,64,128,256] [--warmup 60] [--steps 120] [--variants]
+//                  [--threads 1,2 [--no-bullet]]
+//   --threads: tachi's step on each of these thread counts (SolverParams::threads), each against the first;
+//     --no-bullet leaves Bullet out (it takes seconds a step at 512 x 512).
 //   --variants: also print the solver-design table of docs/sim.md (sub-steps x passes, attachments).
 //   --bullet-bending-helper: give Bullet generateBendingConstraints(2) instead of the same bend links as
 //     ours (more links, slower; needs nodes^2 ints while building: up to 128^2 only).
@@ -302,6 +305,8 @@ int main(int argc, char** argv) {
   int steps = 120;
   bool variants = false;
   bool bending_helper = false;
+  std::vector<int> thread_counts;
+  bool bullet = true;
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
     const bool has_value = i + 1 < argc;
@@ -315,10 +320,23 @@ int main(int argc, char** argv) {
       variants = true;
     } else if (arg == "--bullet-bending-helper") {
       bending_helper = true;
+    } else if (arg == "--threads" && has_value) {
+      std::stringstream list{argv[++i]};
+      std::string item;
+      while (std::getline(list, item, ',')) {
+        const int t = std::atoi(item.c_str());
+        if (t < 1 || t > 64) {
+          std::fprintf(stderr, "sim_bench: --threads needs counts in 1..64, got '%s'\n", item.c_str());
+          return 2;
+        }
+        thread_counts.push_back(t);
+      }
+    } else if (arg == "--no-bullet") {
+      bullet = false;
     } else {
       std::fprintf(stderr, "sim_bench: unknown or incomplete argument '%s'\n"
                            "usage: sim_bench [--grids 32,64,128,256] [--warmup 60] [--steps 120] [--variants]\n"
-                           "                 [--bullet-bending-helper]\n",
+                           "                 [--bullet-bending-helper] [--threads 1,2 [--no-bullet]]\n",
                    arg.c_str());
       return 2;
     }
@@ -330,6 +348,24 @@ int main(int argc, char** argv) {
 
   std::printf("sim_bench: one 1/60 s step, corners pinned, hanging start; warm-up %d steps, median of %d\n", warmup,
               steps);
+  if (!thread_counts.empty()) {
+    // Each count in its own process, one after another for each grid: the first is the reference.
+    std::printf("%6s %8s %12s %12s %12s %10s\n", "grid", "threads", "tachi ms", "end strain", "peak strain",
+                "speed-up");
+    for (const int n : grids) {
+      double reference = 0.0;
+      for (const int t : thread_counts) {
+        SolverParams params;
+        params.threads = t;
+        const Run r = run_fresh([&] { return run_tachi(n, warmup, steps, params); });
+        if (reference == 0.0) reference = r.step_ms;
+        std::printf("%6s %8d %12.3f %11.1f%% %11.1f%% %9.2fx\n", (std::to_string(n) + "^2").c_str(), t, r.step_ms,
+                    100.0 * r.max_strain, 100.0 * r.peak_strain, reference / r.step_ms);
+        std::fflush(stdout);
+      }
+    }
+    if (!bullet) return 0;
+  }
   std::printf("Bullet springs: %s\n", bending_helper ? "CreatePatch diagonals + generateBendingConstraints(2)"
                                                      : "CreatePatch diagonals + bend links two apart (same set as tachi)");
   std::printf("%6s %12s %12s %12s %12s %10s  %s\n", "grid", "tachi ms", "tachi strain", "bullet ms", "bullet strain",

@@ -1402,25 +1402,19 @@ void Solver::sweep_all_tethers(Vec4* x) const {
   sweep(begin, count);
 }
 
-std::uint32_t Solver::first_over_limit(const Vec4* x, std::uint32_t from, float limit) const {
-  const auto places = static_cast<std::uint32_t>(strain_limit_.size());
-  std::uint32_t first = places;
-  const int threads = params_.threads;
-  const std::uint32_t span = places - std::min(from, places);
-#pragma omp parallel for schedule(static) num_threads(threads) reduction(min : first)
-  for (int t = 0; t < threads; ++t) {
-    const std::uint32_t begin = from + static_cast<std::uint32_t>(std::uint64_t{span} * static_cast<std::uint64_t>(t) /
-                                                                  static_cast<std::uint64_t>(threads));
-    const std::uint32_t end = from + static_cast<std::uint32_t>(std::uint64_t{span} * static_cast<std::uint64_t>(t + 1) /
-                                                                static_cast<std::uint64_t>(threads));
-    for (std::uint32_t place = begin; place < end; ++place) {
-      if (over_limit(x, strain_limit_[place], limit)) {
-        first = std::min(first, place);
-        break;
-      }
+void Solver::mark_over_limit(const Vec4* x, float limit) {
+  const std::size_t places = strain_limit_.size();
+  const auto words = static_cast<std::ptrdiff_t>(limit_dirty_.size());
+#pragma omp parallel for schedule(static) num_threads(params_.threads)
+  for (std::ptrdiff_t w = 0; w < words; ++w) {
+    std::uint64_t bits = 0;
+    const std::size_t first = static_cast<std::size_t>(w) * 64;
+    const std::size_t last = std::min(first + 64, places);
+    for (std::size_t place = first; place < last; ++place) {
+      if (over_limit(x, strain_limit_[place], limit)) bits |= std::uint64_t{1} << (place - first);
     }
+    limit_dirty_[static_cast<std::size_t>(w)] = bits;
   }
-  return first;
 }
 
 template <typename LimitSpring>
@@ -1682,6 +1676,15 @@ void Solver::substep(Cloth& cloth, const Colliders& colliders, float h, bool fir
       mark_springs_of(spring.b);
     };
     std::uint32_t place = 0;
+    if (full && threads > 1 && marking) {
+      // A full pass on several threads: which springs are over the limit now is read on all of them
+      // (mark_over_limit), and the pass sweeps those as a sparse pass does, with the springs that its own
+      // corrections move an end of. A spring neither over the limit nor moved since would be found within: the
+      // same corrections as the full pass (only when marking stops, a sixteenth of the springs marked, can the
+      // rest of the pass differ from one thread's, for it counts the marks ahead of the sweep too).
+      mark_over_limit(x, limit);
+      full = false;
+    }
     if (!full) {
       for (std::size_t w = 0; w < limit_dirty_.size() && marking; ++w) {
         this_word = limit_dirty_[w];
@@ -1699,26 +1702,9 @@ void Solver::substep(Cloth& cloth, const Colliders& colliders, float h, bool fir
     }
     if (full || !marking) {
       full = true;
-      if (threads > 1) {
-        // Until a spring is corrected nothing moves, so the springs before the first one over the limit are
-        // only read: that search runs on every thread, and the pass goes on in order from what it found, on
-        // one thread for a stretch (corrections come in clusters) and then by another search.
-        constexpr std::uint32_t kInOrderAfterCorrection = 1024;
-        const auto end = static_cast<std::uint32_t>(places);
-        while (place < end) {
-          place = first_over_limit(x, place, limit);
-          for (std::uint32_t quiet = 0; place < end && quiet < kInOrderAfterCorrection; ++place) {
-            cursor = place;
-            const std::size_t before = corrections;
-            sweep(place);
-            quiet = corrections == before ? quiet + 1 : 0;
-          }
-        }
-      } else {
-        for (; place < places; ++place) {
-          cursor = place;
-          sweep(place);
-        }
+      for (; place < places; ++place) {
+        cursor = place;
+        sweep(place);
       }
     }
     cursor = static_cast<std::uint32_t>(places);  // marks from here on are for the next pass

@@ -189,8 +189,8 @@ class Solver {
   void sweep_springs(Eigen::Vector4f* padded, std::size_t family, float alpha) const;
   /// Step 2 over every tether, in the order they apply: in parallel over each pin group's block.
   void sweep_all_tethers(Eigen::Vector4f* x) const;
-  /// The first place at or after `from` in strain_limit_ whose spring is over `limit` (places: none).
-  [[nodiscard]] std::uint32_t first_over_limit(const Eigen::Vector4f* x, std::uint32_t from, float limit) const;
+  /// Sets limit_dirty_ to a bit per place in strain_limit_ whose spring is over `limit` now, on all threads.
+  void mark_over_limit(const Eigen::Vector4f* x, float limit);
   void substep(Cloth& cloth, const Colliders& colliders, float h, bool first);
   /// Provot's sweeps past their budget, over only the springs near the last corrections (substep step 5).
   template <typename LimitSpring>

@@ -1402,19 +1402,20 @@ void Solver::sweep_all_tethers(Vec4* x) const {
   sweep(begin, count);
 }
 
+void Solver::mark_word(const Vec4* x, float limit, std::size_t word) {
+  std::uint64_t bits = 0;
+  const std::size_t first = word * 64;
+  const std::size_t last = std::min(first + 64, strain_limit_.size());
+  for (std::size_t place = first; place < last; ++place) {
+    if (over_limit(x, strain_limit_[place], limit)) bits |= std::uint64_t{1} << (place - first);
+  }
+  limit_dirty_[word] = bits;
+}
+
 void Solver::mark_over_limit(const Vec4* x, float limit) {
-  const std::size_t places = strain_limit_.size();
   const auto words = static_cast<std::ptrdiff_t>(limit_dirty_.size());
 #pragma omp parallel for schedule(static) num_threads(params_.threads)
-  for (std::ptrdiff_t w = 0; w < words; ++w) {
-    std::uint64_t bits = 0;
-    const std::size_t first = static_cast<std::size_t>(w) * 64;
-    const std::size_t last = std::min(first + 64, places);
-    for (std::size_t place = first; place < last; ++place) {
-      if (over_limit(x, strain_limit_[place], limit)) bits |= std::uint64_t{1} << (place - first);
-    }
-    limit_dirty_[static_cast<std::size_t>(w)] = bits;
-  }
+  for (std::ptrdiff_t w = 0; w < words; ++w) mark_word(x, limit, static_cast<std::size_t>(w));
 }
 
 template <typename LimitSpring>
@@ -1461,8 +1462,8 @@ void Solver::limit_locally(const Cloth& cloth, const LimitSpring& limit_spring) 
 }
 
 template <typename Predict>
-void Solver::front_in_bands(Vec4* x, std::size_t n, const Predict& predict, bool soft, float shear_alpha,
-                            float bend_alpha, float structural_alpha) {
+bool Solver::front_in_bands(Vec4* x, std::size_t n, const Predict& predict, bool soft, float shear_alpha,
+                            float bend_alpha, float structural_alpha, float limit) {
   Vec4* const padded = x - 1;
   const int threads = params_.threads;
   const bool ordered = !tether_order_.empty();
@@ -1481,6 +1482,11 @@ void Solver::front_in_bands(Vec4* x, std::size_t n, const Predict& predict, bool
   const std::size_t count = ordered ? tether_order_.size() : attachments_.size();
   const std::size_t rest = block[blocks];
   const int bands = static_cast<int>(bands_[0].size()) - 1;
+  // With no cut's springs to sweep after the bands, the strain limit's first reading (mark_over_limit) joins
+  // the region: one wait for the other thread fewer per sub-step.
+  bool mark = limit > 0.0F;
+  for (std::size_t f = 0; f < 3; ++f) mark = mark && bands_[f].back() == groups_[f].size();
+  const auto words = static_cast<std::ptrdiff_t>(limit_dirty_.size());
   const auto run = [&](const auto& at) {
     // The first place in [from, to) of a block (sorted by particle) whose tether holds `particle` or a later one.
     const auto first_from = [&](std::size_t from, std::size_t to, std::size_t particle) {
@@ -1528,6 +1534,10 @@ void Solver::front_in_bands(Vec4* x, std::size_t n, const Predict& predict, bool
           for (int it = 0; it < params_.iterations; ++it) band(0, structural_alpha);
         }
       }
+      if (mark) {
+#pragma omp for schedule(static)
+        for (std::ptrdiff_t w = 0; w < words; ++w) mark_word(x, limit, static_cast<std::size_t>(w));
+      }
     }
   };
   if (ordered) {
@@ -1545,6 +1555,7 @@ void Solver::front_in_bands(Vec4* x, std::size_t n, const Predict& predict, bool
     tail(2, bend_alpha);
   }
   for (int it = 0; it < params_.iterations; ++it) tail(0, structural_alpha);
+  return mark;
 }
 
 void Solver::substep(Cloth& cloth, const Colliders& colliders, float h, bool first) {
@@ -1576,11 +1587,17 @@ void Solver::substep(Cloth& cloth, const Colliders& colliders, float h, bool fir
   };
   old_work_[0] = work_[0];
 
+  // Step 5's limit, and its bits (a full pass on several threads reads them first: mark_over_limit).
+  const float limit = 1.0F + params_.max_strain;
+  const std::size_t places = strain_limit_.size();
+  limit_dirty_.assign((places + 63) / 64, 0);
+  bool premarked = false;
   if (threads > 1 && banded()) {
     // Steps 1 to 4 in one parallel region (each wait for the other thread is a chance to lose the core on a
     // shared machine): steps 1 and 2 per range of particles, each thread predicting its particles and then
     // applying their unbent tethers (anchored on pins: sweep_all_tethers), then the springs band by band.
-    front_in_bands(x, n, predict, soft, shear_alpha, bend_alpha, structural_alpha);
+    premarked = front_in_bands(x, n, predict, soft, shear_alpha, bend_alpha, structural_alpha,
+                            params_.sparse_strain_limit ? limit : 0.0F);
   } else {
     for_chunks(n, threads, predict);
 
@@ -1612,7 +1629,6 @@ void Solver::substep(Cloth& cloth, const Colliders& colliders, float h, bool fir
   // A violating spring is brought to 95 % of the allowed stretch, not exactly to it: the corrections of
   // its neighbours then push it back towards, not over, the limit (a 256^2 cloth otherwise rests with a
   // few springs at 10.08 %).
-  const float limit = 1.0F + params_.max_strain;
   const float corrected = 1.0F + 0.95F * params_.max_strain;
   // A correction can stretch a spring swept earlier, so sweeps repeat until one finds nothing to
   // correct (usually the first: the scan without a square root is cheap) or the budget is spent.
@@ -1634,8 +1650,6 @@ void Solver::substep(Cloth& cloth, const Colliders& colliders, float h, bool fir
   // stops marking, and the next pass reads them all.
   bool clean = false;
   bool full = true;
-  const std::size_t places = strain_limit_.size();
-  limit_dirty_.assign((places + 63) / 64, 0);
   // Only the last pass records what it corrected: a pass on a falling piece corrects a third of the springs.
   for (int pass = 0; pass < params_.strain_limit_passes && !clean; ++pass) {
     const bool last = pass + 1 == params_.strain_limit_passes;
@@ -1682,7 +1696,7 @@ void Solver::substep(Cloth& cloth, const Colliders& colliders, float h, bool fir
       // corrections move an end of. A spring neither over the limit nor moved since would be found within: the
       // same corrections as the full pass (only when marking stops, a sixteenth of the springs marked, can the
       // rest of the pass differ from one thread's, for it counts the marks ahead of the sweep too).
-      mark_over_limit(x, limit);
+      if (pass > 0 || !premarked) mark_over_limit(x, limit);  // the first pass's: read with the springs
       full = false;
     }
     if (!full) {

@@ -182,15 +182,18 @@ class Solver {
   /// Splits each family's batches, as fully built, into 2 x threads bands of rows that share no particle with
   /// the other bands of their parity (none: too few rows, or a band's particles reach past its neighbour).
   void build_bands(const Cloth& cloth);
+  /// Returns whether it also read which springs are over `limit` into limit_dirty_ (limit > 0, no cut's
+  /// springs after the bands).
   template <typename Predict>
-  void front_in_bands(Eigen::Vector4f* x, std::size_t n, const Predict& predict, bool soft, float shear_alpha,
-                      float bend_alpha, float structural_alpha);
+  bool front_in_bands(Eigen::Vector4f* x, std::size_t n, const Predict& predict, bool soft, float shear_alpha,
+                      float bend_alpha, float structural_alpha, float limit);
   /// One XPBD pass over a family of springs (substep steps 3 and 4): in bands when threads > 1.
   void sweep_springs(Eigen::Vector4f* padded, std::size_t family, float alpha) const;
   /// Step 2 over every tether, in the order they apply: in parallel over each pin group's block.
   void sweep_all_tethers(Eigen::Vector4f* x) const;
   /// Sets limit_dirty_ to a bit per place in strain_limit_ whose spring is over `limit` now, on all threads.
   void mark_over_limit(const Eigen::Vector4f* x, float limit);
+  void mark_word(const Eigen::Vector4f* x, float limit, std::size_t word);
   void substep(Cloth& cloth, const Colliders& colliders, float h, bool first);
   /// Provot's sweeps past their budget, over only the springs near the last corrections (substep step 5).
   template <typename LimitSpring>

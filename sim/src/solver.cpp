@@ -1124,7 +1124,8 @@ void Solver::step(Cloth& cloth, const Colliders& colliders) {
     for (std::size_t i = begin; i < end; ++i) work_[i + 1] << cloth.position[i], cloth.inverse_mass[i];
   });
   const float h = params_.dt / static_cast<float>(params_.substeps);
-  for (int s = 0; s < params_.substeps; ++s) substep(cloth, colliders, h, s == 0);
+  for (int s = 0; s < params_.substeps; ++s) substep(cloth, colliders, h, s == 0, s + 1 == params_.substeps);
+  if (params_.threads > 1 && banded()) return;  // the last sub-step wrote the positions back (substep)
   for_chunks(n, params_.threads, [&](std::size_t begin, std::size_t end) {
     for (std::size_t i = begin; i < end; ++i) cloth.position[i] = work_[i + 1].head<3>();
   });
@@ -1558,7 +1559,7 @@ bool Solver::front_in_bands(Vec4* x, std::size_t n, const Predict& predict, bool
   return mark;
 }
 
-void Solver::substep(Cloth& cloth, const Colliders& colliders, float h, bool first) {
+void Solver::substep(Cloth& cloth, const Colliders& colliders, float h, bool first, bool last_substep) {
   const std::size_t n = cloth.particle_count();
   Vec4* const padded = work_.data();
   Vec4* x = padded + 1;  // particle i
@@ -1592,12 +1593,37 @@ void Solver::substep(Cloth& cloth, const Colliders& colliders, float h, bool fir
   const std::size_t places = strain_limit_.size();
   limit_dirty_.assign((places + 63) / 64, 0);
   bool premarked = false;
-  if (threads > 1 && banded()) {
+  // 6. Collisions by projection with friction (collide_with_friction), then velocities from the positions
+  // actually reached.
+  const bool any_collider = !colliders.spheres.empty() || !colliders.boxes.empty() || colliders.ground.has_value() ||
+                            cloud != nullptr;
+  const float inv_h = 1.0F / h;
+  const auto finish = [&](std::size_t begin, std::size_t end) {
+    if (any_collider) {
+      for (std::size_t i = begin; i < end; ++i) {
+        if (x[i].w() == 0.0F) continue;
+        Eigen::Vector3f p = x[i].head<3>();
+        if (collide_with_friction(p, old_x[i].head<3>(), colliders, h)) x[i].head<3>() = p;
+      }
+    }
+    for (std::size_t i = begin; i < end; ++i) {
+      if (x[i].w() == 0.0F) continue;
+      v[i] = (x[i].head<3>() - old_x[i].head<3>()) * inv_h;
+    }
+  };
+  const bool fused = threads > 1 && banded();
+  if (fused) {
     // Steps 1 to 4 in one parallel region (each wait for the other thread is a chance to lose the core on a
     // shared machine): steps 1 and 2 per range of particles, each thread predicting its particles and then
     // applying their unbent tethers (anchored on pins: sweep_all_tethers), then the springs band by band.
-    premarked = front_in_bands(x, n, predict, soft, shear_alpha, bend_alpha, structural_alpha,
-                            params_.sparse_strain_limit ? limit : 0.0F);
+    // Each thread also finishes the previous sub-step's step 6 for its particles first (elementwise, on the
+    // same particles it predicts next): one wait fewer per sub-step.
+    const auto finish_and_predict = [&](std::size_t begin, std::size_t end) {
+      if (!first) finish(begin, end);
+      predict(begin, end);
+    };
+    premarked = front_in_bands(x, n, finish_and_predict, soft, shear_alpha, bend_alpha, structural_alpha,
+                               params_.sparse_strain_limit ? limit : 0.0F);
   } else {
     for_chunks(n, threads, predict);
 
@@ -1735,25 +1761,16 @@ void Solver::substep(Cloth& cloth, const Colliders& colliders, float h, bool fir
   // Not clean: every pass ran (validate: strain_limit_passes >= 1), so limit_active_ is this sub-step's last.
   if (!clean && few_limit_corrections()) limit_locally(cloth, limit_spring);
 
-  // 6. Collisions by projection with friction (collide_with_friction), then velocities from the positions
-  // actually reached.
-  const bool any_collider = !colliders.spheres.empty() || !colliders.boxes.empty() || colliders.ground.has_value() ||
-                            cloud != nullptr;
-  const float inv_h = 1.0F / h;
-  for_chunks(n, threads, [&](std::size_t begin, std::size_t end) {
-    if (any_collider) {
-      for (std::size_t i = begin; i < end; ++i) {
-        if (x[i].w() == 0.0F) continue;
-        Eigen::Vector3f p = x[i].head<3>();
-        if (collide_with_friction(p, old_x[i].head<3>(), colliders, h)) x[i].head<3>() = p;
-      }
-    }
-    for (std::size_t i = begin; i < end; ++i) {
-      if (x[i].w() == 0.0F) continue;
-      v[i] = (x[i].head<3>() - old_x[i].head<3>()) * inv_h;
-    }
-  });
-
+  // 6. (finish, above): in bands on several threads, the next sub-step's region does it, or the last one's
+  // here, with the positions written back.
+  if (!fused) {
+    for_chunks(n, threads, finish);
+  } else if (last_substep) {
+    for_chunks(n, threads, [&](std::size_t begin, std::size_t end) {
+      finish(begin, end);
+      for (std::size_t i = begin; i < end; ++i) cloth.position[i] = x[i].head<3>();
+    });
+  }
 }
 
 double mechanical_energy(const Cloth& cloth, const Eigen::Vector3f& gravity, double k_structural) {

@@ -194,7 +194,9 @@ class Solver {
   /// Sets limit_dirty_ to a bit per place in strain_limit_ whose spring is over `limit` now, on all threads.
   void mark_over_limit(const Eigen::Vector4f* x, float limit);
   void mark_word(const Eigen::Vector4f* x, float limit, std::size_t word);
-  void substep(Cloth& cloth, const Colliders& colliders, float h, bool first);
+  /// One sub-step; on several threads in bands (banded()) its step 6 is finished by the next one, the last
+  /// one's with the positions written back to the cloth.
+  void substep(Cloth& cloth, const Colliders& colliders, float h, bool first, bool last_substep);
   /// Provot's sweeps past their budget, over only the springs near the last corrections (substep step 5).
   template <typename LimitSpring>
   void limit_locally(const Cloth& cloth, const LimitSpring& limit_spring);

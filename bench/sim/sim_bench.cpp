@@ -6,6 +6,10 @@
 // it is never timed asleep; its activation state is checked and printed.
 //
 // Usage: sim_bench [--grids 32,64,128,256] [--warmup 60] [--steps 120] [--variants]
+//                  [--threads 1,2 [--no-bullet]]
+//   --threads: tachi's step on each of these thread counts (SolverParams::threads), each against the first;
+//     --no-bullet leaves Bullet out (it takes seconds a step at 512 x 512).
+//   --xpbd N: only the second anchor, a textbook small-steps XPBD cloth (run_xpbd) at tachi's maximum strain, N x N.
 //   --variants: also print the solver-design table of docs/sim.md (sub-steps x passes, attachments).
 //   --bullet-bending-helper: give Bullet generateBendingConstraints(2) instead of the same bend links as
 //     ours (more links, slower; needs nodes^2 ints while building: up to 128^2 only).
@@ -26,10 +30,12 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <limits>
 #include <memory>
 #include <sstream>
 #include <string>
@@ -224,6 +230,95 @@ std::vector<int> parse_list(const std::string& text) {
   return out;
 }
 
+/// The second anchor (issue 25): a textbook XPBD cloth with small steps (Macklin et al. 2019, "Small steps in
+/// physics simulation": n sub-steps of one Gauss-Seidel iteration each, lambda starting at 0 in each, so each
+/// projection is eq. 18 of Macklin et al. 2016 with compliance alpha / h^2). The same springs (structural hard,
+/// shear and bend with tachi's compliances), masses, pins and air damping as tachi's step; no tethers, no
+/// strain limit, no batching: one spring after another in the cloth's order, plain scalar code.
+Run run_xpbd(int n, int substeps, int warmup, int steps, bool horizontal) {
+  Cloth cloth = make_cloth(n);
+  if (horizontal) {
+    for (auto& p : cloth.position) p = Eigen::Vector3f{p.x(), 0.5F, 0.5F - p.y()};
+  }
+  const SolverParams defaults;
+  const float h = static_cast<float>(kDt) / static_cast<float>(substeps);
+  std::array<float, 3> alpha{};  // by SpringKind: structural, shear, bend
+  alpha[static_cast<std::size_t>(tachi::sim::SpringKind::Structural)] = defaults.structural_compliance / (h * h);
+  alpha[static_cast<std::size_t>(tachi::sim::SpringKind::Shear)] = defaults.shear_compliance / (h * h);
+  alpha[static_cast<std::size_t>(tachi::sim::SpringKind::Bend)] = defaults.bend_compliance / (h * h);
+  std::vector<Eigen::Vector3f> old(cloth.particle_count());
+  const auto step = [&] {
+    for (int sub = 0; sub < substeps; ++sub) {
+      const float keep = std::max(0.0F, 1.0F - defaults.damping * h);
+      for (std::size_t i = 0; i < cloth.particle_count(); ++i) {
+        old[i] = cloth.position[i];
+        if (cloth.inverse_mass[i] == 0.0F) continue;
+        cloth.velocity[i] = cloth.velocity[i] * keep + defaults.gravity * h;
+        cloth.position[i] += cloth.velocity[i] * h;
+      }
+      for (std::size_t k = 0; k < cloth.spring_count(); ++k) {
+        if (cloth.alive[k] == 0) continue;
+        Eigen::Vector3f& a = cloth.position[cloth.spring_a[k]];
+        Eigen::Vector3f& b = cloth.position[cloth.spring_b[k]];
+        const float wa = cloth.inverse_mass[cloth.spring_a[k]];
+        const float wb = cloth.inverse_mass[cloth.spring_b[k]];
+        const Eigen::Vector3f d = b - a;
+        const float len = d.norm();
+        if (wa + wb == 0.0F || len < 1e-9F) continue;
+        const float c = (len - cloth.rest_length[k]) / (len * (wa + wb + alpha[static_cast<std::size_t>(cloth.kind[k])]));
+        a += (wa * c) * d;
+        b -= (wb * c) * d;
+      }
+      for (std::size_t i = 0; i < cloth.particle_count(); ++i) cloth.velocity[i] = (cloth.position[i] - old[i]) / h;
+    }
+  };
+  // A cloth that came apart (non-finite positions) has no finite strain: +inf, not what max() makes of NaN.
+  const auto strain = [&] {
+    const bool finite = std::all_of(cloth.position.begin(), cloth.position.end(),
+                                    [](const Eigen::Vector3f& p) { return p.allFinite(); });
+    return finite ? static_cast<double>(cloth.max_structural_strain()) : std::numeric_limits<double>::infinity();
+  };
+  Run r;
+  for (int s = 0; s < warmup; ++s) step();
+  std::vector<double> ms;
+  for (int s = 0; s < steps; ++s) {
+    const auto t0 = Clock::now();
+    step();
+    ms.push_back(ms_since(t0));
+    r.peak_strain = std::max(r.peak_strain, strain());
+  }
+  r.step_ms = median(ms);
+  r.max_strain = strain();
+  return r;
+}
+
+/// tachi's default step against the textbook XPBD cloth at the same maximum strain, 128 x 128 (or `n`), on the
+/// hanging cloth (strain at the end of the run) and the swinging one (horizontal start, peak over the run):
+/// XPBD's sub-steps double until its strain is no more than tachi's.
+void print_xpbd_anchor(int n, int warmup, int steps) {
+  std::printf("\nTextbook XPBD, small steps (Macklin et al. 2019), %dx%d, same springs, one iteration per sub-step:\n",
+              n, n);
+  std::printf("%9s %10s %10s %12s %10s %10s\n", "cloth", "solver", "sub-steps", "ms a step", "strain", "vs tachi");
+  for (const bool swinging : {false, true}) {
+    const int w = swinging ? 0 : warmup;
+    const SolverParams defaults;
+    const Run t = run_fresh([&] { return run_tachi(n, w, steps, defaults, swinging); });
+    const double tachi_strain = swinging ? t.peak_strain : t.max_strain;
+    const char* cloth = swinging ? "swinging" : "hanging";
+    std::printf("%9s %10s %10d %12.3f %9.1f%% %10s\n", cloth, "tachi", defaults.substeps, t.step_ms,
+                100.0 * tachi_strain, "1.00x");
+    constexpr int kMostSubsteps = 512;
+    for (int substeps = 8; substeps <= kMostSubsteps; substeps *= 2) {
+      const Run x = run_fresh([&] { return run_xpbd(n, substeps, w, steps, swinging); });
+      const double strain = swinging ? x.peak_strain : x.max_strain;
+      std::printf("%9s %10s %10d %12.3f %9.1f%% %9.1fx\n", cloth, "xpbd", substeps, x.step_ms, 100.0 * strain,
+                  x.step_ms / t.step_ms);
+      std::fflush(stdout);
+      if (strain <= tachi_strain) break;
+    }
+  }
+}
+
 void print_variants(int warmup) {
   struct Variant {
     const char* name;
@@ -302,6 +397,9 @@ int main(int argc, char** argv) {
   int steps = 120;
   bool variants = false;
   bool bending_helper = false;
+  std::vector<int> thread_counts;
+  bool bullet = true;
+  int xpbd = 0;
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
     const bool has_value = i + 1 < argc;
@@ -315,10 +413,25 @@ int main(int argc, char** argv) {
       variants = true;
     } else if (arg == "--bullet-bending-helper") {
       bending_helper = true;
+    } else if (arg == "--threads" && has_value) {
+      std::stringstream list{argv[++i]};
+      std::string item;
+      while (std::getline(list, item, ',')) {
+        const int t = std::atoi(item.c_str());
+        if (t < 1 || t > 64) {
+          std::fprintf(stderr, "sim_bench: --threads needs counts in 1..64, got '%s'\n", item.c_str());
+          return 2;
+        }
+        thread_counts.push_back(t);
+      }
+    } else if (arg == "--no-bullet") {
+      bullet = false;
+    } else if (arg == "--xpbd" && has_value) {
+      xpbd = std::clamp(std::atoi(argv[++i]), 2, 1024);
     } else {
       std::fprintf(stderr, "sim_bench: unknown or incomplete argument '%s'\n"
                            "usage: sim_bench [--grids 32,64,128,256] [--warmup 60] [--steps 120] [--variants]\n"
-                           "                 [--bullet-bending-helper]\n",
+                           "                 [--bullet-bending-helper] [--threads 1,2 [--no-bullet]] [--xpbd 128]\n",
                    arg.c_str());
       return 2;
     }
@@ -330,6 +443,28 @@ int main(int argc, char** argv) {
 
   std::printf("sim_bench: one 1/60 s step, corners pinned, hanging start; warm-up %d steps, median of %d\n", warmup,
               steps);
+  if (xpbd > 0) {
+    print_xpbd_anchor(xpbd, warmup, steps);
+    return 0;
+  }
+  if (!thread_counts.empty()) {
+    // Each count in its own process, one after another for each grid: the first is the reference.
+    std::printf("%6s %8s %12s %12s %12s %10s\n", "grid", "threads", "tachi ms", "end strain", "peak strain",
+                "speed-up");
+    for (const int n : grids) {
+      double reference = 0.0;
+      for (const int t : thread_counts) {
+        SolverParams params;
+        params.threads = t;
+        const Run r = run_fresh([&] { return run_tachi(n, warmup, steps, params); });
+        if (reference == 0.0) reference = r.step_ms;
+        std::printf("%6s %8d %12.3f %11.1f%% %11.1f%% %9.2fx\n", (std::to_string(n) + "^2").c_str(), t, r.step_ms,
+                    100.0 * r.max_strain, 100.0 * r.peak_strain, reference / r.step_ms);
+        std::fflush(stdout);
+      }
+    }
+    if (!bullet) return 0;
+  }
   std::printf("Bullet springs: %s\n", bending_helper ? "CreatePatch diagonals + generateBendingConstraints(2)"
                                                      : "CreatePatch diagonals + bend links two apart (same set as tachi)");
   std::printf("%6s %12s %12s %12s %12s %10s  %s\n", "grid", "tachi ms", "tachi strain", "bullet ms", "bullet strain",

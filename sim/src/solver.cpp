@@ -8,6 +8,7 @@
 #include <cmath>
 #include <limits>
 #include <numeric>
+#include <thread>
 #include <utility>
 
 namespace tachi::sim {
@@ -38,6 +39,24 @@ std::uint32_t sweep_key(SpringKind k, GridCoord a, GridCoord b) {
   return static_cast<std::uint32_t>(vmin * kColoursPerRow + colour);
 }
 
+/// Runs body(begin, end) over [0, n) in `threads` contiguous chunks at once (OpenMP, static: chunk t on
+/// thread t), or in one call for one thread or a short range. For loops whose iterations are independent
+/// (each particle on its own, or tethers of distinct particles), so the results do not depend on the split.
+template <typename Body>
+void for_chunks(std::size_t n, int threads, const Body& body) {
+  constexpr std::size_t kWorthSplitting = 2048;  // below this the threads' wake-up costs more than the loop
+  if (threads <= 1 || n < kWorthSplitting) {
+    body(std::size_t{0}, n);
+    return;
+  }
+#pragma omp parallel for schedule(static) num_threads(threads)
+  for (int t = 0; t < threads; ++t) {
+    const auto chunk = static_cast<std::size_t>(t);
+    const auto parts = static_cast<std::size_t>(threads);
+    body(n * chunk / parts, n * (chunk + 1) / parts);
+  }
+}
+
 }  // namespace
 
 std::optional<const char*> validate(const SolverParams& p) {
@@ -51,7 +70,13 @@ std::optional<const char*> validate(const SolverParams& p) {
   if (!(p.max_strain > 0.0F) || !(p.max_strain < 10.0F)) return "max_strain must be in (0, 10)";
   if (p.strain_limit_passes < 1 || p.strain_limit_passes > 100) return "strain_limit_passes must be in [1, 100]";
   if (p.repair_per_step < 1) return "repair_per_step must be at least 1";
+  if (p.threads < 1 || p.threads > 64) return "threads must be in [1, 64]";
   return std::nullopt;
+}
+
+int default_solver_threads() {
+  const unsigned cores = std::thread::hardware_concurrency();
+  return cores <= 1 ? 1 : static_cast<int>(std::min(cores - 1, 64U));
 }
 
 Solver::Solver(SolverParams params) : params_(std::move(params)) {}
@@ -268,6 +293,7 @@ void Solver::full_build(const Cloth& cloth, std::vector<std::uint32_t> pins) {
   cached_pins_ = std::move(pins);
   build_attachments(cloth);
   append_springs(cloth, all);
+  build_bands(cloth);
   order_strain_limit(cloth);
   lanes_ = 0;
   for (auto& g : groups_) {
@@ -687,6 +713,7 @@ void Solver::order_tethers() {
   std::vector<std::uint32_t> start(static_cast<std::size_t>(most) + 2, 0);
   for (const Attachment& a : attachments_) ++start[a.bends + 1];
   for (std::size_t b = 1; b < start.size(); ++b) start[b] += start[b - 1];
+  unbent_tethers_ = start[1];
   // Every entry is written below: resized, not cleared first (zeroing 265k entries each step of a stroke).
   tether_order_.resize(attachments_.size());
   for (std::uint32_t k = 0; k < attachments_.size(); ++k) tether_order_[start[attachments_[k].bends]++] = k;
@@ -696,6 +723,7 @@ void Solver::build_attachments(const Cloth& cloth) {
   attachments_.clear();
   engaging_.clear();
   tether_order_stale_ = true;
+  tether_block_end_.clear();
   searches_.clear();
   const std::size_t n = cloth.particle_count();
   nearest_.assign(n, kInf);
@@ -767,7 +795,22 @@ void Solver::build_attachments(const Cloth& cloth) {
       search.owner[s] = s;
       search.heap.emplace_back(0.0F, s);
     }
+    const std::size_t block_begin = attachments_.size();
     run_search(cloth, search, false, std::numeric_limits<std::size_t>::max());
+    // The group's tethers by particle, not in the order the search settled them: each holds another particle
+    // on a pin, so they are independent and the order changes nothing, but a thread can then find the
+    // tethers of its range of particles (front_in_bands), and the sweep reads the positions in order.
+    std::size_t next = block_begin;
+    std::vector<Attachment> by_particle;
+    by_particle.reserve(attachments_.size() - block_begin);
+    for (std::uint32_t i = 0; i < n; ++i) {
+      std::uint32_t& slot = search.attachment[i];
+      if (slot == kNone) continue;
+      by_particle.push_back(attachments_[slot]);
+      slot = static_cast<std::uint32_t>(next++);
+    }
+    std::copy(by_particle.begin(), by_particle.end(), attachments_.begin() + static_cast<std::ptrdiff_t>(block_begin));
+    tether_block_end_.push_back(attachments_.size());
     for (std::uint32_t i = 0; i < n; ++i) nearest_[i] = std::min(nearest_[i], search.dist[i]);
   }
 }
@@ -1077,12 +1120,15 @@ void Solver::step(Cloth& cloth, const Colliders& colliders) {
   work_.resize(n + 1);
   work_[0] = Eigen::Vector4f::Zero();
   old_work_.resize(n + 1);
-  for (std::size_t i = 0; i < n; ++i) {
-    work_[i + 1] << cloth.position[i], cloth.inverse_mass[i];
-  }
+  for_chunks(n, params_.threads, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i) work_[i + 1] << cloth.position[i], cloth.inverse_mass[i];
+  });
   const float h = params_.dt / static_cast<float>(params_.substeps);
-  for (int s = 0; s < params_.substeps; ++s) substep(cloth, colliders, h, s == 0);
-  for (std::size_t i = 0; i < n; ++i) cloth.position[i] = work_[i + 1].head<3>();
+  for (int s = 0; s < params_.substeps; ++s) substep(cloth, colliders, h, s == 0, s + 1 == params_.substeps);
+  if (params_.threads > 1 && banded()) return;  // the last sub-step wrote the positions back (substep)
+  for_chunks(n, params_.threads, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i) cloth.position[i] = work_[i + 1].head<3>();
+  });
 }
 
 namespace {
@@ -1119,10 +1165,11 @@ inline void project_distance(Vec4& pa, Vec4& pb, float target, float alpha) {
 
 /// project_distance<Length::NearRest> on four independent springs at once (SSE, x86-64 baseline):
 /// the same arithmetic per lane, so the sweep is still Gauss-Seidel in the same fixed order.
-void sweep_near_rest(Vec4* x, const std::vector<Solver::Group>& groups, float alpha) {
+void sweep_near_rest(Vec4* x, const Solver::Group* first, const Solver::Group* last, float alpha) {
   const __m128 alpha4 = _mm_set1_ps(alpha);
   const __m128 zero = _mm_setzero_ps();
-  for (const Solver::Group& g : groups) {
+  for (const Solver::Group* it = first; it != last; ++it) {
+    const Solver::Group& g = *it;
     __m128 a0 = _mm_load_ps(x[g.a[0]].data()), a1 = _mm_load_ps(x[g.a[1]].data());
     __m128 a2 = _mm_load_ps(x[g.a[2]].data()), a3 = _mm_load_ps(x[g.a[3]].data());
     __m128 b0 = _mm_load_ps(x[g.b[0]].data()), b1 = _mm_load_ps(x[g.b[1]].data());
@@ -1228,7 +1275,149 @@ void sweep_tethers(Vec4* x, std::size_t count, const At& at) {
   for (; k < count; ++k) apply_tether(x, at(k));
 }
 
+/// Whether structural spring s is longer than `limit` times its rest length (substep step 5's test; the
+/// parallel scan for the first such spring asks the same question with the same arithmetic).
+inline bool over_limit(const Vec4* x, const Solver::PackedSpring& s, float limit) {
+  const Vec4 d = (x[s.b] - x[s.a]).cwiseProduct(kXyz);
+  const float target = limit * s.rest;
+  return d.squaredNorm() > target * target;
+}
+
 }  // namespace
+
+void Solver::build_bands(const Cloth& cloth) {
+  // A spring of row v (its upper end's row, the batches' order) touches rows v .. v + 2 (bend springs two
+  // apart; structural and shear v .. v + 1). So bands of at least three rows, every other one swept at once,
+  // share no particle: a two-colouring of a partition, where each band itself is still swept in the
+  // single-threaded order. What a cut changes in place only blanks lanes (particle 0, which never moves);
+  // its new springs go after the bands. The check below reads the particles' rows rather than trusting the
+  // rule: after a full build of a cut cloth an exact cut's particles have the row of their nearest grid point.
+  // The three families share the bands' rows, so that a band can sweep all of its springs at once.
+  banded_ = false;
+  for (auto& bounds : bands_) bounds.clear();
+  const int threads = params_.threads;
+  if (threads <= 1) return;
+  const auto row_of = [&](std::uint32_t padded) { return cloth.grid[padded - 1].v; };
+  const auto first_row = [&](const Group& g) { return std::min(row_of(g.a[0]), row_of(g.b[0])); };
+  int rows = 0;
+  for (const auto& groups : groups_) {
+    if (!groups.empty()) rows = std::max(rows, first_row(groups.back()) + 1);  // sorted by row (sweep_key)
+  }
+  const int count = 2 * threads;
+  constexpr int kRowsPerBand = 3;
+  if (rows < kRowsPerBand * count) return;
+  std::vector<std::pair<int, int>> reach(static_cast<std::size_t>(count),
+                                         {std::numeric_limits<int>::max(), std::numeric_limits<int>::min()});
+  for (std::size_t f = 0; f < 3; ++f) {
+    std::vector<std::size_t>& bounds = bands_[f];
+    const std::vector<Group>& groups = groups_[f];
+    bounds.resize(static_cast<std::size_t>(count) + 1);
+    std::size_t at = 0;
+    for (int j = 0; j < count; ++j) {
+      const int from = rows * j / count;
+      while (at < groups.size() && first_row(groups[at]) < from) ++at;
+      bounds[static_cast<std::size_t>(j)] = at;
+    }
+    bounds.back() = groups.size();
+    for (std::size_t j = 0; j < reach.size(); ++j) {
+      for (std::size_t k = bounds[j]; k < bounds[j + 1]; ++k) {
+        for (std::size_t l = 0; l < 4; ++l) {
+          for (const std::uint32_t p : {groups[k].a[l], groups[k].b[l]}) {
+            if (p == 0) continue;
+            reach[j].first = std::min(reach[j].first, row_of(p));
+            reach[j].second = std::max(reach[j].second, row_of(p));
+          }
+        }
+      }
+    }
+  }
+  for (std::size_t j = 0; j + 2 < reach.size(); ++j) {
+    if (reach[j].second >= reach[j + 2].first) {
+      for (auto& bounds : bands_) bounds.clear();
+      return;
+    }
+  }
+  banded_ = true;
+}
+
+void Solver::sweep_springs(Vec4* padded, std::size_t family, float alpha) const {
+  const std::vector<Group>& groups = groups_[family];
+  const std::vector<std::size_t>& bounds = bands_[family];
+  const Group* g = groups.data();
+  if (params_.threads <= 1 || bounds.empty()) {
+    sweep_near_rest(padded, g, g + groups.size(), alpha);
+    return;
+  }
+  const int count = static_cast<int>(bounds.size()) - 1;
+#pragma omp parallel num_threads(params_.threads)
+  for (int parity = 0; parity < 2; ++parity) {
+#pragma omp for schedule(static)
+    for (int j = parity; j < count; j += 2) {
+      sweep_near_rest(padded, g + bounds[static_cast<std::size_t>(j)], g + bounds[static_cast<std::size_t>(j) + 1],
+                      alpha);
+    }
+  }
+  sweep_near_rest(padded, g + bounds.back(), g + groups.size(), alpha);  // a cut's springs, in order
+}
+
+void Solver::sweep_all_tethers(Vec4* x) const {
+  const bool ordered = !tether_order_.empty();
+  const std::size_t count = ordered ? tether_order_.size() : attachments_.size();
+  const auto plain = [this](std::size_t k) -> const Attachment& { return attachments_[k]; };
+  const auto by_bends = [this](std::size_t k) -> const Attachment& { return attachments_[tether_order_[k]]; };
+  const auto sweep = [&](std::size_t begin, std::size_t end) {
+    const auto shifted = [&](const auto& at) { return [&at, begin](std::size_t k) -> const Attachment& { return at(begin + k); }; };
+    if (ordered) {
+      sweep_tethers(x, end - begin, shifted(by_bends));
+    } else {
+      sweep_tethers(x, end - begin, shifted(plain));
+    }
+  };
+  if (params_.threads <= 1 || tether_block_end_.empty()) {
+    sweep(0, count);
+    return;
+  }
+  // In a pin group's block each tether holds another particle, and those with no bend are anchored on a pin
+  // (inverse mass 0, never moved): a block's tethers are independent, and split into chunks they give what
+  // one thread gives. Blocks follow one another (a particle has a tether in each); with bends in use the
+  // unbent ones lead tether_order_ in attachment order, so each block is a run there too. What follows the
+  // blocks (tethers added by repairs, and those anchored past a bend) goes in order on one thread.
+  constexpr std::size_t kMaxBlocks = 8;
+  std::array<std::size_t, kMaxBlocks> block_end{};
+  const std::size_t blocks = std::min(tether_block_end_.size(), kMaxBlocks);
+  for (std::size_t b = 0; b < blocks; ++b) {
+    block_end[b] = ordered ? static_cast<std::size_t>(std::lower_bound(tether_order_.begin(),
+                                                                       tether_order_.begin() +
+                                                                           static_cast<std::ptrdiff_t>(unbent_tethers_),
+                                                                       tether_block_end_[b]) -
+                                                      tether_order_.begin())
+                           : tether_block_end_[b];
+  }
+  std::size_t begin = 0;
+  for (std::size_t b = 0; b < blocks; ++b) {
+    const std::size_t end = block_end[b];
+    for_chunks(end - begin, params_.threads,
+               [&](std::size_t first, std::size_t last) { sweep(begin + first, begin + last); });
+    begin = end;
+  }
+  sweep(begin, count);
+}
+
+void Solver::mark_word(const Vec4* x, float limit, std::size_t word) {
+  std::uint64_t bits = 0;
+  const std::size_t first = word * 64;
+  const std::size_t last = std::min(first + 64, strain_limit_.size());
+  for (std::size_t place = first; place < last; ++place) {
+    if (over_limit(x, strain_limit_[place], limit)) bits |= std::uint64_t{1} << (place - first);
+  }
+  limit_dirty_[word] = bits;
+}
+
+void Solver::mark_over_limit(const Vec4* x, float limit) {
+  const auto words = static_cast<std::ptrdiff_t>(limit_dirty_.size());
+#pragma omp parallel for schedule(static) num_threads(params_.threads)
+  for (std::ptrdiff_t w = 0; w < words; ++w) mark_word(x, limit, static_cast<std::size_t>(w));
+}
 
 template <typename LimitSpring>
 void Solver::limit_locally(const Cloth& cloth, const LimitSpring& limit_spring) {
@@ -1273,53 +1462,188 @@ void Solver::limit_locally(const Cloth& cloth, const LimitSpring& limit_spring) 
   }
 }
 
-void Solver::substep(Cloth& cloth, const Colliders& colliders, float h, bool first) {
+template <typename Predict>
+bool Solver::front_in_bands(Vec4* x, std::size_t n, const Predict& predict, bool soft, float shear_alpha,
+                            float bend_alpha, float structural_alpha, float limit) {
+  Vec4* const padded = x - 1;
+  const int threads = params_.threads;
+  const bool ordered = !tether_order_.empty();
+  // Where each pin group's block of unbent tethers runs in the order they apply (sweep_all_tethers).
+  constexpr std::size_t kMaxBlocks = 8;
+  std::array<std::size_t, kMaxBlocks + 1> block{};
+  const std::size_t blocks = std::min(tether_block_end_.size(), kMaxBlocks);
+  for (std::size_t b = 0; b < blocks; ++b) {
+    block[b + 1] = ordered ? static_cast<std::size_t>(
+                                 std::lower_bound(tether_order_.begin(),
+                                                  tether_order_.begin() + static_cast<std::ptrdiff_t>(unbent_tethers_),
+                                                  tether_block_end_[b]) -
+                                 tether_order_.begin())
+                           : tether_block_end_[b];
+  }
+  const std::size_t count = ordered ? tether_order_.size() : attachments_.size();
+  const std::size_t rest = block[blocks];
+  const int bands = static_cast<int>(bands_[0].size()) - 1;
+  // With no cut's springs to sweep after the bands, the strain limit's first reading (mark_over_limit) joins
+  // the region: one wait for the other thread fewer per sub-step.
+  bool mark = limit > 0.0F;
+  for (std::size_t f = 0; f < 3; ++f) mark = mark && bands_[f].back() == groups_[f].size();
+  const auto words = static_cast<std::ptrdiff_t>(limit_dirty_.size());
+  const auto run = [&](const auto& at) {
+    // The first place in [from, to) of a block (sorted by particle) whose tether holds `particle` or a later one.
+    const auto first_from = [&](std::size_t from, std::size_t to, std::size_t particle) {
+      while (from < to) {
+        const std::size_t mid = from + (to - from) / 2;
+        if (at(mid).particle < particle) {
+          from = mid + 1;
+        } else {
+          to = mid;
+        }
+      }
+      return from;
+    };
+    const auto tethers = [&](std::size_t from, std::size_t to) {
+      sweep_tethers(x, to - from, [&](std::size_t k) -> const Attachment& { return at(from + k); });
+    };
+#pragma omp parallel num_threads(threads)
+    {
+#pragma omp for schedule(static)
+      for (int c = 0; c < threads; ++c) {
+        const std::size_t begin = n * static_cast<std::size_t>(c) / static_cast<std::size_t>(threads);
+        const std::size_t end = n * static_cast<std::size_t>(c + 1) / static_cast<std::size_t>(threads);
+        predict(begin, end);
+        for (std::size_t b = 0; b < blocks; ++b) {
+          const std::size_t from = first_from(block[b], block[b + 1], begin);
+          tethers(from, first_from(from, block[b + 1], end));
+        }
+      }
+      if (rest < count) {
+#pragma omp single
+        tethers(rest, count);  // added by repairs, or anchored past a bend: in order
+      }
+      for (int parity = 0; parity < 2; ++parity) {
+#pragma omp for schedule(static)
+        for (int j = parity; j < bands; j += 2) {
+          const auto band = [&](std::size_t family, float alpha) {
+            const Group* g = groups_[family].data();
+            sweep_near_rest(padded, g + bands_[family][static_cast<std::size_t>(j)],
+                            g + bands_[family][static_cast<std::size_t>(j) + 1], alpha);
+          };
+          if (soft) {
+            band(1, shear_alpha);
+            band(2, bend_alpha);
+          }
+          for (int it = 0; it < params_.iterations; ++it) band(0, structural_alpha);
+        }
+      }
+      if (mark) {
+#pragma omp for schedule(static)
+        for (std::ptrdiff_t w = 0; w < words; ++w) mark_word(x, limit, static_cast<std::size_t>(w));
+      }
+    }
+  };
+  if (ordered) {
+    run([this](std::size_t k) -> const Attachment& { return attachments_[tether_order_[k]]; });
+  } else {
+    run([this](std::size_t k) -> const Attachment& { return attachments_[k]; });
+  }
+  // A cut's springs, appended after the bands: in order, family after family.
+  const auto tail = [&](std::size_t family, float alpha) {
+    const Group* g = groups_[family].data();
+    sweep_near_rest(padded, g + bands_[family].back(), g + groups_[family].size(), alpha);
+  };
+  if (soft) {
+    tail(1, shear_alpha);
+    tail(2, bend_alpha);
+  }
+  for (int it = 0; it < params_.iterations; ++it) tail(0, structural_alpha);
+  return mark;
+}
+
+void Solver::substep(Cloth& cloth, const Colliders& colliders, float h, bool first, bool last_substep) {
   const std::size_t n = cloth.particle_count();
   Vec4* const padded = work_.data();
   Vec4* x = padded + 1;  // particle i
   Eigen::Vector3f* v = cloth.velocity.data();
-  std::copy(work_.begin(), work_.end(), old_work_.begin());
+  const int threads = params_.threads;
   const Vec4* old_x = old_work_.data() + 1;
-
-  // 1. Prediction (symplectic Euler on external forces; seed 000's point-cloud repulsion is one of them).
   const float keep = std::max(0.0F, 1.0F - params_.damping * h);
   const Eigen::Vector3f gh = params_.gravity * h;
   const PointCloudCollider* cloud = colliders.point_cloud;
-  for (std::size_t i = 0; i < n; ++i) {
-    if (x[i].w() == 0.0F) continue;
-    Eigen::Vector3f vel = v[i] * keep + gh;
-    if (cloud != nullptr) vel += cloud->repulsion(x[i].head<3>()) * h;
-    v[i] = vel;
-    x[i].head<3>() += vel * h;
-  }
-
-  // 2. Long-range attachments (unilateral): a particle may not be farther from a pin than its rest
-  // distance, which removes in one pass the sag that Gauss-Seidel needs O(N^2) passes for.
-  // Behind a cut a tether's anchor is a particle, held by its own tether first (tether_order_), and only
-  // the particle moves: the anchor stands for the pin the path leads to. Four at a time (sweep_tethers): at
-  // 256 x 256 the 261k tethers of four pin groups were 44 % of a step; a third of that went.
-  if (tether_order_.empty()) {
-    sweep_tethers(x, attachments_.size(), [this](std::size_t k) -> const Attachment& { return attachments_[k]; });
-  } else {
-    sweep_tethers(x, tether_order_.size(),
-                  [this](std::size_t k) -> const Attachment& { return attachments_[tether_order_[k]]; });
-  }
-
-  // 3. Soft shear and bend springs, one XPBD pass each per sub-step (soft: more passes buy nothing visible).
-  if (first || params_.soft_every_substep) {
-    const float full_h = params_.soft_every_substep ? h : params_.dt;
-    const float shear_alpha = params_.shear_compliance / (full_h * full_h);
-    const float bend_alpha = params_.bend_compliance / (full_h * full_h);
-    sweep_near_rest(padded, groups_[1], shear_alpha);
-    sweep_near_rest(padded, groups_[2], bend_alpha);
-  }
-
-  // 4. Structural springs, hard, Gauss-Seidel. Near rest length the square root is replaced by its
-  // first-order expansion, |d| ~ (|d|^2 + L^2) / 2L (Jakobsen 2001, "Advanced Character Physics"):
-  // the fixed point is still |d| = L, and step 5 below is exact.
+  const bool soft = first || params_.soft_every_substep;
+  const float full_h = params_.soft_every_substep ? h : params_.dt;
+  const float shear_alpha = params_.shear_compliance / (full_h * full_h);
+  const float bend_alpha = params_.bend_compliance / (full_h * full_h);
   const float structural_alpha = params_.structural_compliance / (h * h);
-  for (int it = 0; it < params_.iterations; ++it) {
-    sweep_near_rest(padded, groups_[0], structural_alpha);
+  // 1. Prediction (symplectic Euler on external forces; seed 000's point-cloud repulsion is one of them).
+  const auto predict = [&](std::size_t begin, std::size_t end) {
+    std::copy(work_.begin() + static_cast<std::ptrdiff_t>(begin + 1),
+              work_.begin() + static_cast<std::ptrdiff_t>(end + 1), old_work_.begin() + static_cast<std::ptrdiff_t>(begin + 1));
+    for (std::size_t i = begin; i < end; ++i) {
+      if (x[i].w() == 0.0F) continue;
+      Eigen::Vector3f vel = v[i] * keep + gh;
+      if (cloud != nullptr) vel += cloud->repulsion(x[i].head<3>()) * h;
+      v[i] = vel;
+      x[i].head<3>() += vel * h;
+    }
+  };
+  old_work_[0] = work_[0];
+
+  // Step 5's limit, and its bits (a full pass on several threads reads them first: mark_over_limit).
+  const float limit = 1.0F + params_.max_strain;
+  const std::size_t places = strain_limit_.size();
+  limit_dirty_.assign((places + 63) / 64, 0);
+  bool premarked = false;
+  // 6. Collisions by projection with friction (collide_with_friction), then velocities from the positions
+  // actually reached.
+  const bool any_collider = !colliders.spheres.empty() || !colliders.boxes.empty() || colliders.ground.has_value() ||
+                            cloud != nullptr;
+  const float inv_h = 1.0F / h;
+  const auto finish = [&](std::size_t begin, std::size_t end) {
+    if (any_collider) {
+      for (std::size_t i = begin; i < end; ++i) {
+        if (x[i].w() == 0.0F) continue;
+        Eigen::Vector3f p = x[i].head<3>();
+        if (collide_with_friction(p, old_x[i].head<3>(), colliders, h)) x[i].head<3>() = p;
+      }
+    }
+    for (std::size_t i = begin; i < end; ++i) {
+      if (x[i].w() == 0.0F) continue;
+      v[i] = (x[i].head<3>() - old_x[i].head<3>()) * inv_h;
+    }
+  };
+  const bool fused = threads > 1 && banded();
+  if (fused) {
+    // Steps 1 to 4 in one parallel region (each wait for the other thread is a chance to lose the core on a
+    // shared machine): steps 1 and 2 per range of particles, each thread predicting its particles and then
+    // applying their unbent tethers (anchored on pins: sweep_all_tethers), then the springs band by band.
+    // Each thread also finishes the previous sub-step's step 6 for its particles first (elementwise, on the
+    // same particles it predicts next): one wait fewer per sub-step.
+    const auto finish_and_predict = [&](std::size_t begin, std::size_t end) {
+      if (!first) finish(begin, end);
+      predict(begin, end);
+    };
+    premarked = front_in_bands(x, n, finish_and_predict, soft, shear_alpha, bend_alpha, structural_alpha,
+                               params_.sparse_strain_limit ? limit : 0.0F);
+  } else {
+    for_chunks(n, threads, predict);
+
+    // 2. Long-range attachments (unilateral): a particle may not be farther from a pin than its rest
+    // distance, which removes in one pass the sag that Gauss-Seidel needs O(N^2) passes for.
+    // Behind a cut a tether's anchor is a particle, held by its own tether first (tether_order_), and only
+    // the particle moves: the anchor stands for the pin the path leads to. Four at a time (sweep_tethers): at
+    // 256 x 256 the 261k tethers of four pin groups were 44 % of a step; a third of that went.
+    sweep_all_tethers(x);
+
+    // 3. Soft shear and bend springs, one XPBD pass each per sub-step (soft: more passes buy nothing visible).
+    if (soft) {
+      sweep_springs(padded, 1, shear_alpha);
+      sweep_springs(padded, 2, bend_alpha);
+    }
+
+    // 4. Structural springs, hard, Gauss-Seidel. Near rest length the square root is replaced by its
+    // first-order expansion, |d| ~ (|d|^2 + L^2) / 2L (Jakobsen 2001, "Advanced Character Physics"):
+    // the fixed point is still |d| = L, and step 5 below is exact.
+    for (int it = 0; it < params_.iterations; ++it) sweep_springs(padded, 0, structural_alpha);
   }
 
   // 5. Provot's deformation constraint: a structural spring longer than (1 + max_strain) L is brought
@@ -1331,15 +1655,12 @@ void Solver::substep(Cloth& cloth, const Colliders& colliders, float h, bool fir
   // A violating spring is brought to 95 % of the allowed stretch, not exactly to it: the corrections of
   // its neighbours then push it back towards, not over, the limit (a 256^2 cloth otherwise rests with a
   // few springs at 10.08 %).
-  const float limit = 1.0F + params_.max_strain;
   const float corrected = 1.0F + 0.95F * params_.max_strain;
   // A correction can stretch a spring swept earlier, so sweeps repeat until one finds nothing to
   // correct (usually the first: the scan without a square root is cheap) or the budget is spent.
   // The springs shorter than a cell go again at the end of each pass (limit_again_, order_strain_limit).
   const auto limit_spring = [&](const PackedSpring& s) {
-    const Vec4 d = (x[s.b] - x[s.a]).cwiseProduct(kXyz);
-    const float target = limit * s.rest;
-    if (d.squaredNorm() <= target * target) return false;
+    if (!over_limit(x, s, limit)) return false;
     project_distance<Length::Exact>(x[s.a], x[s.b], corrected * s.rest, 0.0F);
     return true;
   };
@@ -1355,8 +1676,6 @@ void Solver::substep(Cloth& cloth, const Colliders& colliders, float h, bool fir
   // stops marking, and the next pass reads them all.
   bool clean = false;
   bool full = true;
-  const std::size_t places = strain_limit_.size();
-  limit_dirty_.assign((places + 63) / 64, 0);
   // Only the last pass records what it corrected: a pass on a falling piece corrects a third of the springs.
   for (int pass = 0; pass < params_.strain_limit_passes && !clean; ++pass) {
     const bool last = pass + 1 == params_.strain_limit_passes;
@@ -1397,6 +1716,15 @@ void Solver::substep(Cloth& cloth, const Colliders& colliders, float h, bool fir
       mark_springs_of(spring.b);
     };
     std::uint32_t place = 0;
+    if (full && threads > 1 && marking) {
+      // A full pass on several threads: which springs are over the limit now is read on all of them
+      // (mark_over_limit), and the pass sweeps those as a sparse pass does, with the springs that its own
+      // corrections move an end of. A spring neither over the limit nor moved since would be found within: the
+      // same corrections as the full pass (only when marking stops, a sixteenth of the springs marked, can the
+      // rest of the pass differ from one thread's, for it counts the marks ahead of the sweep too).
+      if (pass > 0 || !premarked) mark_over_limit(x, limit);  // the first pass's: read with the springs
+      full = false;
+    }
     if (!full) {
       for (std::size_t w = 0; w < limit_dirty_.size() && marking; ++w) {
         this_word = limit_dirty_[w];
@@ -1433,23 +1761,16 @@ void Solver::substep(Cloth& cloth, const Colliders& colliders, float h, bool fir
   // Not clean: every pass ran (validate: strain_limit_passes >= 1), so limit_active_ is this sub-step's last.
   if (!clean && few_limit_corrections()) limit_locally(cloth, limit_spring);
 
-  // 6. Collisions by projection with friction (collide_with_friction), then velocities from the positions
-  // actually reached.
-  const bool any_collider = !colliders.spheres.empty() || !colliders.boxes.empty() || colliders.ground.has_value() ||
-                            cloud != nullptr;
-  if (any_collider) {
-    for (std::size_t i = 0; i < n; ++i) {
-      if (x[i].w() == 0.0F) continue;
-      Eigen::Vector3f p = x[i].head<3>();
-      if (collide_with_friction(p, old_x[i].head<3>(), colliders, h)) x[i].head<3>() = p;
-    }
+  // 6. (finish, above): in bands on several threads, the next sub-step's region does it, or the last one's
+  // here, with the positions written back.
+  if (!fused) {
+    for_chunks(n, threads, finish);
+  } else if (last_substep) {
+    for_chunks(n, threads, [&](std::size_t begin, std::size_t end) {
+      finish(begin, end);
+      for (std::size_t i = begin; i < end; ++i) cloth.position[i] = x[i].head<3>();
+    });
   }
-  const float inv_h = 1.0F / h;
-  for (std::size_t i = 0; i < n; ++i) {
-    if (x[i].w() == 0.0F) continue;
-    v[i] = (x[i].head<3>() - old_x[i].head<3>()) * inv_h;
-  }
-
 }
 
 double mechanical_energy(const Cloth& cloth, const Eigen::Vector3f& gravity, double k_structural) {

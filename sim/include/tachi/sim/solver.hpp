@@ -6,7 +6,11 @@
 //   4. Gauss-Seidel projection of structural springs, C = |xa - xb| - L          (Mueller et al. 2007, sec. 3.3)
 //   5. Provot's deformation constraint: structural springs over (1 + max_strain) L pulled back (Provot 1995, sec. 4)
 //   6. collisions by projection, with friction; v = (x - x_old) / h
-// Single-threaded with a fixed iteration order, so the same inputs give bit-identical results.
+// Deterministic: a fixed iteration order, so the same inputs and thread count give bit-identical results.
+// threads > 1 (OpenMP): the springs' sweeps run over bands of rows, the even bands at once, then the odd
+// ones (bands share no particle: a two-colouring of a partition, docs/sim.md "Threads"); the tethers, the
+// per-particle loops and the strain limit's scan for its first violation are split with the same results
+// as one thread. One thread runs the single-threaded code as before.
 // Why this and not semi-implicit + Provot or an implicit solver: docs/sim.md (with the figures).
 #pragma once
 
@@ -42,7 +46,14 @@ struct SolverParams {
   int repair_per_step = 2048;
   bool long_range_attachments = true;
   bool soft_every_substep = true;  ///< shear/bend in every sub-step (false: cheaper, but never fully at rest)
+  /// Threads of the sweeps (OpenMP). The positions are a function of this number, not of how many threads the
+  /// system actually grants: 1 gives the single-threaded results bit for bit; > 1 sweeps the springs in
+  /// 2 x threads bands of rows (even bands together, then odd), the same for every run with that number.
+  int threads = 1;
 };
+
+/// Threads a process uses by default: one core left for the other nodes that share the machine (at least 1).
+[[nodiscard]] int default_solver_threads();
 
 /// Returns a message naming the bad field, or nothing.
 [[nodiscard]] std::optional<const char*> validate(const SolverParams& params);
@@ -66,6 +77,9 @@ class Solver {
   void update_topology(const Cloth& cloth) { refresh_caches(cloth); }
 
   [[nodiscard]] const SolverParams& params() const { return params_; }
+  /// Whether the springs are swept in bands of rows on several threads (threads > 1 and at least three rows
+  /// a band; else in the single-threaded order): each step then runs its steps 1-4 in one parallel region.
+  [[nodiscard]] bool banded() const { return banded_; }
   /// Number of long-range attachments in use (0 when disabled or nothing is pinned).
   [[nodiscard]] std::size_t attachment_count() const;
   /// Full cache builds so far (the first step's included), and incremental updates after cuts.
@@ -165,7 +179,24 @@ class Solver {
   [[nodiscard]] std::uint32_t settled_groups(std::uint32_t i) const;
   static void build_groups(const std::vector<PackedSpring>& springs, const std::vector<std::uint32_t>& keys,
                            std::vector<Group>& groups);
-  void substep(Cloth& cloth, const Colliders& colliders, float h, bool first);
+  /// Splits each family's batches, as fully built, into 2 x threads bands of rows that share no particle with
+  /// the other bands of their parity (none: too few rows, or a band's particles reach past its neighbour).
+  void build_bands(const Cloth& cloth);
+  /// Returns whether it also read which springs are over `limit` into limit_dirty_ (limit > 0, no cut's
+  /// springs after the bands).
+  template <typename Predict>
+  bool front_in_bands(Eigen::Vector4f* x, std::size_t n, const Predict& predict, bool soft, float shear_alpha,
+                      float bend_alpha, float structural_alpha, float limit);
+  /// One XPBD pass over a family of springs (substep steps 3 and 4): in bands when threads > 1.
+  void sweep_springs(Eigen::Vector4f* padded, std::size_t family, float alpha) const;
+  /// Step 2 over every tether, in the order they apply: in parallel over each pin group's block.
+  void sweep_all_tethers(Eigen::Vector4f* x) const;
+  /// Sets limit_dirty_ to a bit per place in strain_limit_ whose spring is over `limit` now, on all threads.
+  void mark_over_limit(const Eigen::Vector4f* x, float limit);
+  void mark_word(const Eigen::Vector4f* x, float limit, std::size_t word);
+  /// One sub-step; on several threads in bands (banded()) its step 6 is finished by the next one, the last
+  /// one's with the positions written back to the cloth.
+  void substep(Cloth& cloth, const Colliders& colliders, float h, bool first, bool last_substep);
   /// Provot's sweeps past their budget, over only the springs near the last corrections (substep step 5).
   template <typename LimitSpring>
   void limit_locally(const Cloth& cloth, const LimitSpring& limit_spring);
@@ -189,6 +220,14 @@ class Solver {
   std::size_t full_builds_ = 0;
   std::size_t incremental_updates_ = 0;
   std::array<std::vector<Group>, 3> groups_;  ///< structural, shear, bend, four at a time
+  /// Per family: where each band of rows starts in groups_ (2 x threads + 1 bounds; empty: sweep in order),
+  /// over the batches of the last full build (a cut's springs, appended after them, go in order after).
+  std::array<std::vector<std::size_t>, 3> bands_;
+  bool banded_ = false;
+  /// Where each pin group's block of tethers ends in attachments_, as the full build made them (in a block
+  /// every tether holds a different particle; those with no bend hang on a pin, which never moves).
+  std::vector<std::size_t> tether_block_end_;
+  std::size_t unbent_tethers_ = 0;  ///< leading entries of tether_order_ with no bend (when it is in use)
   std::vector<Slot> slot_;                    ///< per spring
   std::size_t lanes_ = 0;                     ///< lanes in use when last fully built, and blanked since
   std::size_t blanked_ = 0;

@@ -332,7 +332,8 @@ std::vector<SpeakerRun> run_no_commands(const VoiceConfig& config, const std::st
 }
 
 int speakers_main(VoiceConfig config, const std::string& set, unsigned seed_offset, int threads, double no_command_s,
-                  const std::string& cache, std::optional<std::pair<double, double>> sweep_ratio, bool check) {
+                  const std::string& cache, std::optional<std::pair<double, double>> sweep_ratio, bool check,
+                  const std::vector<std::string>& only_conditions, const std::vector<std::string>& only_contexts) {
   const Gate gate{config.verify_min_log_ratio.value_or(-std::numeric_limits<double>::infinity()), config.verify_min_margin};
   // Decode with no gate: the thresholds are applied when scoring (a sweep needs one decoding only).
   if (config.verify_min_log_ratio) config.verify_min_log_ratio = -std::numeric_limits<double>::infinity();
@@ -376,6 +377,9 @@ int speakers_main(VoiceConfig config, const std::string& set, unsigned seed_offs
     conditions = {kConditions[0], kConditions[1], kConditions[4], kConditions[5]};
     contexts = {"alone"};
   }
+  if (!only_conditions.empty())
+    std::erase_if(conditions, [&](const Condition& c) { return std::find(only_conditions.begin(), only_conditions.end(), c.name) == only_conditions.end(); });
+  if (!only_contexts.empty()) contexts = only_contexts;
   std::vector<std::vector<SpeakerRun>> results(jobs.size() + 2);
   std::atomic<std::size_t> next{0};
   std::mutex log_mutex;
@@ -495,6 +499,10 @@ int main(int argc, char** argv) try {
   std::string cache = TACHI_VOICE_CACHE;
   std::vector<double> sweep_ratio;
   bool check = false;
+  std::vector<std::string> only_conditions, only_contexts;
+  app.add_option("--conditions", only_conditions, "--speakers: only these conditions")
+      ->check(CLI::IsMember({"clean", "white 20 dB", "white 10 dB", "babble 20 dB", "babble 10 dB", "reverb"}));
+  app.add_option("--contexts", only_contexts, "--speakers: only these contexts")->check(CLI::IsMember({"alone", "sentence"}));
   app.add_option("--speakers", speakers,
                  "evaluate across speakers (docs/voice.md): every voice and condition of the set: tune (the thresholds were "
                  "chosen on it), heldout (the other voices, other seeds), all, ci (4 voices, 4 conditions: the ctest)")
@@ -519,7 +527,7 @@ int main(int argc, char** argv) try {
     if (phone_loop) c.phone_loop_probability = *phone_loop;
     std::optional<std::pair<double, double>> sweep_range;
     if (sweep_ratio.size() == 2) sweep_range = std::pair{sweep_ratio[0], sweep_ratio[1]};
-    return speakers_main(c, speakers, seed_offset, threads, no_command_s, cache, sweep_range, check);
+    return speakers_main(c, speakers, seed_offset, threads, no_command_s, cache, sweep_range, check, only_conditions, only_contexts);
   }
   if (threshold) for (auto& p : commands.phrases) p.threshold = *threshold;
   if (phone_loop) commands.phone_loop_probability = *phone_loop;

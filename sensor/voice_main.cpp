@@ -1,4 +1,4 @@
-// tachi-voice: spots "start cutting" / "stop cutting" (configurable) in a WAV file, a raw file, an ALSA
+// tachi-voice: spots "begin cutting" / "stop cutting" (configurable) in a WAV file, a raw file, an ALSA
 // capture device or the Kinect's microphones; prints time_s,command,phrase per command and publishes
 // tachi_msg_VoiceCommand on the bus unless --no-dds.
 #include "tachi/bus/heartbeat.hpp"
@@ -90,7 +90,9 @@ class CommandPublisher {
 
 void report(const tachi::sensor::VoiceDetection& d) {
   std::printf("%.3f,%s,%s\n", d.time_s, tachi::sensor::to_string(d.command).c_str(), d.phrase.c_str());
-  if (!std::isnan(d.verification_score)) spdlog::debug("\"{}\" at {:.3f} s: second-pass log-likelihood ratio {:.2f} per frame", d.phrase, d.time_s, d.verification_score);
+  if (!std::isnan(d.verification_score))
+    spdlog::debug("\"{}\" at {:.3f} s: second-pass log-likelihood ratio {:.2f} per frame, {:.2f} above the best other command", d.phrase,
+                  d.time_s, d.verification_score, d.command_margin);
   std::fflush(stdout);
 }
 
@@ -161,7 +163,7 @@ int main(int argc, char** argv) try {
   raw->excludes(device)->excludes(kinect);
   device->excludes(kinect);
   app.add_option("--config", o.config_file, "Voice config JSON (see config/voice.json)")->check(CLI::ExistingFile);
-  app.add_option("--start-phrase", o.start_phrase, "Phrase that starts cutting (default \"start cutting\")");
+  app.add_option("--start-phrase", o.start_phrase, "Phrase that starts cutting (default \"begin cutting\"; \"start cutting\" was the default before issue 22)");
   app.add_option("--stop-phrase", o.stop_phrase, "Phrase that stops cutting (default \"stop cutting\")");
   app.add_option("--grab-phrase", o.grab_phrase, "Phrase that makes the hand grab the cloth (none by default; e.g. \"grab cloth\")");
   app.add_option("--release-phrase", o.release_phrase, "Phrase that lets the grabbed cloth go (none by default; e.g. \"release cloth\")");

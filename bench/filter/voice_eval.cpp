@@ -22,6 +22,11 @@
 #include <map>
 #include <optional>
 #include <random>
+#include <atomic>
+#include <mutex>
+#include <numeric>
+#include <span>
+#include <thread>
 
 namespace {
 
@@ -124,6 +129,342 @@ double rms(const std::vector<std::int16_t>& s) {
 
 std::string snr_label(double snr) { return snr >= 99 ? "clean" : std::to_string(static_cast<int>(snr)) + " dB"; }
 
+// ---- Across speakers (issue 22) --------------------------------------------------------------------
+// Every English voice the machine synthesises (espeak-ng en and en-us with their +m1..m7 / +f1..f5
+// variants, flite kal kal16 awb rms slt, festival kal and slt), each also pitch-shifted and
+// tempo-changed with sox, in six conditions (clean, white noise and LibriVox babble at 20 and 10 dB,
+// room reverb), the two commands said alone and inside sentences, start then stop 2 s apart. Plus
+// false alarms on LibriVox reading and babble with no command in it.
+
+/// Base voices; `tune` says whether the thresholds were chosen on it (the rest are held out).
+struct BaseVoice {
+  fixture::Speaker speaker;
+  bool tune;
+};
+std::vector<BaseVoice> base_voices() {
+  std::vector<BaseVoice> v;
+  // Tuning set: half of each family, alternating, so that every kind of voice is on both sides.
+  const std::vector<std::string> variants{"", "+m1", "+m2", "+m3", "+m4", "+m5", "+m6", "+m7", "+f1", "+f2", "+f3", "+f4", "+f5"};
+  for (const std::string lang : {"en-us", "en"})
+    for (std::size_t i = 0; i < variants.size(); ++i)
+      v.push_back({{"espeak-ng", lang + variants[i]}, (i % 2 == 0) == (lang == "en-us")});
+  // flite's rms (the voice of the reported start/stop swap) and festival's slt are held out.
+  for (const auto& [voice, tune] : std::vector<std::pair<std::string, bool>>{{"slt", true}, {"awb", true}, {"rms", false}, {"kal16", false}, {"kal", false}})
+    v.push_back({{"flite", voice}, tune});
+  v.push_back({{"festival", "voice_kal_diphone"}, true});
+  v.push_back({{"festival", "voice_cmu_us_slt_arctic_hts"}, false});
+  return v;
+}
+
+struct Condition {
+  std::string name;
+  std::string noise;  // "", "white", "babble"
+  double snr_db = 0;
+  bool reverb = false;
+};
+const std::vector<Condition> kConditions{{"clean", "", 0, false},        {"white 20 dB", "white", 20, false},
+                                         {"white 10 dB", "white", 10, false}, {"babble 20 dB", "babble", 20, false},
+                                         {"babble 10 dB", "babble", 10, false}, {"reverb", "", 0, true}};
+
+std::string family_of(const fixture::Speaker& s) {
+  if (s.engine == "espeak-ng") return s.voice.rfind("en-us", 0) == 0 ? "espeak-ng en-us" : "espeak-ng en";
+  return s.engine;
+}
+
+/// One sequence of a speaker: what was said where, what the spotter reported (scores kept, so that
+/// thresholds can be applied afterwards: one decoding for a whole sweep).
+struct SpeakerRun {
+  std::string family, variant, condition, context;
+  bool tune_voice = false;
+  std::vector<fixture::Placed> placed;
+  std::vector<VoiceDetection> found;
+  double audio_s = 0;
+};
+
+struct SpeakerSet {
+  std::string name;  // tune, heldout, all, ci
+  unsigned seed_base = 0;
+};
+
+/// Synthesises and decodes every sequence of one speaker through one spotter (a continuous stream,
+/// as a microphone's: sequences follow each other, each ending in 1.5 s of its own noise so that the
+/// second pass judges its last command on its own audio).
+std::vector<SpeakerRun> run_speaker(const VoiceConfig& config, const fixture::Speaker& speaker, const std::string& variant, bool tune_voice,
+                                    const std::vector<Condition>& conditions, const std::vector<std::string>& contexts, unsigned seed,
+                                    const std::vector<std::vector<std::int16_t>>& librivox, const std::string& cache) {
+  const auto phrase_of = [&](VoiceCommand c) {
+    return std::find_if(config.phrases.begin(), config.phrases.end(), [&](const VoicePhrase& p) { return p.command == c; })->phrase;
+  };
+  const std::string start = phrase_of(VoiceCommand::Start), stop = phrase_of(VoiceCommand::Stop);
+  KeywordSpotter spotter{config};
+  std::vector<SpeakerRun> runs;
+  std::mt19937 rng{seed};
+  const std::array<std::string, 2> start_carriers{"okay %s now", "now %s along the line"};
+  const std::array<std::string, 2> stop_carriers{"alright %s please", "that is enough, %s"};
+  for (const auto& condition : conditions)
+    for (const auto& context : contexts) {
+      std::uniform_real_distribution<double> lead(0.4, 1.0), gain(0.6, 1.0);
+      std::uniform_int_distribution<int> carrier(0, 1);
+      const auto text = [&](const std::string& phrase, const std::array<std::string, 2>& carriers) {
+        if (context == "alone") return phrase;
+        std::string t = carriers[static_cast<std::size_t>(carrier(rng))];
+        return t.replace(t.find("%s"), 2, phrase);
+      };
+      const auto said_start = fixture::synthesize(speaker, text(start, start_carriers), condition.reverb, cache);
+      const auto said_stop = fixture::synthesize(speaker, text(stop, stop_carriers), condition.reverb, cache);
+      fixture::Sequence seq{static_cast<unsigned>(rng())};
+      seq.pause(lead(rng));
+      seq.say(start, said_start, gain(rng));
+      seq.pause(2.0);  // the reported swap: "stop cutting" 2 s after "start cutting"
+      seq.say(stop, said_stop, gain(rng));
+      seq.pause(1.5);
+      if (!condition.noise.empty()) {
+        // SNR against the speech at full gain, over the utterance (synthesisers pad little silence).
+        const double noise_rms = rms(said_start) * std::pow(10.0, -condition.snr_db / 20.0);
+        if (condition.noise == "white")
+          seq.noise(noise_rms);
+        else
+          seq.babble(librivox, 4, noise_rms);
+      }
+      SpeakerRun run{family_of(speaker), variant, condition.name, context, tune_voice, seq.placed(), {}, seq.seconds()};
+      const double t0 = spotter.time_s();
+      constexpr std::size_t kBlock = 512;
+      const auto& s = seq.samples();
+      for (std::size_t at = 0; at < s.size(); at += kBlock)
+        for (auto d : spotter.process(std::span(s).subspan(at, std::min(kBlock, s.size() - at)))) {
+          d.time_s -= t0;
+          run.found.push_back(d);
+        }
+      runs.push_back(std::move(run));
+    }
+  for (auto d : spotter.finish()) {  // nothing should be pending after the last 1.5 s pause
+    d.time_s = runs.back().audio_s;
+    runs.back().found.push_back(d);
+  }
+  return runs;
+}
+
+/// Thresholds applied after decoding (the spotter ran with none).
+struct Gate {
+  double min_log_ratio;
+  double min_margin;
+  bool keeps(const VoiceDetection& d) const {
+    return std::isnan(d.verification_score) || (d.verification_score >= min_log_ratio && d.command_margin >= min_margin);
+  }
+};
+
+struct SpeakerTally {
+  int commands = 0, found = 0, wrong = 0, false_alarms = 0;
+  double audio_s = 0;
+  SpeakerTally& operator+=(const SpeakerTally& o) {
+    commands += o.commands, found += o.found, wrong += o.wrong, false_alarms += o.false_alarms, audio_s += o.audio_s;
+    return *this;
+  }
+};
+
+/// A detection counts for an utterance when it comes between its start and 1 s after its end: found
+/// when it names the utterance's command, WRONG when it names another (even beside a right one).
+/// Detections near no utterance are false alarms.
+SpeakerTally score(const SpeakerRun& run, const Gate& gate, const VoiceConfig& config) {
+  SpeakerTally t;
+  t.audio_s = run.audio_s;
+  const auto command_of = [&](const std::string& phrase) {
+    return std::find_if(config.phrases.begin(), config.phrases.end(), [&](const VoicePhrase& p) { return p.phrase == phrase; })->command;
+  };
+  std::vector<bool> used(run.found.size(), false);
+  for (const auto& p : run.placed) {
+    ++t.commands;
+    bool right = false, wrong = false;
+    for (std::size_t i = 0; i < run.found.size(); ++i) {
+      const auto& d = run.found[i];
+      if (!gate.keeps(d) || d.time_s < p.begin_s || d.time_s > p.end_s + kLatencyS) continue;
+      used[i] = true;
+      (d.command == command_of(p.phrase) ? right : wrong) = true;
+    }
+    t.found += right ? 1 : 0;
+    t.wrong += wrong ? 1 : 0;
+  }
+  for (std::size_t i = 0; i < run.found.size(); ++i) t.false_alarms += (!used[i] && gate.keeps(run.found[i])) ? 1 : 0;
+  return t;
+}
+
+/// Commands said nowhere: LibriVox reading (the five clips alone, then in random orders, gains and
+/// pauses, with white noise at 20-40 dB) and babble (four of the clips at once from random points).
+/// Returns one run a chunk of ~30 s, context "librivox" or "babble".
+std::vector<SpeakerRun> run_no_commands(const VoiceConfig& config, const std::string& corpus, double seconds, unsigned seed,
+                                        const std::vector<std::vector<std::int16_t>>& librivox) {
+  KeywordSpotter spotter{config};
+  std::vector<SpeakerRun> runs;
+  std::mt19937 rng{seed};
+  const auto decode = [&](const std::vector<std::int16_t>& s) {
+    SpeakerRun run{corpus, "-", "-", corpus, false, {}, {}, static_cast<double>(s.size()) / kVoiceSampleRate};
+    for (std::size_t at = 0; at < s.size(); at += 512)
+      for (const auto& d : spotter.process(std::span(s).subspan(at, std::min<std::size_t>(512, s.size() - at)))) run.found.push_back(d);
+    runs.push_back(std::move(run));
+  };
+  double total = 0;
+  if (corpus == "librivox")
+    for (const auto& clip : librivox) {
+      decode(clip);
+      total += runs.back().audio_s;
+    }
+  while (total < seconds) {
+    fixture::Sequence seq{static_cast<unsigned>(rng())};
+    if (corpus == "librivox") {
+      std::uniform_real_distribution<double> pause(0.2, 1.0), gain(0.5, 1.0), snr(20, 40);
+      std::vector<std::size_t> order(librivox.size());
+      std::iota(order.begin(), order.end(), 0);
+      std::shuffle(order.begin(), order.end(), rng);
+      for (auto i : order) {
+        seq.pause(pause(rng));
+        seq.say("-", librivox[i], gain(rng));
+      }
+      seq.noise(rms(librivox[0]) * std::pow(10.0, -snr(rng) / 20.0));
+    } else {
+      seq.pause(30.0);
+      seq.babble(librivox, 4, std::uniform_real_distribution<double>(1000, 4000)(rng));
+    }
+    decode(seq.samples());
+    total += runs.back().audio_s;
+  }
+  for (const auto& d : spotter.finish()) runs.back().found.push_back(d);
+  return runs;
+}
+
+int speakers_main(VoiceConfig config, const std::string& set, unsigned seed_offset, int threads, double no_command_s,
+                  const std::string& cache, std::optional<std::pair<double, double>> sweep_ratio, bool check,
+                  const std::vector<std::string>& only_conditions, const std::vector<std::string>& only_contexts) {
+  const Gate gate{config.verify_min_log_ratio.value_or(-std::numeric_limits<double>::infinity()), config.verify_min_margin};
+  // Decode with no gate: the thresholds are applied when scoring (a sweep needs one decoding only).
+  if (config.verify_min_log_ratio) config.verify_min_log_ratio = -std::numeric_limits<double>::infinity();
+  config.verify_min_margin = 0.0;
+  std::vector<std::vector<std::int16_t>> librivox;
+  for (const auto& clip : fixture::librivox_clips()) librivox.push_back(read_wav_file(clip).samples);
+  // Jobs: every speaker (base voice, pitch-shifted, tempo-changed) of the set, then the corpora
+  // without commands. The shifts are drawn per voice from the set's seeds.
+  struct Job {
+    fixture::Speaker speaker;
+    std::string variant;
+    bool tune_voice;
+    unsigned seed;
+  };
+  std::vector<Job> jobs;
+  std::vector<Condition> conditions = kConditions;
+  std::vector<std::string> contexts{"alone", "sentence"};
+  const unsigned seed_base = (set == "heldout" ? 5000U : 0U) + seed_offset;
+  const auto voices = base_voices();
+  for (std::size_t v = 0; v < voices.size(); ++v) {
+    const auto& [speaker, tune] = voices[v];
+    if ((set == "tune" && !tune) || (set == "heldout" && tune)) continue;
+    if (set == "ci" && !(speaker.voice == "en+m3" || speaker.voice == "en-us+f2" || speaker.voice == "rms" ||
+                         speaker.voice == "voice_cmu_us_slt_arctic_hts"))
+      continue;
+    std::mt19937 rng{seed_base + 100U * static_cast<unsigned>(v)};
+    // Pitch: 2-5 semitones up or down; tempo: 0.75-0.9 or 1.12-1.3 (sox keeps the other).
+    // sox's pitch moves the formants with the pitch, as a longer or shorter vocal tract would: 1.5-3.5
+    // semitones, about the spread of adult vocal tract lengths (women's ~15-20 % shorter than men's:
+    // ~3 semitones). Up for every other voice, down for the others; faster or slower likewise.
+    const int cents = std::uniform_int_distribution<int>(150, 350)(rng) * (v % 2 == 0 ? 1 : -1);
+    const double tempo = (v / 2) % 2 == 0 ? std::uniform_real_distribution<double>(0.75, 0.9)(rng) : std::uniform_real_distribution<double>(1.12, 1.3)(rng);
+    auto pitched = speaker, timed = speaker;
+    pitched.pitch_cents = cents;
+    timed.tempo = std::round(tempo * 100) / 100;
+    jobs.push_back({speaker, "as synthesised", tune, seed_base + 100U * static_cast<unsigned>(v) + 1});
+    jobs.push_back({pitched, "pitch-shifted", tune, seed_base + 100U * static_cast<unsigned>(v) + 2});
+    if (set != "ci") jobs.push_back({timed, "tempo-changed", tune, seed_base + 100U * static_cast<unsigned>(v) + 3});
+  }
+  if (set == "ci") {
+    conditions = {kConditions[0], kConditions[1], kConditions[4], kConditions[5]};
+    contexts = {"alone"};
+  }
+  if (!only_conditions.empty())
+    std::erase_if(conditions, [&](const Condition& c) { return std::find(only_conditions.begin(), only_conditions.end(), c.name) == only_conditions.end(); });
+  if (!only_contexts.empty()) contexts = only_contexts;
+  std::vector<std::vector<SpeakerRun>> results(jobs.size() + 2);
+  std::atomic<std::size_t> next{0};
+  std::mutex log_mutex;
+  const auto worker = [&] {
+    for (std::size_t j; (j = next++) < results.size();) {
+      if (j < jobs.size())
+        results[j] = run_speaker(config, jobs[j].speaker, jobs[j].variant, jobs[j].tune_voice, conditions, contexts, jobs[j].seed, librivox, cache);
+      else
+        results[j] = run_no_commands(config, j == jobs.size() ? "librivox" : "babble", no_command_s, seed_base + 7U + static_cast<unsigned>(j), librivox);
+      const std::lock_guard lock{log_mutex};
+      std::fprintf(stderr, "\r%zu/%zu decoded", j + 1, results.size());
+    }
+  };
+  std::vector<std::thread> pool;
+  for (int i = 0; i < threads; ++i) pool.emplace_back(worker);
+  for (auto& t : pool) t.join();
+  std::fprintf(stderr, "\n");
+  std::vector<SpeakerRun> runs;
+  for (auto& r : results) runs.insert(runs.end(), r.begin(), r.end());
+
+  const auto totals = [&](const Gate& g, auto&& key) {
+    std::map<std::string, SpeakerTally> by;
+    for (const auto& r : runs)
+      if (const std::string k = key(r); !k.empty()) by[k] += score(r, g, config);
+    return by;
+  };
+  const auto commanded = [](const SpeakerRun& r) { return r.context == "alone" || r.context == "sentence"; };
+  const auto at_20 = [&](const SpeakerRun& r) { return commanded(r) && r.condition.find("20 dB") != std::string::npos; };
+  if (sweep_ratio) {
+    std::printf("%9s %7s %14s %14s %12s %8s %8s\n", "min_ratio", "margin", "20 dB alone", "20 dB all", "found all", "wrong", "fa/h");
+    for (double ratio = sweep_ratio->first; ratio <= sweep_ratio->second + 1e-9; ratio += 2)
+      for (double margin : {0.0, 1.0, 2.0, 3.0, 4.0, 6.0, 8.0}) {
+        const Gate g{ratio, margin};
+        SpeakerTally a20, all20, all, none;
+        for (const auto& r : runs) {
+          const auto t = score(r, g, config);
+          if (!commanded(r)) none += t;
+          else {
+            all += t;
+            if (at_20(r)) (all20 += t, r.context == "alone" ? (a20 += t, 0) : 0);
+          }
+        }
+        std::printf("%9.1f %7.1f %6d/%-4d%3.0f%% %6d/%-4d%3.0f%% %6d/%-5d %8d %8.2f\n", ratio, margin, a20.found, a20.commands,
+                    100.0 * a20.found / std::max(1, a20.commands), all20.found, all20.commands, 100.0 * all20.found / std::max(1, all20.commands),
+                    all.found, all.commands, all.wrong, 3600.0 * (none.false_alarms + all.false_alarms) / std::max(1.0, none.audio_s));
+      }
+  }
+  std::printf("voices: %s set (seeds +%u), phrases \"%s\" / \"%s\", second pass: min log ratio %g, min margin %g\n", set.c_str(), seed_base,
+              std::find_if(config.phrases.begin(), config.phrases.end(), [](const VoicePhrase& p) { return p.command == VoiceCommand::Start; })->phrase.c_str(),
+              std::find_if(config.phrases.begin(), config.phrases.end(), [](const VoicePhrase& p) { return p.command == VoiceCommand::Stop; })->phrase.c_str(),
+              gate.min_log_ratio, gate.min_margin);
+  const auto table = [&](const std::string& title, auto&& key) {
+    std::printf("\n| %s | commands | found | rate | WRONG | false alarms |\n|---|---|---|---|---|---|\n", title.c_str());
+    for (const auto& [k, t] : totals(gate, key))
+      std::printf("| %s | %d | %d | %.1f%% | %d | %d |\n", k.c_str(), t.commands, t.found, 100.0 * t.found / std::max(1, t.commands), t.wrong,
+                  t.false_alarms);
+  };
+  table("condition, context", [&](const SpeakerRun& r) { return commanded(r) ? r.condition + ", " + r.context : std::string{}; });
+  table("voices (all conditions)", [&](const SpeakerRun& r) { return commanded(r) ? r.family + ", " + r.variant : std::string{}; });
+  table("voices at 20 dB (white and babble)", [&](const SpeakerRun& r) { return at_20(r) ? r.family + ", " + r.context : std::string{}; });
+  const auto overall = totals(gate, [&](const SpeakerRun& r) {
+    if (!commanded(r)) return r.context;
+    return std::string(at_20(r) ? "20 dB" : "other");
+  });
+  const auto get = [&](const std::string& k) { return overall.count(k) ? overall.at(k) : SpeakerTally{}; };
+  SpeakerTally all_commanded = get("20 dB");
+  all_commanded += get("other");
+  std::printf("\n| without commands | audio | false alarms | per hour |\n|---|---|---|---|\n");
+  bool fa_ok = true;
+  for (const std::string corpus : {"librivox", "babble"}) {
+    const auto t = get(corpus);
+    const double per_hour = 3600.0 * t.false_alarms / std::max(1.0, t.audio_s);
+    fa_ok = fa_ok && per_hour <= 1.0;
+    std::printf("| %s | %.0f s | %d | %.2f |\n", corpus == "librivox" ? "LibriVox reading" : "LibriVox babble (4 talkers)", t.audio_s, t.false_alarms, per_hour);
+  }
+  const auto t20 = get("20 dB");
+  const double rate20 = 100.0 * t20.found / std::max(1, t20.commands);
+  std::printf("\nacceptance: found at 20 dB %d/%d = %.1f%% (>= 90%%); WRONG commands %d over all conditions (0); false alarms amid the "
+              "sequences %d; false alarms per hour above\n",
+              t20.found, t20.commands, rate20, all_commanded.wrong, all_commanded.false_alarms);
+  const bool ok = rate20 >= 90.0 && all_commanded.wrong == 0 && fa_ok;
+  std::printf("%s\n", ok ? "PASS" : "FAIL");
+  return check && !ok ? 1 : 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) try {
@@ -149,7 +490,45 @@ int main(int argc, char** argv) try {
       ->check(CLI::IsMember({"white", "babble"}));
   app.add_option("threshold", threshold, "kws threshold for both default phrases, e.g. 1e-30 (default: the config's)")
       ->check(CLI::Range(1e-100, 1.0));
+  std::string speakers;
+  std::string config_file = std::string(TACHI_SOURCE_DIR) + "/config/voice.json";
+  std::string start_phrase, stop_phrase;
+  std::optional<double> margin;
+  int threads = 1;
+  double no_command_s = 600;
+  std::string cache = TACHI_VOICE_CACHE;
+  std::vector<double> sweep_ratio;
+  bool check = false;
+  std::vector<std::string> only_conditions, only_contexts;
+  app.add_option("--conditions", only_conditions, "--speakers: only these conditions")
+      ->check(CLI::IsMember({"clean", "white 20 dB", "white 10 dB", "babble 20 dB", "babble 10 dB", "reverb"}));
+  app.add_option("--contexts", only_contexts, "--speakers: only these contexts")->check(CLI::IsMember({"alone", "sentence"}));
+  app.add_option("--speakers", speakers,
+                 "evaluate across speakers (docs/voice.md): every voice and condition of the set: tune (the thresholds were "
+                 "chosen on it), heldout (the other voices, other seeds), all, ci (4 voices, 4 conditions: the ctest)")
+      ->check(CLI::IsMember({"tune", "heldout", "all", "ci"}));
+  app.add_option("--config", config_file, "--speakers: voice config (default: the shipped config/voice.json)")->check(CLI::ExistingFile);
+  app.add_option("--start-phrase", start_phrase, "--speakers: the start phrase instead of the config's");
+  app.add_option("--stop-phrase", stop_phrase, "--speakers: the stop phrase instead of the config's");
+  app.add_option("--margin", margin, "--speakers: the second pass's minimum margin over another command (default: the config's)");
+  app.add_option("--threads", threads, "--speakers: decoding threads")->check(CLI::Range(1, 8));
+  app.add_option("--no-command-seconds", no_command_s, "--speakers: seconds of LibriVox reading and of babble without commands, each")
+      ->check(CLI::Range(0.0, 36000.0));
+  app.add_option("--cache", cache, "--speakers: folder for the synthesised audio");
+  app.add_option("--sweep", sweep_ratio, "--speakers: sweep min log ratio FROM TO (step 2) x margins instead of the table")->expected(2);
+  app.add_flag("--check", check, "--speakers: exit 1 when the acceptance targets are missed");
   if (const int rc = tachi::common::parse(app, argc, argv); rc >= 0) return rc;
+  if (!speakers.empty()) {
+    VoiceConfig c = load_voice_config(config_file);
+    if (!start_phrase.empty()) set_phrase(c, VoiceCommand::Start, start_phrase);
+    if (!stop_phrase.empty()) set_phrase(c, VoiceCommand::Stop, stop_phrase);
+    if (verify) c.verify_min_log_ratio = *verify;
+    if (margin) c.verify_min_margin = *margin;
+    if (phone_loop) c.phone_loop_probability = *phone_loop;
+    std::optional<std::pair<double, double>> sweep_range;
+    if (sweep_ratio.size() == 2) sweep_range = std::pair{sweep_ratio[0], sweep_ratio[1]};
+    return speakers_main(c, speakers, seed_offset, threads, no_command_s, cache, sweep_range, check, only_conditions, only_contexts);
+  }
   if (threshold) for (auto& p : commands.phrases) p.threshold = *threshold;
   if (phone_loop) commands.phone_loop_probability = *phone_loop;
   if (verify) commands.verify_min_log_ratio = *verify;

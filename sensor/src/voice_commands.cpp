@@ -63,6 +63,8 @@ std::optional<std::string> validate(const VoiceConfig& config) {
     return "phone_loop_probability must be in (0, 1] (e.g. 1e-10 with the second pass, 0.1 without)";
   if (config.verify_min_log_ratio && std::isnan(*config.verify_min_log_ratio))
     return "verify_min_log_ratio must be a number (or null for no second pass)";
+  if (!std::isfinite(config.verify_min_margin) || config.verify_min_margin < 0.0)
+    return "verify_min_margin must be a number >= 0 (e.g. 2)";
   return std::nullopt;
 }
 
@@ -82,7 +84,7 @@ VoiceConfig parse_voice_config(const std::string& json_text) {
   VoiceConfig c;
   for (const auto& item : root.items())
     if (item.key() != "model_dir" && item.key() != "dictionary" && item.key() != "phrases" && item.key() != "phone_loop_probability" &&
-        item.key() != "verify_min_log_ratio")
+        item.key() != "verify_min_log_ratio" && item.key() != "verify_min_margin")
       fail("unknown key " + item.key());
   try {
     if (root.contains("model_dir")) c.model_dir = root.at("model_dir").get<std::string>();
@@ -97,6 +99,7 @@ VoiceConfig parse_voice_config(const std::string& json_text) {
       else
         fail("verify_min_log_ratio must be a number (e.g. -20) or null (no second pass)");
     }
+    if (root.contains("verify_min_margin")) c.verify_min_margin = root.at("verify_min_margin").get<double>();
     if (root.contains("phrases")) {
       c.phrases.clear();
       for (const auto& p : root.at("phrases")) {

@@ -7,6 +7,7 @@
 #include <feat.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -52,8 +53,10 @@ struct KeywordSpotter::Impl {
   struct Verdict {
     std::optional<VoicePhrase> phrase;
     double log_ratio = -std::numeric_limits<double>::infinity();
+    /// log_ratio minus the best log ratio of a phrase of another command (+infinity when none fits).
+    double margin = std::numeric_limits<double>::infinity();
   };
-  Verdict verify(const std::vector<std::size_t>& candidates, long begin, long end);
+  Verdict verify(long begin, long end, long before);
 
   ~Impl() {
     if (decoder != nullptr) {
@@ -75,6 +78,7 @@ constexpr long kRedetectSamples = kVoiceSampleRate / 2;      // a hit ending < 0
 // 3.98 s, the word's end at 4.49 s); a grammar cannot be aligned to a phrase cut short.
 constexpr long kVerifyBeforeSamples = 3 * kVoiceSampleRate / 10;
 constexpr long kVerifyAfterSamples = 6 * kVoiceSampleRate / 10;
+constexpr long kVerifyWideBeforeSamples = 8 * kVoiceSampleRate / 10;
 constexpr const char* kKeywordSearch = "commands";
 const std::string kPhoneLoopSearch = "verify-phone-loop";
 std::string grammar_search(std::size_t phrase) { return "verify-phrase-" + std::to_string(phrase); }
@@ -125,9 +129,9 @@ std::string write_kws_file(const std::string& text) {
 // a phrase inside ongoing speech scores low. That is what rejects the keyword search's false alarms in
 // ordinary reading, and it asks a command to be said on its own ("of clubs" inside "four of clubs
 // seven" scores -64, the same phrase alone -4 to -13; docs/voice.md).
-KeywordSpotter::Impl::Verdict KeywordSpotter::Impl::verify(const std::vector<std::size_t>& candidates, long begin, long end) {
+KeywordSpotter::Impl::Verdict KeywordSpotter::Impl::verify(long begin, long end, long before) {
   Verdict verdict;
-  const long from = std::max(begin - kVerifyBeforeSamples, audio_start);
+  const long from = std::max(begin - before, audio_start);
   const long to = std::min(end + kVerifyAfterSamples, audio_start + static_cast<long>(audio.size()));
   if (to <= from) return verdict;
   // Both decodings normalise the cepstra with the keyword search's live mean: a short window alone
@@ -146,7 +150,8 @@ KeywordSpotter::Impl::Verdict KeywordSpotter::Impl::verify(const std::vector<std
   };
   double loop_score = 0.0;
   for (const auto& seg : decode(kPhoneLoopSearch.c_str())) loop_score += seg.acoustic;
-  for (const std::size_t i : candidates) {
+  std::vector<double> log_ratio(config.phrases.size(), -std::numeric_limits<double>::infinity());
+  for (std::size_t i = 0; i < config.phrases.size(); ++i) {
     double phrase_score = 0.0;
     int phrase_frames = 0;
     for (const auto& seg : decode(grammar_search(i).c_str())) {
@@ -154,9 +159,19 @@ KeywordSpotter::Impl::Verdict KeywordSpotter::Impl::verify(const std::vector<std
       if (!is_filler(seg.word)) phrase_frames += seg.last_frame - seg.first_frame + 1;
     }
     if (phrase_frames == 0) continue;  // the phrase cannot be aligned to this audio
-    const double log_ratio = (phrase_score - loop_score) / phrase_frames;
-    if (log_ratio > verdict.log_ratio) verdict = {config.phrases[i], log_ratio};
+    log_ratio[i] = (phrase_score - loop_score) / phrase_frames;
   }
+  // A phrase that cannot be aligned may be longer than the one the search hit and begin before the
+  // window ("stop cutting" hit on flite rms's "begin cutting": "be" lay before it): judged again over
+  // a window reaching further back, so that every phrase is scored on the whole utterance.
+  if (before == kVerifyBeforeSamples && std::any_of(log_ratio.begin(), log_ratio.end(), [](double r) { return !std::isfinite(r); }))
+    return verify(begin, end, kVerifyWideBeforeSamples);
+  const auto best = static_cast<std::size_t>(std::max_element(log_ratio.begin(), log_ratio.end()) - log_ratio.begin());
+  if (!std::isfinite(log_ratio[best])) return verdict;
+  verdict = {config.phrases[best], log_ratio[best], std::numeric_limits<double>::infinity()};
+  for (std::size_t i = 0; i < config.phrases.size(); ++i)
+    if (config.phrases[i].command != config.phrases[best].command && std::isfinite(log_ratio[i]))
+      verdict.margin = std::min(verdict.margin, log_ratio[best] - log_ratio[i]);
   return verdict;
 }
 
@@ -285,20 +300,21 @@ void KeywordSpotter::Impl::verify_pending(long ended_by, std::vector<VoiceDetect
   while (!pending.empty() && pending.front().end <= ended_by) {
     const PendingHit hit = pending.front();
     pending.erase(pending.begin());
-    // Both phrases may be hit on one utterance ("start cutting" and "stop cutting" share most of
-    // their phones): the second pass scores each and keeps the better, once. Only phrases the keyword
-    // search found compete: offered every phrase, it named "of clubs" "of hearts" in a recording.
-    std::vector<std::size_t> candidates{hit.phrase};
+    // Every phrase competes for the hit's audio, not only those the keyword search hit: the search
+    // reports the first phrase whose last state scores well enough, and "start cutting" and "stop
+    // cutting" share most of their phones, so it named the wrong one for espeak-ng's British voices
+    // (issue 22). Hits overlapping this one are the same utterance, judged once.
     long end = hit.end;
     while (!pending.empty() && pending.front().begin < hit.end) {
-      candidates.push_back(pending.front().phrase);
       end = std::max(end, pending.front().end);
       pending.erase(pending.begin());
     }
-    const Verdict verdict = verify(candidates, hit.begin, end);
+    const Verdict verdict = verify(hit.begin, end, kVerifyBeforeSamples);
     if (!verdict.phrase) continue;
     VoiceDetection d{static_cast<double>(samples) / kVoiceSampleRate, verdict.phrase->command, verdict.phrase->phrase};
     d.verification_score = verdict.log_ratio;
+    d.command_margin = verdict.margin;
+    if (d.command_margin < config.verify_min_margin) continue;  // too close to another command: a miss, never a wrong command
     if (d.verification_score >= *config.verify_min_log_ratio) accepted.push_back(d);
   }
 }

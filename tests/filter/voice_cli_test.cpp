@@ -43,7 +43,7 @@ class VoiceCli : public ::testing::Test {
   void SetUp() override {
     tachi::sensor::testing::Sequence seq{5};
     seq.pause(0.5);
-    seq.say("start cutting", tachi::sensor::testing::flite_say("start cutting"));
+    seq.say("begin cutting", tachi::sensor::testing::flite_say("begin cutting"));
     seq.pause(1.0);
     seq.say("stop cutting", tachi::sensor::testing::flite_say("stop cutting"));
     seq.pause(0.5);
@@ -66,7 +66,7 @@ TEST_F(VoiceCli, WavModePrintsOneLinePerCommand) {
     EXPECT_GT(std::stod(line.substr(0, first)), 0.0) << line;
     commands.push_back(line.substr(first + 1));
   }
-  EXPECT_EQ(commands, (std::vector<std::string>{"start,start cutting", "stop,stop cutting"}));
+  EXPECT_EQ(commands, (std::vector<std::string>{"start,begin cutting", "stop,stop cutting"}));
 }
 
 TEST_F(VoiceCli, OtherPhrasesAreConfigurableFromTheCommandLine) {
@@ -123,7 +123,7 @@ TEST_F(VoiceCli, PublishesCommandsOnTheBus) {
     for (const auto& c : reader.take()) got.emplace_back(static_cast<int>(c->command), c->phrase);
   }
   ASSERT_EQ(got.size(), 2U);
-  EXPECT_EQ(got[0], std::make_pair(static_cast<int>(tachi_msg_VOICE_START), std::string("start cutting")));
+  EXPECT_EQ(got[0], std::make_pair(static_cast<int>(tachi_msg_VOICE_START), std::string("begin cutting")));
   EXPECT_EQ(got[1], std::make_pair(static_cast<int>(tachi_msg_VOICE_STOP), std::string("stop cutting")));
 }
 

@@ -8,7 +8,7 @@ namespace {
 TEST(VoiceCommands, DefaultsAreTwoWordPhrasesForStartAndStop) {
   const VoiceConfig c;
   ASSERT_EQ(c.phrases.size(), 2U);
-  EXPECT_EQ(c.phrases[0].phrase, "start cutting");
+  EXPECT_EQ(c.phrases[0].phrase, "begin cutting");
   EXPECT_EQ(c.phrases[0].command, VoiceCommand::Start);
   EXPECT_EQ(c.phrases[1].phrase, "stop cutting");
   EXPECT_EQ(c.phrases[1].command, VoiceCommand::Stop);
@@ -18,7 +18,7 @@ TEST(VoiceCommands, DefaultsAreTwoWordPhrasesForStartAndStop) {
 TEST(VoiceCommands, KeywordListHoldsEveryPhraseWithItsThreshold) {
   VoiceConfig c;
   c.phrases[1].threshold = 1e-30;
-  EXPECT_EQ(kws_file_text(c.phrases), "start cutting /1e-15/\nstop cutting /1e-30/\n");
+  EXPECT_EQ(kws_file_text(c.phrases), "begin cutting /1e-15/\nstop cutting /1e-30/\n");
 }
 
 TEST(VoiceCommands, HypothesisWithTrailingSpaceMapsToItsCommand) {
@@ -26,7 +26,7 @@ TEST(VoiceCommands, HypothesisWithTrailingSpaceMapsToItsCommand) {
   const auto one = phrases_in_hypothesis("stop cutting ", c.phrases);
   ASSERT_EQ(one.size(), 1U);
   EXPECT_EQ(one[0].command, VoiceCommand::Stop);
-  const auto two = phrases_in_hypothesis("stop cutting start cutting ", c.phrases);
+  const auto two = phrases_in_hypothesis("stop cutting begin cutting ", c.phrases);
   ASSERT_EQ(two.size(), 2U);
   EXPECT_EQ(two[0].command, VoiceCommand::Stop);
   EXPECT_EQ(two[1].command, VoiceCommand::Start);
@@ -95,6 +95,17 @@ TEST(VoiceCommands, TheShippedConfigFileMatchesTheDefaults) {
   EXPECT_EQ(kws_file_text(file.phrases), kws_file_text(defaults.phrases));
   EXPECT_EQ(file.phone_loop_probability, defaults.phone_loop_probability);
   EXPECT_EQ(file.verify_min_log_ratio, defaults.verify_min_log_ratio);
+  EXPECT_EQ(file.verify_min_margin, defaults.verify_min_margin);
+}
+
+TEST(VoiceCommands, TheSecondPassMarginIsValidated) {
+  EXPECT_EQ(parse_voice_config(R"({"verify_min_margin": 2.5})").verify_min_margin, 2.5);
+  try {
+    parse_voice_config(R"({"verify_min_margin": -1})");
+    FAIL() << "accepted a negative margin";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("verify_min_margin"), std::string::npos) << e.what();
+  }
 }
 
 }  // namespace

@@ -8,6 +8,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -39,6 +40,54 @@ inline std::vector<std::int16_t> flite_say(const std::string& text, double stret
   auto audio = read_wav_file(path.string());
   std::filesystem::remove(path);
   return resample_to_16k(audio);
+}
+
+/// A synthetic speaker: a TTS engine's voice, optionally shifted by sox (pitch in cents, tempo factor).
+struct Speaker {
+  std::string engine;  ///< "espeak-ng", "flite" or "festival"
+  std::string voice;   ///< espeak-ng "-v" (en+m3), flite "-voice" (rms), festival voice function (voice_kal_diphone)
+  int pitch_cents = 0;
+  double tempo = 1.0;
+  std::string label() const {
+    std::string l = engine + ":" + voice;
+    if (pitch_cents != 0) l += " pitch" + std::string(pitch_cents > 0 ? "+" : "") + std::to_string(pitch_cents);
+    if (tempo != 1.0) l += " tempo" + std::to_string(tempo).substr(0, 4);
+    return l;
+  }
+};
+
+/// `text` said by `speaker`, as 16 kHz mono samples; `reverb` adds sox's room reverb (and its 0.5 s
+/// tail). Synthesised once and kept in `cache_dir` (a build folder): espeak-ng, flite, festival and
+/// sox cost CPU the evaluation needs for decoding.
+inline std::vector<std::int16_t> synthesize(const Speaker& speaker, const std::string& text, bool reverb, const std::string& cache_dir) {
+  namespace fs = std::filesystem;
+  std::string key = speaker.label() + (reverb ? " reverb" : "") + " " + text;
+  for (auto& c : key)
+    if (!std::isalnum(static_cast<unsigned char>(c)) && c != '+' && c != '-' && c != '.') c = '_';
+  const fs::path cached = fs::path(cache_dir) / (key + ".wav");
+  if (!fs::exists(cached)) {
+    fs::create_directories(cache_dir);
+    const std::string tmp = (fs::path(cache_dir) / ("tmp_" + std::to_string(::getpid()) + "_" + key)).string();
+    std::string say;
+    if (speaker.engine == "espeak-ng")
+      say = "espeak-ng -v '" + speaker.voice + "' -w '" + tmp + ".raw.wav' '" + text + "'";
+    else if (speaker.engine == "flite")
+      say = std::string(TACHI_FLITE) + " -voice " + speaker.voice + " -t '" + text + "' -o '" + tmp + ".raw.wav'";
+    else if (speaker.engine == "festival")
+      say = "echo '" + text + "' | text2wave -eval '(" + speaker.voice + ")' -o '" + tmp + ".raw.wav'";
+    else
+      throw std::invalid_argument("unknown speech engine " + speaker.engine);
+    std::string shift = " channels 1";
+    if (speaker.pitch_cents != 0) shift += " pitch " + std::to_string(speaker.pitch_cents);
+    if (speaker.tempo != 1.0) shift += " tempo -s " + std::to_string(speaker.tempo);
+    if (reverb) shift += " pad 0 0.5 reverb";
+    const std::string convert = "sox '" + tmp + ".raw.wav' -b 16 '" + tmp + ".wav'" + shift + " rate 16000";
+    const std::string cmd = "(" + say + ") >/dev/null 2>&1 && " + convert + " >/dev/null 2>&1 && mv '" + tmp + ".wav' '" + cached.string() + "'";
+    const int status = std::system(cmd.c_str());
+    fs::remove(tmp + ".raw.wav");
+    if (status != 0) throw std::runtime_error("speech synthesis failed: " + cmd);
+  }
+  return resample_to_16k(read_wav_file(cached.string()));
 }
 
 /// Where an utterance sits in a sequence, in seconds.

@@ -34,7 +34,10 @@ struct VoiceConfig {
   // The defaults are the two-pass spotter of issue 14 (docs/voice.md, "Two passes"): a sensitive
   // keyword search, each hit verified. One pass as before: thresholds 1e-20, phone loop 0.1, no
   // verify_min_log_ratio.
-  std::vector<VoicePhrase> phrases{{"start cutting", VoiceCommand::Start, 1e-15},
+  // "begin cutting", not "start cutting" (issue 22): in non-rhotic voices (espeak-ng en) "start" has
+  // no R and the en-us model hears "stop"; "begin" differs from "stop" in every phone and a syllable.
+  // "start cutting" stays selectable (--start-phrase "start cutting" or the config).
+  std::vector<VoicePhrase> phrases{{"begin cutting", VoiceCommand::Start, 1e-15},
                                    {"stop cutting", VoiceCommand::Stop, 1e-15}};
   /// pocketsphinx's `-kws_plp`: the probability of its phone loop, the garbage model a key phrase
   /// competes with. Smaller = more detections (and false alarms). pocketsphinx's own 0.1 finds 21% of
@@ -46,6 +49,12 @@ struct VoiceConfig {
   /// frame of the phrase against a free phone loop. Chosen on the evaluation's sequences (seeds +0)
   /// between -28 and -18, where none of them changes; nothing: no second pass, every hit is a command.
   std::optional<double> verify_min_log_ratio = -20.0;
+  /// Second pass: every phrase is scored on the hit's audio, and the best becomes a command only when
+  /// its score beats the best phrase of every other command by at least this (log-likelihood ratio per
+  /// frame). A hit that could be either command is dropped: a missed command is a repeat, a wrong one
+  /// starts or stops a cut the user did not ask for (issue 22).
+  /// 4: chosen on tachi-voice-eval --speakers tune --sweep (docs/voice.md).
+  double verify_min_margin = 4.0;
 };
 
 /// Lower-cases and collapses whitespace: " Start   Cutting " -> "start cutting".

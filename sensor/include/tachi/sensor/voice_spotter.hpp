@@ -23,6 +23,9 @@ struct VoiceDetection {
   std::string phrase;
   /// The second pass's score (VoiceConfig::verify_min_log_ratio); NaN when there is no second pass.
   double verification_score = std::numeric_limits<double>::quiet_NaN();
+  /// The second pass's score minus that of the best phrase of another command (VoiceConfig::
+  /// verify_min_margin); +infinity when no other command's phrase fits, NaN without a second pass.
+  double command_margin = std::numeric_limits<double>::quiet_NaN();
 };
 
 class KeywordSpotter {

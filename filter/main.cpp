@@ -253,7 +253,7 @@ int main(int argc, char** argv) try {
   app.add_option("--config", o.config_file, "Filter config JSON (see config/filter.json); defaults built in")
       ->check(CLI::ExistingFile);
   app.add_option("--smoother", o.smoother, "Override the config's smoother")
-      ->check(CLI::IsMember({"one-euro", "moving-average", "none"}));
+      ->check(CLI::IsMember({"wiener", "one-euro", "moving-average", "none"}));
   app.add_option("--gate", o.gate, "Override the config's gate mode")->check(CLI::IsMember({"threshold", "voice", "either"}));
   app.add_flag("--camera-frame", o.camera_frame, "Offline: write camera-frame positions instead of world-frame ones");
   app.add_flag("--print-config", o.print_config, "Print the effective config as JSON and exit");

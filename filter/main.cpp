@@ -104,7 +104,8 @@ int run_offline(const Options& o, const tachi::filter::FilterConfig& config) {
   }
   out.flush();
   if (!out) throw std::runtime_error("write failed: " + o.out_csv);
-  spdlog::info("{} samples ({} skipped), {} strokes -> {}", hands.samples.size(), hands.skipped.size(), strokes, o.out_csv);
+  spdlog::info("{} samples ({} skipped, {} outliers), {} strokes -> {}", hands.samples.size(), hands.skipped.size(),
+               filter.outliers(), strokes, o.out_csv);
   return tachi::common::kExitOk;
 }
 
@@ -202,6 +203,7 @@ int run_bus(const Options& o, const tachi::filter::FilterConfig& config) {
       msg.acquired_ns = h->acquired_ns;  // the depth frame's time rides on to the simulator
       batch.push_back(msg);
       heartbeat.set_metric("strokes", stroke.stroke_id);
+      heartbeat.set_metric("outliers", static_cast<double>(filter.outliers()));  // impossibly fast samples
       heartbeat.set_metric("gate", static_cast<double>(msg.gate));
       heartbeat.set_metric("gate_opened_by", static_cast<double>(msg.opened_by));
     }

@@ -258,11 +258,11 @@ int tremor_table(std::pair<std::uint64_t, std::uint64_t> range, const tachi::fil
   print_tremor_row("moving average N=3", evaluate(set, ma));
   tachi::filter::SmootherParams p;
   p.kind = SmootherKind::OneEuro;
-  print_tremor_row(one_euro_label("(the default before issue 22)", p.one_euro), evaluate(set, p));
+  print_tremor_row(one_euro_label("(the default)", p.one_euro), evaluate(set, p));
   p.one_euro = chosen;
   print_tremor_row(one_euro_label("given", p.one_euro), evaluate(set, p));
   p.kind = SmootherKind::Wiener;
-  print_tremor_row("wiener (the default: 12 taps fitted on seeds 1..1000)", evaluate(set, p));
+  print_tremor_row("wiener (12 taps fitted on seeds 1..1000)", evaluate(set, p));
   return 0;
 }
 

@@ -104,7 +104,8 @@ int run_offline(const Options& o, const tachi::filter::FilterConfig& config) {
   }
   out.flush();
   if (!out) throw std::runtime_error("write failed: " + o.out_csv);
-  spdlog::info("{} samples ({} skipped), {} strokes -> {}", hands.samples.size(), hands.skipped.size(), strokes, o.out_csv);
+  spdlog::info("{} samples ({} skipped, {} outliers), {} strokes -> {}", hands.samples.size(), hands.skipped.size(),
+               filter.outliers(), strokes, o.out_csv);
   return tachi::common::kExitOk;
 }
 
@@ -202,6 +203,7 @@ int run_bus(const Options& o, const tachi::filter::FilterConfig& config) {
       msg.acquired_ns = h->acquired_ns;  // the depth frame's time rides on to the simulator
       batch.push_back(msg);
       heartbeat.set_metric("strokes", stroke.stroke_id);
+      heartbeat.set_metric("outliers", static_cast<double>(filter.outliers()));  // impossibly fast samples
       heartbeat.set_metric("gate", static_cast<double>(msg.gate));
       heartbeat.set_metric("gate_opened_by", static_cast<double>(msg.opened_by));
     }
@@ -253,7 +255,7 @@ int main(int argc, char** argv) try {
   app.add_option("--config", o.config_file, "Filter config JSON (see config/filter.json); defaults built in")
       ->check(CLI::ExistingFile);
   app.add_option("--smoother", o.smoother, "Override the config's smoother")
-      ->check(CLI::IsMember({"one-euro", "moving-average", "none"}));
+      ->check(CLI::IsMember({"wiener", "one-euro", "moving-average", "none"}));
   app.add_option("--gate", o.gate, "Override the config's gate mode")->check(CLI::IsMember({"threshold", "voice", "either"}));
   app.add_flag("--camera-frame", o.camera_frame, "Offline: write camera-frame positions instead of world-frame ones");
   app.add_flag("--print-config", o.print_config, "Print the effective config as JSON and exit");

@@ -6,6 +6,9 @@
 #include "tachi/common/app.hpp"
 #include "tachi/filter/hand_csv.hpp"
 #include "tachi/filter/smoothing.hpp"
+#include "tachi/filter/tremor_clips.hpp"
+
+#include <Eigen/Dense>
 
 #include <cmath>
 #include <cstdio>
@@ -13,6 +16,8 @@
 #include <iostream>
 #include <map>
 #include <sstream>
+#include <algorithm>
+#include <numeric>
 
 namespace {
 
@@ -114,6 +119,168 @@ std::vector<std::pair<std::uint64_t, Eigen::Vector3d>> run(const std::vector<Han
   return out;
 }
 
+
+/// "FIRST..LAST" -> the seed range.
+std::pair<std::uint64_t, std::uint64_t> parse_range(const std::string& text) {
+  const auto dots = text.find("..");
+  if (dots == std::string::npos) throw std::invalid_argument("--tremor " + text + ": expected FIRST..LAST (e.g. 100001..100300)");
+  const auto first = std::stoull(text.substr(0, dots)), last = std::stoull(text.substr(dots + 2));
+  if (last < first) throw std::invalid_argument("--tremor " + text + ": LAST is below FIRST");
+  return {first, last};
+}
+
+struct TremorSet {
+  std::vector<tachi::filter::TremorClip> clips;
+  std::vector<double> ceiling_m, raw_m;
+};
+
+TremorSet make_set(std::uint64_t first, std::uint64_t last) {
+  TremorSet set;
+  for (std::uint64_t seed = first; seed <= last; ++seed) {
+    set.clips.push_back(tachi::filter::make_tremor_clip(seed));
+    set.ceiling_m.push_back(tachi::filter::offline_ceiling(set.clips.back()).rms_m);
+    set.raw_m.push_back(tachi::filter::rms_against_shifted(set.clips.back(), set.clips.back().measured, 0.0));
+  }
+  return set;
+}
+
+double quantile(std::vector<double> v, double q) {
+  std::sort(v.begin(), v.end());
+  return v.empty() ? 0.0 : v[std::min(v.size() - 1, static_cast<std::size_t>(q * static_cast<double>(v.size())))];
+}
+
+struct TremorResult {
+  double mean_vs_ceiling = 0, median_vs_ceiling = 0, p90_vs_ceiling = 0, pooled_vs_ceiling = 0, pooled_vs_raw = 0;
+  double lag_median = 0, lag_p95 = 0, lag_max = 0, same_frame_vs_ceiling = 0;
+};
+
+TremorResult evaluate(const TremorSet& set, const tachi::filter::SmootherParams& p) {
+  std::vector<double> ratio, lag;
+  double err2 = 0, ceil2 = 0, raw2 = 0, same2 = 0;
+  for (std::size_t i = 0; i < set.clips.size(); ++i) {
+    const auto s = tachi::filter::score_causal(set.clips[i], tachi::filter::run_smoother(set.clips[i], p));
+    ratio.push_back(s.rms_m / set.ceiling_m[i]);
+    lag.push_back(s.lag_frames);
+    err2 += s.rms_m * s.rms_m;
+    same2 += s.rms_same_frame_m * s.rms_same_frame_m;
+    ceil2 += set.ceiling_m[i] * set.ceiling_m[i];
+    raw2 += set.raw_m[i] * set.raw_m[i];
+  }
+  TremorResult r;
+  r.mean_vs_ceiling = std::accumulate(ratio.begin(), ratio.end(), 0.0) / static_cast<double>(ratio.size());
+  r.median_vs_ceiling = quantile(ratio, 0.5);
+  r.p90_vs_ceiling = quantile(ratio, 0.9);
+  r.pooled_vs_ceiling = std::sqrt(err2 / ceil2);
+  r.pooled_vs_raw = std::sqrt(err2 / raw2);
+  r.same_frame_vs_ceiling = std::sqrt(same2 / ceil2);
+  r.lag_median = quantile(lag, 0.5);
+  r.lag_p95 = quantile(lag, 0.95);
+  r.lag_max = quantile(lag, 1.0);
+  return r;
+}
+
+void print_tremor_header() {
+  std::printf("%-58s %9s %9s %9s %9s %9s %8s %8s %8s %10s\n", "smoother", "mean/ceil", "med/ceil", "p90/ceil", "pool/ceil",
+              "pool/raw", "lag_med", "lag_p95", "lag_max", "same_fr/ce");
+}
+
+void print_tremor_row(const std::string& label, const TremorResult& r) {
+  std::printf("%-58s %9.3f %9.3f %9.3f %9.3f %9.3f %8.2f %8.2f %8.2f %10.3f\n", label.c_str(), r.mean_vs_ceiling,
+              r.median_vs_ceiling, r.p90_vs_ceiling, r.pooled_vs_ceiling, r.pooled_vs_raw, r.lag_median, r.lag_p95,
+              r.lag_max, r.same_frame_vs_ceiling);
+}
+
+
+/// The Wiener FIR (least squares on training clips): out_n = y_n + sum_k g_k (y_{n-k} - y_n), k = 1..taps-1,
+/// fitted to intended_{n - delay}; translation invariant (the taps sum to 1).
+std::vector<double> fit_fir(const TremorSet& set, int taps, double delay) {
+  const int m = taps - 1;
+  Eigen::MatrixXd ata = Eigen::MatrixXd::Zero(m, m);
+  Eigen::VectorXd atb = Eigen::VectorXd::Zero(m);
+  for (const auto& c : set.clips) {
+    const int n = static_cast<int>(c.measured.size());
+    for (int i = std::max<int>(taps, tachi::filter::kScoreMargin); i < n - static_cast<int>(tachi::filter::kScoreMargin); ++i) {
+      const double t = i - delay;
+      const int f = static_cast<int>(std::floor(t));
+      const double w = t - f;
+      const Eigen::Vector3d target = (1 - w) * c.intended[f] + w * c.intended[f + 1] - c.measured[i];
+      for (int a = 0; a < 3; ++a) {
+        Eigen::VectorXd row(m);
+        for (int k = 1; k <= m; ++k) row[k - 1] = c.measured[i - k][a] - c.measured[i][a];
+        ata += row * row.transpose();
+        atb += row * target[a];
+      }
+    }
+  }
+  const Eigen::VectorXd g = ata.ldlt().solve(atb);
+  std::vector<double> h(static_cast<std::size_t>(taps));
+  h[0] = 1.0 - g.sum();
+  for (int k = 1; k <= m; ++k) h[static_cast<std::size_t>(k)] = g[k - 1];
+  return h;
+}
+
+/// Fits the Wiener taps on the clips of `range` and prints them (paste into smoothing.cpp).
+int fit_wiener(std::pair<std::uint64_t, std::uint64_t> range, int taps, double delay) {
+  TremorSet set;
+  for (std::uint64_t seed = range.first; seed <= range.second; ++seed) set.clips.push_back(tachi::filter::make_tremor_clip(seed));
+  const auto h = fit_fir(set, taps, delay);
+  std::printf("wiener taps (%d, newest first, delay %.2f frame, clips %llu..%llu):", taps, delay,
+              static_cast<unsigned long long>(range.first), static_cast<unsigned long long>(range.second));
+  for (std::size_t k = 0; k < h.size(); ++k) std::printf("%s %.6f", k ? "," : "", h[k]);
+  std::printf("\n");
+  return 0;
+}
+
+tachi::filter::SmootherParams with_kind(tachi::filter::SmootherKind kind) {
+  tachi::filter::SmootherParams p;
+  p.kind = kind;
+  return p;
+}
+
+std::string one_euro_label(const char* what, const tachi::filter::OneEuroParams& e) {
+  char name[160];
+  std::snprintf(name, sizeof name, "one-euro %s (%.2f Hz, beta %.1f, d %.1f Hz, comp %.2f)", what, e.min_cutoff_hz, e.beta,
+                e.d_cutoff_hz, e.lag_compensation);
+  return name;
+}
+
+int tremor_table(std::pair<std::uint64_t, std::uint64_t> range, const tachi::filter::OneEuroParams& chosen) {
+  using tachi::filter::SmootherKind;
+  const TremorSet set = make_set(range.first, range.second);
+  std::printf("tremor clips %llu..%llu (%zu): raw %.2f mm, ceiling %.2f mm (pooled RMS against the intended path)\n",
+              static_cast<unsigned long long>(range.first), static_cast<unsigned long long>(range.second), set.clips.size(),
+              1000 * std::sqrt(std::inner_product(set.raw_m.begin(), set.raw_m.end(), set.raw_m.begin(), 0.0) / static_cast<double>(set.raw_m.size())),
+              1000 * std::sqrt(std::inner_product(set.ceiling_m.begin(), set.ceiling_m.end(), set.ceiling_m.begin(), 0.0) / static_cast<double>(set.ceiling_m.size())));
+  print_tremor_header();
+  print_tremor_row("raw", evaluate(set, with_kind(SmootherKind::None)));
+  auto ma = with_kind(SmootherKind::MovingAverage);
+  ma.moving_average_window = 3;
+  print_tremor_row("moving average N=3", evaluate(set, ma));
+  tachi::filter::SmootherParams p;
+  p.kind = SmootherKind::OneEuro;
+  print_tremor_row(one_euro_label("(the default)", p.one_euro), evaluate(set, p));
+  p.one_euro = chosen;
+  print_tremor_row(one_euro_label("given", p.one_euro), evaluate(set, p));
+  p.kind = SmootherKind::Wiener;
+  print_tremor_row("wiener (12 taps fitted on seeds 1..1000)", evaluate(set, p));
+  return 0;
+}
+
+int tune(std::pair<std::uint64_t, std::uint64_t> range) {
+  const TremorSet set = make_set(range.first, range.second);
+  print_tremor_header();
+  tachi::filter::SmootherParams p;
+  p.kind = tachi::filter::SmootherKind::OneEuro;
+  for (double comp : {0.0, 0.5, 1.0})
+    for (double d : {0.5, 1.0, 2.0})
+      for (double fc : {0.5, 1.0, 1.5, 2.0, 2.5, 3.0, 4.0, 5.0})
+        for (double b : {0.0, 2.0, 5.0, 10.0, 20.0, 40.0}) {
+          p.one_euro = {fc, b, d, comp};
+          print_tremor_row(one_euro_label("", p.one_euro), evaluate(set, p));
+          std::fflush(stdout);
+        }
+  return 0;
+}
 }  // namespace
 
 int main(int argc, char** argv) try {
@@ -124,7 +291,20 @@ int main(int argc, char** argv) try {
   app.add_option("--lag-compensation", lag_compensation, "One Euro lag_compensation (0 = the paper's filter) to try");
   app.add_option("--hands", hands_csv, "tachi-sensor's CSV for the recording (omit: use the ground-truth palm, tremor only)")
       ->check(CLI::ExistingFile);
-  app.add_option("--truth", truth_csv, "The recording's ground_truth.csv (with intended_x,y,z)")->required()->check(CLI::ExistingFile);
+  app.add_option("--truth", truth_csv, "The recording's ground_truth.csv (with intended_x,y,z); needed unless --tremor/--tune")
+      ->check(CLI::ExistingFile);
+  std::string tremor_range, tune_range;
+  app.add_option("--tremor", tremor_range,
+                 "Randomized trembling-hand clips FIRST..LAST (held out: 100001..100300): each smoother's error against "
+                 "the best offline zero-lag smoother of the same clip (the ceiling), and its lag");
+  std::string fit_range;
+  int taps = 12;
+  double delay = 0.9;
+  app.add_option("--fit-wiener", fit_range, "Fit the Wiener smoother's taps on clips FIRST..LAST (tuning: 1..1000) and print them");
+  app.add_option("--taps", taps, "With --fit-wiener: the number of taps")->capture_default_str()->check(CLI::Range(2, 64));
+  app.add_option("--delay", delay, "With --fit-wiener: the intended path's delay the taps aim at (frames)")->capture_default_str()
+      ->check(CLI::Range(0.0, 5.0));
+  app.add_option("--tune", tune_range, "Grid-search the One Euro parameters on clips FIRST..LAST (tuning: 1..1000)");
   app.add_option("--min-cutoff", min_cutoff, "One Euro min_cutoff_hz to try instead of the default");
   app.add_option("--beta", beta, "One Euro beta to try instead of the default");
   app.add_option("--d-cutoff", d_cutoff, "One Euro d_cutoff_hz to try instead of the default");
@@ -133,6 +313,16 @@ int main(int argc, char** argv) try {
   app.add_option("--max-speed", max_speed, "Score frames whose intended speed is below this (m/s): the stroke")
       ->capture_default_str();
   if (const int rc = tachi::common::parse(app, argc, argv); rc >= 0) return rc;
+  tachi::filter::SmootherParams defaults;
+  tachi::filter::OneEuroParams chosen = defaults.one_euro;
+  if (min_cutoff > 0) chosen.min_cutoff_hz = min_cutoff;
+  if (beta >= 0) chosen.beta = beta;
+  if (d_cutoff > 0) chosen.d_cutoff_hz = d_cutoff;
+  if (lag_compensation >= 0) chosen.lag_compensation = lag_compensation;
+  if (!fit_range.empty()) return fit_wiener(parse_range(fit_range), taps, delay);
+  if (!tune_range.empty()) return tune(parse_range(tune_range));
+  if (!tremor_range.empty()) return tremor_table(parse_range(tremor_range), chosen);
+  if (truth_csv.empty()) throw std::invalid_argument("--truth is needed (or --tremor / --tune)");
 
   const Truth truth = read_truth(truth_csv);
   std::vector<HandSample> hands;
@@ -175,6 +365,11 @@ int main(int argc, char** argv) try {
     variants.emplace_back(name, euro);
   };
   add_euro(base.one_euro, "default");
+  {
+    auto wiener = base;
+    wiener.kind = tachi::filter::SmootherKind::Wiener;
+    variants.emplace_back("wiener (12 taps, seeds 1..1000)", wiener);
+  }
   // The paper's filter at the settings its tuning procedure starts from (1 Hz, beta 0 -> 3), and the
   // optional lag compensation (not in the paper) at the former default.
   add_euro({1.0, 3.0, 1.0, 0.0}, "paper, 1 Hz");

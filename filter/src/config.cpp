@@ -71,7 +71,8 @@ FilterConfig parse_filter_config(const std::string& json_text) {
     fail(std::string("not valid JSON: ") + e.what());
   }
   if (!root.is_object()) fail("the document must be a JSON object");
-  check_keys(root, {"workspace", "smoother", "gate", "cloth"}, "");
+  check_keys(root, {"workspace", "smoother", "gate", "cloth", "outliers"}, "");
+  check_keys(section(root, "outliers"), {"max_hand_speed_mps", "reanchor_samples"}, "outliers.");
   check_keys(section(root, "workspace"), {"rotation", "translation_m", "scale"}, "workspace.");
   check_keys(section(root, "smoother"),
              {"kind", "moving_average_window", "min_cutoff_hz", "beta", "d_cutoff_hz", "lag_compensation", "nominal_rate_hz",
@@ -89,7 +90,7 @@ FilterConfig parse_filter_config(const std::string& json_text) {
     std::string kind;
     read(s, "kind", "smoother.", kind);
     const auto k = smoother_kind_from_string(kind);
-    if (!k) fail("smoother.kind must be one of none, moving-average, one-euro (got \"" + kind + "\")");
+    if (!k) fail("smoother.kind must be one of none, moving-average, one-euro, wiener (got \"" + kind + "\")");
     c.smoother.kind = *k;
   }
   read(s, "moving_average_window", "smoother.", c.smoother.moving_average_window);
@@ -126,6 +127,12 @@ FilterConfig parse_filter_config(const std::string& json_text) {
     fail("cloth.width_m and cloth.height_m must be in (0, 100] m");
   if (!std::isfinite(c.cloth.outside_margin_m) || c.cloth.outside_margin_m < 0.0F || c.cloth.outside_margin_m > 10.0F)
     fail("cloth.outside_margin_m must be in [0, 10] m");
+  const json& o = section(root, "outliers");
+  read(o, "max_hand_speed_mps", "outliers.", c.outliers.max_hand_speed_mps);
+  read(o, "reanchor_samples", "outliers.", c.outliers.reanchor_samples);
+  if (!std::isfinite(c.outliers.max_hand_speed_mps) || c.outliers.max_hand_speed_mps < 0.0F || c.outliers.max_hand_speed_mps > 1000.0F)
+    fail("outliers.max_hand_speed_mps must be in [0, 1000] m/s (0 disables)");
+  if (c.outliers.reanchor_samples < 1 || c.outliers.reanchor_samples > 1000) fail("outliers.reanchor_samples must be in [1, 1000]");
   return c;
 }
 
@@ -161,7 +168,8 @@ std::string to_json(const FilterConfig& c) {
        {{"width_m", tidy(c.cloth.width_m)},
         {"height_m", tidy(c.cloth.height_m)},
         {"outside_margin_m", tidy(c.cloth.outside_margin_m)},
-        {"behind_cloth_is_contact", c.cloth.behind_cloth_is_contact}}}};
+        {"behind_cloth_is_contact", c.cloth.behind_cloth_is_contact}}},
+      {"outliers", {{"max_hand_speed_mps", tidy(c.outliers.max_hand_speed_mps)}, {"reanchor_samples", c.outliers.reanchor_samples}}}};
   return root.dump(2);
 }
 

@@ -56,10 +56,30 @@ void OneEuroFilter::reset() {
   z_.reset();
 }
 
+WienerFir::WienerFir(std::vector<double> taps) : taps_(std::move(taps)) {}
+
+std::optional<Eigen::Vector3f> WienerFir::filter(const Eigen::Vector3f& x) {
+  history_.push_front(x.cast<double>());
+  if (history_.size() > taps_.size()) history_.pop_back();
+  if (history_.size() < taps_.size() || taps_.empty()) return std::nullopt;
+  // Relative to the newest sample, so that the float sum of a position ~1 m loses nothing.
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  for (std::size_t k = 1; k < taps_.size(); ++k) sum += taps_[k] * (history_[k] - history_[0]);
+  return (history_[0] + sum).cast<float>();
+}
+
+const std::vector<double>& tremor_wiener_taps() {
+  // tachi-filter-bench --fit-wiener 1..1000 (12 taps, delay 0.9 frame); docs/filter.md.
+  static const std::vector<double> taps{0.387865, 0.186547, 0.377026, 0.026899, 0.179829, -0.114524,
+                                        0.036208, -0.107109, 0.005589, -0.018385, 0.021749, 0.018308};
+  return taps;
+}
+
 std::optional<SmootherKind> smoother_kind_from_string(const std::string& name) {
   if (name == "none") return SmootherKind::None;
   if (name == "moving-average") return SmootherKind::MovingAverage;
   if (name == "one-euro") return SmootherKind::OneEuro;
+  if (name == "wiener") return SmootherKind::Wiener;
   return std::nullopt;
 }
 
@@ -68,6 +88,7 @@ std::string to_string(SmootherKind kind) {
     case SmootherKind::None: return "none";
     case SmootherKind::MovingAverage: return "moving-average";
     case SmootherKind::OneEuro: return "one-euro";
+    case SmootherKind::Wiener: return "wiener";
   }
   return "?";
 }
@@ -88,11 +109,12 @@ std::optional<std::string> validate(const SmootherParams& p) {
 }
 
 Smoother::Smoother(const SmootherParams& params)
-    : params_(params), average_(params.moving_average_window), one_euro_(params.one_euro) {}
+    : params_(params), average_(params.moving_average_window), one_euro_(params.one_euro), wiener_(params.wiener_taps) {}
 
 void Smoother::reset() {
   average_.reset();
   one_euro_.reset();
+  wiener_.reset();
   last_stamp_ns_.reset();
 }
 
@@ -106,11 +128,18 @@ Eigen::Vector3f Smoother::filter(const Eigen::Vector3f& x, std::int64_t stamp_ns
       dt_s = gap;  // timestamps that do not advance fall back to the nominal rate
     }
   }
+  // The Wiener taps hold for samples at the nominal rate: a dropped frame (or a burst) restarts them.
+  if (last_stamp_ns_ && std::abs(dt_s * params_.nominal_rate_hz - 1.0) > 0.5) wiener_.reset();
   last_stamp_ns_ = stamp_ns;
   switch (params_.kind) {
     case SmootherKind::None: return x;
     case SmootherKind::MovingAverage: return average_.filter(x);
     case SmootherKind::OneEuro: return one_euro_.filter(x, dt_s);
+    case SmootherKind::Wiener: {
+      // The One Euro filter runs alongside and bridges the Wiener filter's warm-up.
+      const Eigen::Vector3f bridge = one_euro_.filter(x, dt_s);
+      return wiener_.filter(x).value_or(bridge);
+    }
   }
   return x;
 }

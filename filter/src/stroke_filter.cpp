@@ -3,7 +3,10 @@
 namespace tachi::filter {
 
 StrokeFilter::StrokeFilter(const FilterConfig& config)
-    : config_(config), smoother_(config.smoother), gate_(config.gate) {}
+    : config_(config),
+      smoother_(config.smoother),
+      speed_limit_(config.outliers, 1.0 / config.smoother.nominal_rate_hz),
+      gate_(config.gate) {}
 
 void StrokeFilter::on_cloth_state(std::span<const float> xyz) {
   cloth_xyz_.assign(xyz.begin(), xyz.end());
@@ -15,6 +18,18 @@ StrokeSample StrokeFilter::apply(const HandSample& hand, const std::optional<Pro
   out.frame = hand.frame;
   out.stamp_ns = hand.stamp_ns;
   out.tracked = hand.tracked && hand.position_m.allFinite();
+  if (out.tracked) {
+    // An impossibly fast sample is published as one without a hand (the simulator neither cuts to it
+    // nor from it) but does not restart the smoother: the hand was not lost, the sample was wrong.
+    switch (speed_limit_.check(config_.workspace.to_world(hand.position_m), hand.stamp_ns)) {
+      case HandSpeedLimit::Verdict::Accepted: break;
+      case HandSpeedLimit::Verdict::Outlier:
+        out.tracked = false;
+        out.outlier = true;
+        break;
+      case HandSpeedLimit::Verdict::Reanchored: smoother_.reset(); break;
+    }
+  }
   std::optional<float> distance;
   if (out.tracked) {
     last_camera_ = smoother_.filter(hand.position_m, hand.stamp_ns);
@@ -30,7 +45,7 @@ StrokeSample StrokeFilter::apply(const HandSample& hand, const std::optional<Pro
   } else {
     // A lost hand restarts the smoother: the next sighting may be far from the last one.
     // The position stays where the hand was last seen (tracked = false says it is stale).
-    smoother_.reset();
+    if (!out.outlier) smoother_.reset();
     out.camera_position_m = have_last_ ? last_camera_ : Eigen::Vector3f::Zero();
     out.position_m = config_.workspace.to_world(out.camera_position_m);
     out.distance_to_cloth_m = -1.0F;  // unknown

@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <set>
@@ -69,6 +70,31 @@ TEST_F(FilterCli, OfflinePushWritesOneStrokeInTheWorldFrame) {
   EXPECT_NEAR(std::stod(rows[1][2]), 0.1, 0.03);
   EXPECT_NEAR(std::stod(rows[1][3]), -0.05, 0.03);
   EXPECT_NEAR(std::stod(rows[1][4]), 0.30, 0.03);
+}
+
+// Issue 22: through the executable, a row 50 m away mid-stroke is counted as an outlier, written as a row
+// without a hand (nan), and the stroke stays one.
+TEST_F(FilterCli, AnImpossiblyFarRowIsACountedOutlierOffline) {
+  auto hands = tachi::filter::testing::push_and_back(3);
+  hands[60].position_m.x() += 50.0F;
+  {
+    std::ofstream out(dir_ / "spike.csv");
+    tachi::filter::testing::write_hand_csv(out, hands);
+  }
+  const ProcessResult r = run("--offline --hands " + (dir_ / "spike.csv").string() + " --out " + (dir_ / "out.csv").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("1 outliers"), std::string::npos) << r.output;
+  const auto rows = read_rows(dir_ / "out.csv");
+  ASSERT_EQ(rows.size(), 121U);
+  EXPECT_EQ(rows[61][2], "nan");
+  std::set<std::string> cutting_ids;
+  for (std::size_t i = 1; i < rows.size(); ++i) {
+    if (rows[i][5] == "1") cutting_ids.insert(rows[i][6]);
+    if (rows[i][2] != "nan") {
+      EXPECT_LT(std::abs(std::stod(rows[i][2])), 0.3) << "row " << i;
+    }
+  }
+  EXPECT_EQ(cutting_ids, std::set<std::string>{"1"});
 }
 
 TEST_F(FilterCli, CameraFrameFlagWritesCameraCoordinates) {

@@ -1,9 +1,13 @@
 #include "tachi/filter/smoothing.hpp"
+#include "tachi/filter/tremor_clips.hpp"
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
+#include <numeric>
+#include <optional>
 #include <random>
 
 namespace tachi::filter {
@@ -150,3 +154,49 @@ TEST(SmootherParams, ValidationNamesTheBadKey) {
 
 }  // namespace
 }  // namespace tachi::filter
+
+// Issue 22: the Wiener smoother on randomized trembling hands it was not fitted on (held-out seeds
+// 100001-100040; the taps were fitted on 1-1000), against the best offline zero-lag smoother of each clip.
+// The full table (100001-100300) is in docs/filter.md. The issue's target is 1.15x; what the default reaches
+// is 1.46x (mean per clip over 300 clips); this test holds it there (1.55x on the smaller range; One Euro as
+// configured by default measures 1.75x over the 300 and fails here), and the
+// lag within one frame: it fails if the smoother regresses toward One Euro's 1.75x or starts to lag.
+TEST(TremorClips, TheWienerSmootherStaysNearTheOfflineCeilingOnHeldOutClips) {
+  tachi::filter::SmootherParams defaults;
+  defaults.kind = tachi::filter::SmootherKind::Wiener;
+  std::vector<double> ratio, lag;
+  for (std::uint64_t seed = 100001; seed <= 100040; ++seed) {
+    const auto clip = tachi::filter::make_tremor_clip(seed);
+    const auto ceiling = tachi::filter::offline_ceiling(clip);
+    const auto score = tachi::filter::score_causal(clip, tachi::filter::run_smoother(clip, defaults));
+    ratio.push_back(score.rms_m / ceiling.rms_m);
+    lag.push_back(score.lag_frames);
+  }
+  std::sort(lag.begin(), lag.end());
+  const double mean_ratio = std::accumulate(ratio.begin(), ratio.end(), 0.0) / static_cast<double>(ratio.size());
+  EXPECT_LE(mean_ratio, 1.55);
+  EXPECT_LE(lag[lag.size() / 2], 1.0) << "median lag";
+}
+
+TEST(TremorClips, AClipIsTheSameForTheSameSeedAndItsTremorIsInTheDrawnBand) {
+  const auto a = tachi::filter::make_tremor_clip(7), b = tachi::filter::make_tremor_clip(7);
+  ASSERT_EQ(a.measured.size(), b.measured.size());
+  EXPECT_TRUE(a.measured.back().isApprox(b.measured.back()));
+  EXPECT_GE(a.tremor_hz, 4.0);
+  EXPECT_LE(a.tremor_hz, 12.0);
+  // The offline ceiling beats the raw samples (it is a smoother with the best width for this clip).
+  EXPECT_LT(tachi::filter::offline_ceiling(a).rms_m, tachi::filter::rms_against_shifted(a, a.measured, 0.0));
+}
+
+TEST(WienerFir, TapsSumToOneSoAStillHandStaysPut) {
+  const auto& taps = tachi::filter::tremor_wiener_taps();
+  EXPECT_NEAR(std::accumulate(taps.begin(), taps.end(), 0.0), 1.0, 1e-5);
+  tachi::filter::WienerFir fir{taps};
+  std::optional<Eigen::Vector3f> out;
+  for (std::size_t i = 0; i < taps.size(); ++i) {
+    EXPECT_FALSE(out.has_value());
+    out = fir.filter({0.1F, -0.2F, 1.0F});
+  }
+  ASSERT_TRUE(out.has_value());
+  EXPECT_TRUE(out->isApprox(Eigen::Vector3f{0.1F, -0.2F, 1.0F}, 1e-5F));
+}

@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <optional>
 #include <set>
 
 namespace tachi::filter {
@@ -140,6 +141,79 @@ TEST(StrokeFilter, VoiceGatingProducesOneStrokePerStartStop) {
   EXPECT_EQ(s.gate, GateOutput::Idle);
   EXPECT_EQ(s.closed_by, GateSource::Voice);
   EXPECT_EQ(s.stroke_id, 1U);
+}
+
+// Issue 22: one stroke row 2-100 m away (a hand cannot get there in 1/30 s) is an outlier: counted, not
+// published as a hand, and the stroke neither jumps to it nor comes back from it: it stays one stroke
+// and no published position is more than a few cm from the push's path.
+TEST(StrokeFilter, ARowMetresAwayIsAnOutlierAndNeverCutAlong) {
+  for (const float away_m : {2.0F, 10.0F, 100.0F}) {
+    auto hands = testing::push_and_back(3);
+    hands[60].position_m.x() += away_m;  // mid-stroke (the hand is within reach from ~frame 40 to ~80)
+    StrokeFilter f{FilterConfig{}};
+    std::set<std::uint32_t> cutting;
+    for (const auto& h : hands) {
+      const auto s = f.on_hand(h);
+      if (s.gate == GateOutput::Cutting) cutting.insert(s.stroke_id);
+      if (s.tracked) {
+        EXPECT_LT(std::abs(s.position_m.x()), 0.3F) << away_m << " m, frame " << h.frame;
+      }
+      EXPECT_EQ(s.outlier, h.frame == 60) << away_m << " m, frame " << h.frame;
+      if (h.frame == 60) {
+        EXPECT_FALSE(s.tracked);
+      }
+    }
+    EXPECT_EQ(f.outliers(), 1U) << away_m << " m";
+    EXPECT_EQ(cutting, std::set<std::uint32_t>{1}) << away_m << " m";
+  }
+}
+
+// A 60 m/s jump (2 m in one frame) that the sensor then holds: refused until the run agrees with itself
+// (outliers.reanchor_samples, 3), never cut along: every published cutting step stays under 10 m/s.
+TEST(StrokeFilter, ASixtyMetrePerSecondJumpIsRefusedAndNeverCutAlong) {
+  auto hands = testing::push_and_back(5);
+  for (std::size_t i = 60; i < hands.size(); ++i) hands[i].position_m.y() += 2.0F;  // 2 m in 1/30 s = 60 m/s
+  StrokeFilter f{FilterConfig{}};
+  std::optional<StrokeSample> previous_cut;
+  for (const auto& h : hands) {
+    const auto s = f.on_hand(h);
+    if (s.tracked && s.gate == GateOutput::Cutting) {
+      if (previous_cut && previous_cut->stroke_id == s.stroke_id) {
+        const float dt = static_cast<float>(s.stamp_ns - previous_cut->stamp_ns) * 1e-9F;
+        EXPECT_LE((s.position_m - previous_cut->position_m).norm() / dt, 10.0F) << "frame " << s.frame;
+      }
+      previous_cut = s;
+    }
+  }
+  EXPECT_EQ(f.outliers(), 2U);  // frames 60 and 61; frame 62 agrees with both and is taken as the hand
+}
+
+// A real fast hand is not refused: a 5 m/s swipe (17 cm a frame) across the cloth, and a 3 m/s one.
+TEST(StrokeFilter, AFastSwipeIsNotAnOutlier) {
+  for (const float speed : {3.0F, 5.0F, 9.0F}) {
+    StrokeFilter f{FilterConfig{}};
+    for (int i = 0; i < 30; ++i) {
+      HandSample h;
+      h.frame = static_cast<std::uint64_t>(i);
+      h.stamp_ns = 1'000'000'000LL + i * 33'333'333LL;
+      h.position_m = {-1.0F + speed * static_cast<float>(i) / 30.0F, 0.0F, 1.0F};
+      h.tracked = true;
+      EXPECT_TRUE(f.on_hand(h).tracked) << speed << " m/s, frame " << i;
+    }
+    EXPECT_EQ(f.outliers(), 0U) << speed << " m/s";
+  }
+}
+
+// A faulty first sample does not lock the real hand out: three agreeing samples re-anchor.
+TEST(StrokeFilter, AWrongFirstSampleDoesNotLockTheHandOut) {
+  auto hands = testing::push_and_back(2);
+  hands[0].position_m.z() = 15.0F;
+  StrokeFilter f{FilterConfig{}};
+  std::vector<bool> tracked;
+  for (const auto& h : hands) tracked.push_back(f.on_hand(h).tracked);
+  EXPECT_EQ(f.outliers(), 2U);
+  EXPECT_TRUE(tracked[3]);
+  EXPECT_TRUE(tracked.back());
 }
 
 }  // namespace

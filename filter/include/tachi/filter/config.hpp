@@ -5,6 +5,7 @@
 #include "tachi/filter/cloth_proximity.hpp"
 #include "tachi/filter/gate.hpp"
 #include "tachi/filter/smoothing.hpp"
+#include "tachi/filter/stroke_outliers.hpp"
 #include "tachi/filter/workspace.hpp"
 
 #include <string>
@@ -16,6 +17,7 @@ struct FilterConfig {
   SmootherParams smoother;
   GateParams gate;
   ClothProximityParams cloth;
+  OutlierParams outliers;
 };
 
 /// Parses a JSON document; missing keys keep their defaults. Throws std::invalid_argument naming the

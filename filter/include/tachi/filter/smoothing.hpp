@@ -16,6 +16,8 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <utility>
+#include <vector>
 
 namespace tachi::filter {
 
@@ -92,16 +94,41 @@ class OneEuroFilter {
   OneEuroScalar x_, y_, z_;
 };
 
-enum class SmootherKind { None, MovingAverage, OneEuro };
+/// A causal FIR whose taps are the Wiener solution for trembling hands (issue 22): the least-squares
+/// filter (Wiener-Hopf normal equations, Wiener 1949; Haykin, Adaptive Filter Theory, ch. 2)
+///   x_hat_n = sum_k h_k y_{n-k},  h = argmin sum (x_hat_n - x_{n-d})^2,  sum_k h_k = 1,
+/// fitted over the randomized tremor clips of seeds 1-1000 (tremor_clips.hpp; `tachi-filter-bench
+/// --fit-wiener 1..1000`) to the intended path d = 0.9 frame earlier. The taps assume the nominal rate:
+/// after a dropped frame the history restarts and the One Euro filter bridges it until it is full.
+class WienerFir {
+ public:
+  explicit WienerFir(std::vector<double> taps);
+  /// Empty until the history holds as many samples as there are taps.
+  std::optional<Eigen::Vector3f> filter(const Eigen::Vector3f& x);
+  void reset() { history_.clear(); }
+
+ private:
+  std::vector<double> taps_;
+  std::deque<Eigen::Vector3d> history_;  ///< newest first
+};
+
+/// The taps of `wiener` (12, newest first; they sum to 1).
+const std::vector<double>& tremor_wiener_taps();
+
+enum class SmootherKind { None, MovingAverage, OneEuro, Wiener };
 
 /// "none", "moving-average", "one-euro" (the CLI's spelling) -> kind.
 std::optional<SmootherKind> smoother_kind_from_string(const std::string& name);
 std::string to_string(SmootherKind kind);
 
 struct SmootherParams {
+  /// One Euro stays the default: `wiener` (issue 22: 0.40x raw on recordings/jitter, 1.46x the ceiling on
+  /// held-out tremor, against 0.49x and 1.75x) turns recordings/straight_cut's exact cut at 128 x 128 into
+  /// 2 pieces (sim_recording_cut_test) until the exact cut stops flipping on small input changes.
   SmootherKind kind = SmootherKind::OneEuro;
   std::size_t moving_average_window = 5;
   OneEuroParams one_euro;
+  std::vector<double> wiener_taps = tremor_wiener_taps();
   double nominal_rate_hz = 30.0;   ///< used when timestamps do not advance
   double reset_after_gap_s = 0.5;  ///< a longer gap between tracked samples restarts the filter
 };
@@ -120,6 +147,7 @@ class Smoother {
   SmootherParams params_;
   MovingAverage average_;
   OneEuroFilter one_euro_;
+  WienerFir wiener_;
   std::optional<std::int64_t> last_stamp_ns_;
 };
 

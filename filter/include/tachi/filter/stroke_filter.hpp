@@ -7,6 +7,7 @@
 #include "tachi/filter/config.hpp"
 #include "tachi/filter/gate.hpp"
 #include "tachi/filter/smoothing.hpp"
+#include "tachi/filter/stroke_outliers.hpp"
 #include "tachi/filter/types.hpp"
 
 #include <cstdint>
@@ -33,12 +34,15 @@ class StrokeFilter {
   StrokeSample on_hand(const HandSample& hand, const Proximity& measured_then) { return apply(hand, measured_then); }
 
   const Gate& gate() const noexcept { return gate_; }
+  /// Hand samples refused as impossibly fast (stroke_outliers.hpp), since the start.
+  std::uint64_t outliers() const noexcept { return speed_limit_.outliers(); }
 
  private:
   StrokeSample apply(const HandSample& hand, const std::optional<Proximity>& given);
 
   FilterConfig config_;
   Smoother smoother_;
+  HandSpeedLimit speed_limit_;
   Gate gate_;
   std::vector<float> cloth_xyz_;
   bool have_cloth_ = false;

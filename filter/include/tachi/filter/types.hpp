@@ -38,6 +38,8 @@ struct StrokeSample {
   Eigen::Vector3f position_m = Eigen::Vector3f::Zero();
   Eigen::Vector3f camera_position_m = Eigen::Vector3f::Zero();  ///< camera frame, smoothed
   bool tracked = false;
+  /// The hand sample implied an impossible speed (stroke_outliers.hpp): published as tracked = false.
+  bool outlier = false;
   GateOutput gate = GateOutput::Idle;
   std::uint32_t stroke_id = 0;  ///< grows by one each time the gate opens; 0 before the first stroke
   GateSource opened_by = GateSource::None;

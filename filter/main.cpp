@@ -191,7 +191,7 @@ int run_bus(const Options& o, const tachi::filter::FilterConfig& config) {
       }
       ++in_count;
       if (h->tracked && !guard.position(h->position_m.x, h->position_m.y, h->position_m.z, kMaxHandRange_m)) continue;
-      if (!guard.time(h->sensor_id, h->capture_time_ns, kSensorRestartGap_ns)) continue;
+      if (!guard.time(h->sensor_id, h->capture_time_ns, bus::InputGuard::now_ns(), kSensorRestartGap_ns)) continue;
       const auto hand = tachi::filter::from_msg(*h);
       const auto stroke = filter.on_hand(hand);
       processed.add(h->sensor_id, h->capture_time_ns);

@@ -208,8 +208,10 @@ int run_live(const OfflineOptions& shared, std::optional<int> max_steps, const L
         continue;
       // A stroke is (sensor, filter session, stroke id): its samples' times never go back.
       // ... and its stroke ids never go back: a lower id names a stroke that already ended.
-      if (!guard.time(input->session_id ^ input->sensor_id, sample->time_ns) ||
-          !guard.id(input->session_id ^ input->sensor_id, input->stroke_id))
+      // (A far-future stamp or id is refused, and never locks the stroke out for more than the skew.)
+      const auto now_ns = bus::InputGuard::now_ns();
+      if (!guard.time(input->session_id ^ input->sensor_id, sample->time_ns, now_ns) ||
+          !guard.id(input->session_id ^ input->sensor_id, input->stroke_id, now_ns))
         continue;
       const HandInput hand{input->stroke_id, input->time_s,  input->position_m, input->tracked,
                            input->cutting,   input->holding, input->session_id, input->sensor_id,

@@ -137,6 +137,52 @@ TEST(Boundary, TheSimulatorRefusesAndCountsBadStrokeSamples) {
   EXPECT_EQ(sim.wait(10s), 0);
 }
 
+// Issue 26: one stroke sample stamped INT64_MAX under the live session's id used to make the
+// simulator refuse every later sample of that session as time_backwards (0 cuts). Now it is refused
+// as time_ahead, and the stroke right after it cuts the cloth as it would without it.
+TEST(Boundary, AFarFutureStrokeSampleLeavesTheNextStrokeCutting) {
+  ChildProcess sim({kBin + "/tachi-sim", "--domain", "185", "--grid", "16", "--cut-mode", "exact", "--pin", "top-edge"});
+  bus::Participant dds{185};
+  bus::Writer<tachi_msg_StrokeSample> strokes{dds, bus::topics::stroke};
+  bus::Reader<tachi_msg_CutEvent> cuts{dds, bus::topics::cut_event};
+  bus::Reader<tachi_msg_NodeStatus> status{dds, bus::topics::node_status};
+  ASSERT_TRUE(strokes.wait_for_readers(1, 20s)) << sim.err();
+  ASSERT_TRUE(cuts.wait_for_writers(1, 20s)) << sim.err();
+  std::uint64_t frame = 0;
+  const auto stroke = [&frame](std::uint32_t id, std::int64_t t_ns, float x, bool cutting) {
+    tachi_msg_StrokeSample s{};
+    s.sensor_id = 2;
+    s.session_id = 0x5e55;
+    s.stroke_id = id;
+    s.frame = frame++;
+    s.time_ns = t_ns;
+    s.position_m = {x, -0.1F, 0.0F};
+    s.tracked = true;
+    s.gate = cutting ? tachi_msg_GATE_CUTTING : tachi_msg_GATE_IDLE;
+    return s;
+  };
+  constexpr std::int64_t kFrame_ns = 16'666'667;
+  strokes.write(stroke(1, kFrame_ns, -0.9F, false));
+  strokes.write(stroke(1, 2 * kFrame_ns, -0.9F, false));
+  strokes.write(stroke(1, std::numeric_limits<std::int64_t>::max(), -0.9F, false));  // the poison
+  for (int i = 0; i <= 40; ++i) {
+    strokes.write(stroke(1, (3 + i) * kFrame_ns, -0.7F + 1.4F * static_cast<float>(i) / 40.0F, true));
+    std::this_thread::sleep_for(5ms);
+  }
+  strokes.write(stroke(1, 44 * kFrame_ns, 0.7F, false));
+  std::vector<std::uint32_t> pieces;
+  for (int i = 0; i < 100 && pieces.empty(); ++i) {
+    cuts.wait_for_data(50ms);
+    for (const auto& cut : cuts.take()) pieces.push_back(cut->pieces);
+  }
+  EXPECT_EQ(pieces, std::vector<std::uint32_t>{2}) << "the stroke after the poison cut the cloth in two\n" << sim.err();
+  const auto counted = rejections(status, "tachi-sim", "time_ahead");
+  EXPECT_EQ(counted.count("time_ahead") ? counted.at("time_ahead") : 0, 1.0) << sim.err();
+  EXPECT_EQ(counted.count("time_backwards"), 0u) << "nothing after the poison was refused";
+  sim.signal(SIGTERM);
+  EXPECT_EQ(sim.wait(10s), 0);
+}
+
 TEST(Boundary, TheViewerRefusesAnInconsistentTopology) {
   ChildProcess viewer({kBin + "/tachi-viewer", "--headless", "--domain", "187", "--fps", "10"});
   bus::Participant dds{187};

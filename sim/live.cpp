@@ -8,6 +8,7 @@
 #include "tachi/sim/journal.hpp"
 #include "tachi/sim/session.hpp"
 
+#include <cmath>
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
@@ -199,7 +200,8 @@ int run_live(const OfflineOptions& shared, std::optional<int> max_steps, const L
     for (const auto& sample : strokes.take()) {
       const auto input = from_msg(*sample);
       if (!input) {
-        guard.reject("out_of_range");  // non-finite or > 100 m from the cloth
+        const auto& p = sample->position_m;  // refused for being non-finite, or > 100 m from the cloth
+        guard.reject(std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z) ? "out_of_range" : "nonfinite");
         continue;
       }
       // Re-delivered by the filter's history after a restart, and already replayed from the journal.

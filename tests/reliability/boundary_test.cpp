@@ -130,11 +130,41 @@ TEST(Boundary, TheSimulatorRefusesAndCountsBadStrokeSamples) {
   strokes.write(stroke(2, 1'020'000'000, 0.1F));  // a stroke that already ended
   strokes.write(stroke(4, 1'030'000'000, 0.1F));
   const auto counted = rejections(status, "tachi-sim", "stale_id");
-  EXPECT_EQ(counted.count("out_of_range") ? counted.at("out_of_range") : 0, 1.0) << sim.err();
+  EXPECT_EQ(counted.count("nonfinite") ? counted.at("nonfinite") : 0, 1.0) << "an infinite sample is named for what it is\n" << sim.err();
+  EXPECT_EQ(counted.count("out_of_range"), 0u);
   EXPECT_EQ(counted.count("time_backwards") ? counted.at("time_backwards") : 0, 1.0);
   EXPECT_EQ(counted.count("stale_id") ? counted.at("stale_id") : 0, 1.0);
   sim.signal(SIGTERM);
   EXPECT_EQ(sim.wait(10s), 0);
+}
+
+// Issue 26: the filter trusted cloth states (the viewer refused them). A NaN, a 1e30 m and a ragged
+// state are refused and counted under their reasons.
+TEST(Boundary, TheFilterRefusesAndCountsBadClothStates) {
+  ChildProcess filter({kBin + "/tachi-filter", "--domain", "184"});
+  bus::Participant dds{184};
+  bus::Writer<tachi_msg_ClothState> states{dds, bus::topics::cloth_state};
+  bus::Reader<tachi_msg_NodeStatus> status{dds, bus::topics::node_status};
+  ASSERT_TRUE(states.wait_for_readers(1, 20s)) << filter.err();
+  // One state at a time, each until its refusal shows in the heartbeat: the filter looks at the newest
+  // state of a tick only, so a burst would hide the bad ones.
+  std::map<std::string, double> counted;
+  const auto send = [&](std::vector<float> positions, const std::string& reason) {
+    tachi_msg_ClothState s{};
+    s.cloth_id = 1;
+    s.positions._buffer = positions.data();
+    s.positions._length = s.positions._maximum = static_cast<std::uint32_t>(positions.size());
+    states.write(s);
+    counted = rejections(status, "tachi-filter", reason);
+  };
+  send({0.0F, 0.0F, std::numeric_limits<float>::quiet_NaN(), 0.1F, 0.0F, 0.0F}, "nonfinite");
+  send({0.0F, 0.0F, 1e30F, 0.1F, 0.0F, 0.0F}, "out_of_range");
+  send({0.0F, 0.0F, 0.0F, 0.1F}, "oversized");  // not xyz triples
+  EXPECT_EQ(counted.count("nonfinite") ? counted.at("nonfinite") : 0, 1.0) << filter.err();
+  EXPECT_EQ(counted.count("out_of_range") ? counted.at("out_of_range") : 0, 1.0);
+  EXPECT_EQ(counted.count("oversized") ? counted.at("oversized") : 0, 1.0);
+  filter.signal(SIGINT);
+  EXPECT_EQ(filter.wait(10s), 0);
 }
 
 // Issue 26: one stroke sample stamped INT64_MAX under the live session's id used to make the

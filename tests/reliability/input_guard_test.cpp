@@ -7,6 +7,7 @@
 #include <limits>
 #include <map>
 #include <string>
+#include <vector>
 
 namespace tachi::bus {
 namespace {
@@ -96,6 +97,20 @@ TEST(InputGuard, APoisonedBaselineLocksASourceOutForAtMostTheSkew) {
   EXPECT_TRUE(c.guard.id(7, 4, kSecond + 1));
   EXPECT_TRUE(c.guard.id(7, 4, kSecond + 2));
   EXPECT_EQ(c.reasons["stale_id"], 2);
+}
+
+TEST(InputGuard, RefusesAClothStateWithANonFiniteOrFarParticle) {
+  Counted c;
+  std::vector<float> xyz(300, 0.5F);
+  EXPECT_TRUE(c.guard.positions(xyz.data(), xyz.size(), 100.0F));
+  xyz[299] = std::numeric_limits<float>::infinity();
+  EXPECT_FALSE(c.guard.positions(xyz.data(), xyz.size(), 100.0F));
+  xyz[299] = -1e30F;
+  EXPECT_FALSE(c.guard.positions(xyz.data(), xyz.size(), 100.0F));
+  xyz[0] = std::numeric_limits<float>::quiet_NaN();
+  EXPECT_FALSE(c.guard.positions(xyz.data(), xyz.size(), 100.0F)) << "non-finite is said first";
+  EXPECT_EQ(c.reasons["nonfinite"], 2);
+  EXPECT_EQ(c.reasons["out_of_range"], 1);
 }
 
 TEST(InputGuard, RefusesOversizedOrRaggedSequences) {

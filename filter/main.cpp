@@ -40,6 +40,8 @@ struct Options {
 
 // A Kinect v1 sees 0.4-4 m; a camera-frame hand beyond 20 m on any axis is a faulty or hostile peer.
 constexpr float kMaxHandRange_m = 20.0F;
+// A cloth particle further than this from the origin is a faulty state (the viewer's and the simulator's bound).
+constexpr float kMaxClothRange_m = 100.0F;
 // Hand samples carry no session id: a sensor whose clock jumps back by more than this restarted.
 constexpr std::int64_t kSensorRestartGap_ns = 1'000'000'000;
 // The largest cloth tachi-sim builds (4096 x 4096 particles, cut up to twice over), xyz each.
@@ -192,7 +194,7 @@ int run_bus(const Options& o, const tachi::filter::FilterConfig& config) {
       }
       ++in_count;
       if (h->tracked && !guard.position(h->position_m.x, h->position_m.y, h->position_m.z, kMaxHandRange_m)) continue;
-      if (!guard.time(h->sensor_id, h->capture_time_ns, kSensorRestartGap_ns)) continue;
+      if (!guard.time(h->sensor_id, h->capture_time_ns, bus::InputGuard::now_ns(), kSensorRestartGap_ns)) continue;
       const auto hand = tachi::filter::from_msg(*h);
       const auto stroke = filter.on_hand(hand);
       processed.add(h->sensor_id, h->capture_time_ns);
@@ -226,7 +228,8 @@ int run_bus(const Options& o, const tachi::filter::FilterConfig& config) {
     auto states = cloth.take();
     if (!states.empty()) {
       const auto& newest = *states.back();
-      if (guard.size(newest.positions._length, kMaxClothFloats, 3)) {
+      if (guard.size(newest.positions._length, kMaxClothFloats, 3) &&
+          guard.positions(newest.positions._buffer, newest.positions._length, kMaxClothRange_m)) {
         filter.on_cloth_state({newest.positions._buffer, newest.positions._length});
         cloth_seen = true;
       }

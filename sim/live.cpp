@@ -8,6 +8,7 @@
 #include "tachi/sim/journal.hpp"
 #include "tachi/sim/session.hpp"
 
+#include <cmath>
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
@@ -199,7 +200,8 @@ int run_live(const OfflineOptions& shared, std::optional<int> max_steps, const L
     for (const auto& sample : strokes.take()) {
       const auto input = from_msg(*sample);
       if (!input) {
-        guard.reject("out_of_range");  // non-finite or > 100 m from the cloth
+        const auto& p = sample->position_m;  // refused for being non-finite, or > 100 m from the cloth
+        guard.reject(std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z) ? "out_of_range" : "nonfinite");
         continue;
       }
       // Re-delivered by the filter's history after a restart, and already replayed from the journal.
@@ -208,8 +210,10 @@ int run_live(const OfflineOptions& shared, std::optional<int> max_steps, const L
         continue;
       // A stroke is (sensor, filter session, stroke id): its samples' times never go back.
       // ... and its stroke ids never go back: a lower id names a stroke that already ended.
-      if (!guard.time(input->session_id ^ input->sensor_id, sample->time_ns) ||
-          !guard.id(input->session_id ^ input->sensor_id, input->stroke_id))
+      // (A far-future stamp or id is refused, and never locks the stroke out for more than the skew.)
+      const auto now_ns = bus::InputGuard::now_ns();
+      if (!guard.time(input->session_id ^ input->sensor_id, sample->time_ns, now_ns) ||
+          !guard.id(input->session_id ^ input->sensor_id, input->stroke_id, now_ns))
         continue;
       const HandInput hand{input->stroke_id, input->time_s,  input->position_m, input->tracked,
                            input->cutting,   input->holding, input->session_id, input->sensor_id,

@@ -130,9 +130,85 @@ TEST(Boundary, TheSimulatorRefusesAndCountsBadStrokeSamples) {
   strokes.write(stroke(2, 1'020'000'000, 0.1F));  // a stroke that already ended
   strokes.write(stroke(4, 1'030'000'000, 0.1F));
   const auto counted = rejections(status, "tachi-sim", "stale_id");
-  EXPECT_EQ(counted.count("out_of_range") ? counted.at("out_of_range") : 0, 1.0) << sim.err();
+  EXPECT_EQ(counted.count("nonfinite") ? counted.at("nonfinite") : 0, 1.0) << "an infinite sample is named for what it is\n" << sim.err();
+  EXPECT_EQ(counted.count("out_of_range"), 0u);
   EXPECT_EQ(counted.count("time_backwards") ? counted.at("time_backwards") : 0, 1.0);
   EXPECT_EQ(counted.count("stale_id") ? counted.at("stale_id") : 0, 1.0);
+  sim.signal(SIGTERM);
+  EXPECT_EQ(sim.wait(10s), 0);
+}
+
+// Issue 26: the filter trusted cloth states (the viewer refused them). A NaN, a 1e30 m and a ragged
+// state are refused and counted under their reasons.
+TEST(Boundary, TheFilterRefusesAndCountsBadClothStates) {
+  ChildProcess filter({kBin + "/tachi-filter", "--domain", "184"});
+  bus::Participant dds{184};
+  bus::Writer<tachi_msg_ClothState> states{dds, bus::topics::cloth_state};
+  bus::Reader<tachi_msg_NodeStatus> status{dds, bus::topics::node_status};
+  ASSERT_TRUE(states.wait_for_readers(1, 20s)) << filter.err();
+  // One state at a time, each until its refusal shows in the heartbeat: the filter looks at the newest
+  // state of a tick only, so a burst would hide the bad ones.
+  std::map<std::string, double> counted;
+  const auto send = [&](std::vector<float> positions, const std::string& reason) {
+    tachi_msg_ClothState s{};
+    s.cloth_id = 1;
+    s.positions._buffer = positions.data();
+    s.positions._length = s.positions._maximum = static_cast<std::uint32_t>(positions.size());
+    states.write(s);
+    counted = rejections(status, "tachi-filter", reason);
+  };
+  send({0.0F, 0.0F, std::numeric_limits<float>::quiet_NaN(), 0.1F, 0.0F, 0.0F}, "nonfinite");
+  send({0.0F, 0.0F, 1e30F, 0.1F, 0.0F, 0.0F}, "out_of_range");
+  send({0.0F, 0.0F, 0.0F, 0.1F}, "oversized");  // not xyz triples
+  EXPECT_EQ(counted.count("nonfinite") ? counted.at("nonfinite") : 0, 1.0) << filter.err();
+  EXPECT_EQ(counted.count("out_of_range") ? counted.at("out_of_range") : 0, 1.0);
+  EXPECT_EQ(counted.count("oversized") ? counted.at("oversized") : 0, 1.0);
+  filter.signal(SIGINT);
+  EXPECT_EQ(filter.wait(10s), 0);
+}
+
+// Issue 26: one stroke sample stamped INT64_MAX under the live session's id used to make the
+// simulator refuse every later sample of that session as time_backwards (0 cuts). Now it is refused
+// as time_ahead, and the stroke right after it cuts the cloth as it would without it.
+TEST(Boundary, AFarFutureStrokeSampleLeavesTheNextStrokeCutting) {
+  ChildProcess sim({kBin + "/tachi-sim", "--domain", "185", "--grid", "16", "--cut-mode", "exact", "--pin", "top-edge"});
+  bus::Participant dds{185};
+  bus::Writer<tachi_msg_StrokeSample> strokes{dds, bus::topics::stroke};
+  bus::Reader<tachi_msg_CutEvent> cuts{dds, bus::topics::cut_event};
+  bus::Reader<tachi_msg_NodeStatus> status{dds, bus::topics::node_status};
+  ASSERT_TRUE(strokes.wait_for_readers(1, 20s)) << sim.err();
+  ASSERT_TRUE(cuts.wait_for_writers(1, 20s)) << sim.err();
+  std::uint64_t frame = 0;
+  const auto stroke = [&frame](std::uint32_t id, std::int64_t t_ns, float x, bool cutting) {
+    tachi_msg_StrokeSample s{};
+    s.sensor_id = 2;
+    s.session_id = 0x5e55;
+    s.stroke_id = id;
+    s.frame = frame++;
+    s.time_ns = t_ns;
+    s.position_m = {x, -0.1F, 0.0F};
+    s.tracked = true;
+    s.gate = cutting ? tachi_msg_GATE_CUTTING : tachi_msg_GATE_IDLE;
+    return s;
+  };
+  constexpr std::int64_t kFrame_ns = 16'666'667;
+  strokes.write(stroke(1, kFrame_ns, -0.9F, false));
+  strokes.write(stroke(1, 2 * kFrame_ns, -0.9F, false));
+  strokes.write(stroke(1, std::numeric_limits<std::int64_t>::max(), -0.9F, false));  // the poison
+  for (int i = 0; i <= 40; ++i) {
+    strokes.write(stroke(1, (3 + i) * kFrame_ns, -0.7F + 1.4F * static_cast<float>(i) / 40.0F, true));
+    std::this_thread::sleep_for(5ms);
+  }
+  strokes.write(stroke(1, 44 * kFrame_ns, 0.7F, false));
+  std::vector<std::uint32_t> pieces;
+  for (int i = 0; i < 100 && pieces.empty(); ++i) {
+    cuts.wait_for_data(50ms);
+    for (const auto& cut : cuts.take()) pieces.push_back(cut->pieces);
+  }
+  EXPECT_EQ(pieces, std::vector<std::uint32_t>{2}) << "the stroke after the poison cut the cloth in two\n" << sim.err();
+  const auto counted = rejections(status, "tachi-sim", "time_ahead");
+  EXPECT_EQ(counted.count("time_ahead") ? counted.at("time_ahead") : 0, 1.0) << sim.err();
+  EXPECT_EQ(counted.count("time_backwards"), 0u) << "nothing after the poison was refused";
   sim.signal(SIGTERM);
   EXPECT_EQ(sim.wait(10s), 0);
 }

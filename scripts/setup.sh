@@ -38,7 +38,11 @@ test_packages=(
   openssl clang
   # viewer under a virtual display
   xvfb xdotool imagemagick
+  # the MCAP tests read tachi's recordings with an independent reader (@mcap/core, installed by npm at test time)
+  nodejs
 )
+# Node's own packages (NodeSource) bring npm with nodejs; Debian's nodejs needs its npm package.
+command -v npm >/dev/null 2>&1 || test_packages+=(npm)
 $demo_only || packages+=("${test_packages[@]}")
 
 missing=()

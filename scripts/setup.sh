@@ -34,8 +34,9 @@ test_packages=(
   libgtest-dev libgmock-dev libbenchmark-dev libbullet-dev
   # multi-host tests in network namespaces; the capture that proves DDS stays on loopback
   iproute2 tcpdump
-  # DDS Security test PKI (scripts/make_test_pki.sh); libFuzzer targets and sanitizer builds (-DTACHI_FUZZ=ON)
-  openssl clang
+  # DDS Security test PKI (scripts/make_test_pki.sh); libFuzzer targets and sanitizer builds (-DTACHI_FUZZ=ON;
+  # clang needs LLVM's OpenMP runtime for the solver's threads)
+  openssl clang libomp-dev
   # viewer under a virtual display
   xvfb xdotool imagemagick
   # the MCAP tests read tachi's recordings with an independent reader (@mcap/core, installed by npm at test time)

@@ -1523,9 +1523,12 @@ bool Solver::front_in_bands(Vec4* x, std::size_t n, const Predict& predict, bool
       for (int parity = 0; parity < 2; ++parity) {
 #pragma omp for schedule(static)
         for (int j = parity; j < bands; j += 2) {
-          const auto band = [&](std::size_t family, float alpha) {
+          // Explicit captures: clang 14 refuses a by-reference default capture of the enclosing
+          // function's locals in a lambda inside an OpenMP region of a template.
+          Vec4* const band_padded = padded;
+          const auto band = [this, band_padded, j](std::size_t family, float alpha) {
             const Group* g = groups_[family].data();
-            sweep_near_rest(padded, g + bands_[family][static_cast<std::size_t>(j)],
+            sweep_near_rest(band_padded, g + bands_[family][static_cast<std::size_t>(j)],
                             g + bands_[family][static_cast<std::size_t>(j) + 1], alpha);
           };
           if (soft) {

@@ -1,8 +1,10 @@
 // `tachi run` as a user runs it: the launcher starts the real executables, supervises them and
 // leaves its outputs; `tachi topics|echo|status` look at a running pipeline. Domain ids 120-149
 // belong to tests/launcher (docs/testing.md).
+#include "bus_wait.hpp"
 #include "process.hpp"
 #include "scratch_dir.hpp"
+#include "tachi/bus/run_partition.hpp"
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -73,6 +75,8 @@ std::vector<pid_t> find_processes(const std::vector<std::string>& words) {
   }
   return pids;
 }
+
+bool any_sample(const tachi_msg_RawHandSample&) { return true; }
 
 std::string logs(const fs::path& out) {
   std::string text;
@@ -147,6 +151,10 @@ TEST(TachiRun, TwoRunsOnDifferentDomainsDoNotSeeEachOther) {
 
 TEST(TachiRun, AChildKilledMidRunIsRestartedAndTheRunCompletes) {
   tachi::test::ScratchDir out("tachi_run_kill");
+  // The test waits on the sensor's samples (in every run's partition) instead of sleeping.
+  tachi::bus::read_every_run();
+  tachi::bus::Participant dds{123};
+  tachi::bus::Reader<tachi_msg_RawHandSample> hands{dds, tachi::bus::topics::raw_hand};
   // Half speed: the recording lasts ~10 s, so the filter dies mid-run and comes back before its end.
   ChildProcess run(run_args("straight_cut", 123, out.path(), {"--rate", "0.5"}));
   std::vector<pid_t> filters;
@@ -155,7 +163,8 @@ TEST(TachiRun, AChildKilledMidRunIsRestartedAndTheRunCompletes) {
     filters = find_processes({"tachi-filter", "--domain 123 "});
   }
   ASSERT_EQ(filters.size(), 1u);
-  std::this_thread::sleep_for(2s);
+  // Mid-run: the sensor has published 30 hand samples (~2 s at half speed) of the recording's 90 frames.
+  ASSERT_EQ(tachi::test::wait_for_matching<tachi_msg_RawHandSample>(hands, 30, any_sample, 60s), 30) << run.err();
   ::kill(filters.front(), SIGKILL);
   ASSERT_EQ(run.wait(120s), 0) << run.err();
   EXPECT_NE(run.err().find("tachi-filter died (killed by SIGKILL)"), std::string::npos) << run.err();
@@ -183,8 +192,13 @@ TEST(TachiRun, AChildThatKeepsDyingStopsTheRunNamingIt) {
 
 TEST(TachiRun, SigintStopsTheRunCleanlyWithOutputsWritten) {
   tachi::test::ScratchDir out("tachi_run_sigint");
+  // The test waits on the sensor's samples (in every run's partition) instead of sleeping.
+  tachi::bus::read_every_run();
+  tachi::bus::Participant dds{125};
+  tachi::bus::Reader<tachi_msg_RawHandSample> hands{dds, tachi::bus::topics::raw_hand};
   ChildProcess run(run_args("straight_cut", 125, out.path(), {"--rate", "0.5"}));
-  std::this_thread::sleep_for(4s);
+  // Mid-run: 30 of the recording's 90 frames played.
+  ASSERT_EQ(tachi::test::wait_for_matching<tachi_msg_RawHandSample>(hands, 30, any_sample, 60s), 30) << run.err();
   run.signal(SIGINT);
   EXPECT_EQ(run.wait(20s), 0) << run.err();
   EXPECT_TRUE(find_processes({"--domain 125 "}).empty()) << "no child outlives the launcher";
@@ -198,8 +212,13 @@ TEST(TachiRun, SigintStopsTheRunCleanlyWithOutputsWritten) {
 
 TEST(TachiBusTools, TopicsEchoAndStatusShowARunningPipeline) {
   tachi::test::ScratchDir out("tachi_run_tools");
+  // The test waits on the sensor's samples (in every run's partition) instead of sleeping.
+  tachi::bus::read_every_run();
+  tachi::bus::Participant dds{126};
+  tachi::bus::Reader<tachi_msg_RawHandSample> hands{dds, tachi::bus::topics::raw_hand};
   ChildProcess run(run_args("straight_cut", 126, out.path(), {"--rate", "0.5"}));
-  std::this_thread::sleep_for(2s);
+  // The pipeline is up and the sensor playing (the last node the launcher starts).
+  ASSERT_GT(tachi::test::wait_for_matching<tachi_msg_RawHandSample>(hands, 1, any_sample, 60s), 0) << run.err();
   const std::string d = "126";
   const auto topics = tachi::test::run({kBin + "/tachi", "topics", "--domain", d}, 30s);
   const auto echo = tachi::test::run({kBin + "/tachi", "echo", "tachi/hand/raw", "--domain", d, "--count", "3"}, 30s);

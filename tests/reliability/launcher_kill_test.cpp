@@ -7,6 +7,7 @@
 // same exit (within a cell: two live runs differ by a frame in where the gate opens on the swaying
 // cloth). The kill waits for the hand to be cutting, and the test checks that cutting went on after
 // it. Domain ids 195-199 belong to this file.
+#include "bus_wait.hpp"
 #include "process.hpp"
 #include "same_cut.hpp"
 #include "scratch_dir.hpp"
@@ -38,14 +39,6 @@ struct RunResult {
   int cutting_after_kill = 0;   ///< ... and after it, up to the end of the run
 };
 
-// Counts the stroke samples whose gate is cutting among those waiting in `strokes` (it waits up to
-// `timeout` for the first).
-int take_cutting(tachi::bus::Reader<tachi_msg_StrokeSample>& strokes, std::chrono::milliseconds timeout) {
-  strokes.wait_for_data(std::chrono::duration_cast<std::chrono::nanoseconds>(timeout));
-  int cutting = 0;
-  for (const auto& s : strokes.take(256)) cutting += s->gate == tachi_msg_GATE_CUTTING;
-  return cutting;
-}
 
 // The pid the launcher logged for `program` ("started tachi-sim (pid 1234)"), once it did.
 std::optional<pid_t> started_pid(ChildProcess& launcher, const std::string& program, std::chrono::milliseconds timeout) {
@@ -79,12 +72,11 @@ RunResult run(unsigned domain, const std::string& victim) {
     if (pid) {
       // Mid-stroke: the kill lands once the filter has published a few samples with the gate
       // cutting (the hand is on the cloth), and the test checks afterwards that cutting went on.
-      const auto deadline = std::chrono::steady_clock::now() + 30s;
-      while (r.cutting_before_kill < 5 && std::chrono::steady_clock::now() < deadline && launcher.running())
-        r.cutting_before_kill += take_cutting(strokes, 100ms);
+      r.cutting_before_kill = tachi::test::wait_for_matching<tachi_msg_StrokeSample>(
+          strokes, 5, tachi::test::is_cutting, 30s, [&] { return launcher.running(); });
       ::kill(*pid, SIGKILL);
     }
-    while (launcher.running()) r.cutting_after_kill += take_cutting(strokes, 100ms);
+    while (launcher.running()) r.cutting_after_kill += tachi::test::take_matching<tachi_msg_StrokeSample>(strokes, tachi::test::is_cutting, 100ms);
   }
   r.exit_code = launcher.wait(120s);
   r.log = launcher.err();

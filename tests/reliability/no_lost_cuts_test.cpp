@@ -4,6 +4,7 @@
 // missed (transient-local history), and ends with the same cut: the same pieces, the same cut line
 // from edge to edge. Then the same with the filter killed: the stroke is ended cleanly and the
 // restarted filter's strokes are new strokes, never the old one's continuation.
+#include "bus_wait.hpp"
 #include "process.hpp"
 #include "same_cut.hpp"
 #include "scratch_dir.hpp"
@@ -45,13 +46,6 @@ struct PipelineRun {
   int cutting_after_kill = 0;   ///< ... and after it, while the sensor played on
 };
 
-// Counts the cutting stroke samples waiting in `strokes` (waits up to `timeout` for the first).
-int take_cutting(tachi::bus::Reader<tachi_msg_StrokeSample>& strokes, std::chrono::milliseconds timeout) {
-  strokes.wait_for_data(std::chrono::duration_cast<std::chrono::nanoseconds>(timeout));
-  int cutting = 0;
-  for (const auto& s : strokes.take(256)) cutting += s->gate == tachi_msg_GATE_CUTTING;
-  return cutting;
-}
 
 enum class Kill { None, Sim, Filter };
 
@@ -68,9 +62,8 @@ PipelineRun run_pipeline(unsigned domain, Kill kill) {
   if (kill != Kill::None) {
     // Mid-stroke: kill once the filter has published a few samples with the gate cutting; the test
     // checks below that cutting went on after the kill.
-    const auto deadline = std::chrono::steady_clock::now() + 30s;
-    while (r.cutting_before_kill < 5 && std::chrono::steady_clock::now() < deadline && sensor.running())
-      r.cutting_before_kill += take_cutting(strokes, 100ms);
+    r.cutting_before_kill = tachi::test::wait_for_matching<tachi_msg_StrokeSample>(
+        strokes, 5, tachi::test::is_cutting, 30s, [&] { return sensor.running(); });
     auto& victim = kill == Kill::Sim ? sim : filter;
     victim->signal(SIGKILL);
     victim->wait(5s);
@@ -87,7 +80,7 @@ PipelineRun run_pipeline(unsigned domain, Kill kill) {
       filter = std::make_unique<ChildProcess>(std::vector<std::string>{kBin + "/tachi-filter", "--domain", d, "--gate", "threshold"});
     }
     r.recovery_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-    while (sensor.running()) r.cutting_after_kill += take_cutting(strokes, 100ms);
+    while (sensor.running()) r.cutting_after_kill += tachi::test::take_matching<tachi_msg_StrokeSample>(strokes, tachi::test::is_cutting, 100ms);
     EXPECT_GE(r.cutting_before_kill, 5) << "the kill did not land inside the stroke";
     EXPECT_GT(r.cutting_after_kill, 0) << "the stroke had ended before the kill";
   }

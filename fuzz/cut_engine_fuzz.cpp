@@ -1,9 +1,10 @@
-// libFuzzer target: the cut engine (seed 000 sections 3.1-3.3, sim/src/stroke.cpp and cutting.cpp)
-// on random strokes over random grids. The bytes choose the grid (2..24 per side), the pinning, the
-// blade and the hand's path (positions may lie far beyond the cloth); solver steps run between
-// samples so the cloth deforms. After every stroke the mesh invariants must hold: every spring and
+// libFuzzer target: the cut engine (seed 000 sections 3.1-3.3, sim/src/stroke.cpp, cutting.cpp and
+// exact_cut.cpp) on random strokes over random grids, in every cut mode. The bytes choose the grid (2..24
+// per side), the pinning, the blade, the cut mode (exact, grid or delete) and the hand's path (positions
+// may lie far beyond the cloth); solver steps run between samples so the cloth deforms. After every stroke the mesh invariants must hold: every spring and
 // triangle names existing particles and is in their incidence lists, no spring joins a particle to
-// itself, the particle arrays agree in size, mass is conserved and every position stays finite.
+// itself, the particle arrays agree in size, mass is conserved (no particle's negative) and every position
+// and rest coordinate stays finite.
 #include "tachi/sim/cloth.hpp"
 #include "tachi/sim/solver.hpp"
 #include "tachi/sim/stroke.hpp"
@@ -37,11 +38,11 @@ void require(bool ok) {
 void check_invariants(const tachi::sim::Cloth& cloth, double mass_before) {
   const std::size_t n = cloth.particle_count();
   require(cloth.velocity.size() == n && cloth.mass.size() == n && cloth.inverse_mass.size() == n &&
-          cloth.grid.size() == n && cloth.pinned.size() == n);
+          cloth.grid.size() == n && cloth.pinned.size() == n && cloth.rest_uv.size() == n);
   const double mass = std::accumulate(cloth.mass.begin(), cloth.mass.end(), 0.0);
   require(std::abs(mass - mass_before) <= 1e-4 * mass_before);
   for (std::size_t i = 0; i < n; ++i) {
-    require(cloth.position[i].allFinite());
+    require(cloth.position[i].allFinite() && cloth.rest_uv[i].allFinite() && cloth.mass[i] >= 0.0F);
     require(cloth.grid[i].u >= 0 && cloth.grid[i].u < cloth.columns && cloth.grid[i].v >= 0 && cloth.grid[i].v < cloth.rows);
   }
   for (std::uint32_t k = 0; k < cloth.spring_count(); ++k) {
@@ -75,6 +76,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   Cloth cloth{config};
   StrokeOptions options;
   options.blade = static_cast<Blade>(bytes.next() % 6);
+  options.mode = static_cast<CutMode>(bytes.next() % 3);  // exact, grid, delete
   StrokeCutter cutter{cloth, options};
   Solver solver;
   const double mass = std::accumulate(cloth.mass.begin(), cloth.mass.end(), 0.0);

@@ -342,13 +342,9 @@ void ClothCutter::split_fan(std::uint32_t c, GridCoord to_previous, GridCoord to
   if (m < 2) return;
   auto& tris = fan_triangles_;
   tris.assign(incident.begin(), incident.end());
-  auto& parent = fan_parent_;
-  parent.resize(m);
-  for (std::size_t i = 0; i < m; ++i) parent[i] = i;
-  const auto find = [&](std::size_t i) {
-    while (parent[i] != i) i = parent[i] = parent[parent[i]];
-    return i;
-  };
+  UnionFind<std::size_t>& groups = fan_groups_;
+  groups.reset(m);
+  const auto find = [&groups](std::size_t i) { return groups.find(i); };
   const GridCoord g = cloth.grid[c];
   // Two triangles of the fan stay together when they share an edge c-x (the same particle x, so no
   // earlier cut separated them) whose grid edge is not cut.
@@ -359,7 +355,7 @@ void ClothCutter::split_fan(std::uint32_t c, GridCoord to_previous, GridCoord to
         const auto& other = cloth.triangles[tris[j]];
         if (std::find(other.begin(), other.end(), x) == other.end()) continue;
         if (edge_cut(g, cloth.grid[x])) continue;
-        parent[find(i)] = find(j);
+        groups.unite(i, j);
       }
     }
   }

@@ -769,13 +769,9 @@ void ExactCutter::separate(std::uint32_t c, TopologyChange& change) {
   const auto& tris = fan_;
   const std::size_t m = tris.size();
   if (m < 2) return;
-  auto& parent = fan_parent_;
-  parent.resize(m);
-  for (std::size_t i = 0; i < m; ++i) parent[i] = i;
-  const auto find = [&](std::size_t i) {
-    while (parent[i] != i) i = parent[i] = parent[parent[i]];
-    return i;
-  };
+  UnionFind<std::size_t>& groups = fan_groups_;
+  groups.reset(m);
+  const auto find = [&groups](std::size_t i) { return groups.find(i); };
   // Two triangles of the fan stay together across a shared edge c-x (the same particle x) not cut now.
   for (std::size_t i = 0; i < m; ++i) {
     for (std::size_t j = i + 1; j < m; ++j) {
@@ -783,7 +779,7 @@ void ExactCutter::separate(std::uint32_t c, TopologyChange& change) {
         if (x == c) continue;
         const auto& other = cloth.triangles[tris[j]];
         if (std::find(other.begin(), other.end(), x) == other.end() || is_cut(c, x)) continue;
-        parent[find(i)] = find(j);
+        groups.unite(i, j);
       }
     }
   }

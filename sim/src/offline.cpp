@@ -434,8 +434,7 @@ Summary run_offline(const OfflineOptions& options) {
   step_ms.reserve(static_cast<std::size_t>(options.steps));
   const double dt = session_options(options).solver.dt;
   for (int s = 0; s < options.steps; ++s) {
-    const double step_end = (s + 1) * dt;
-    while (next_sample < stroke.samples.size() && stroke.samples[next_sample].t < step_end) {
+    while (next_sample < stroke.samples.size() && stroke_sample_due(stroke.samples[next_sample].t, s, dt)) {
       const StrokeSample& sample = stroke.samples[next_sample++];
       session.on_hand({1, sample.t, sample.position, true, true});
       if (next_sample == stroke.samples.size()) session.end_stroke();

@@ -1,7 +1,8 @@
 #include "tachi/sim/pieces.hpp"
 
+#include "tachi/sim/union_find.hpp"
+
 #include <algorithm>
-#include <numeric>
 
 namespace tachi::sim {
 
@@ -11,23 +12,15 @@ std::size_t Pieces::fallen() const {
 
 Pieces find_pieces(const Cloth& cloth) {
   const std::size_t n = cloth.particle_count();
-  std::vector<std::uint32_t> parent(n);
-  std::iota(parent.begin(), parent.end(), 0U);
-  const auto find = [&](std::uint32_t i) {
-    while (parent[i] != i) i = parent[i] = parent[parent[i]];
-    return i;
-  };
+  UnionFind<std::uint32_t> sets(n);
   for (std::size_t k = 0; k < cloth.spring_count(); ++k) {
-    if (cloth.alive[k] == 0) continue;
-    const std::uint32_t ra = find(cloth.spring_a[k]);
-    const std::uint32_t rb = find(cloth.spring_b[k]);
-    if (ra != rb) parent[std::max(ra, rb)] = std::min(ra, rb);
+    if (cloth.alive[k] != 0) sets.unite(cloth.spring_a[k], cloth.spring_b[k]);
   }
   Pieces out;
   out.piece_of.assign(n, 0);
   std::vector<std::uint32_t> label(n, 0xFFFFFFFFU);
   for (std::uint32_t i = 0; i < n; ++i) {
-    const std::uint32_t r = find(i);
+    const std::uint32_t r = sets.find(i);
     if (label[r] == 0xFFFFFFFFU) {
       label[r] = static_cast<std::uint32_t>(out.size.size());
       out.size.push_back(0);

@@ -32,6 +32,10 @@ std::string_view to_string(CutMode mode) {
   return "exact";
 }
 
+bool stroke_sample_due(double t_s, long long step, double dt_s) {
+  return t_s < (static_cast<double>(step) + 0.5) * dt_s;
+}
+
 StrokeFile parse_stroke_csv(std::istream& in) {
   StrokeFile out;
   common::CsvReader csv(in);

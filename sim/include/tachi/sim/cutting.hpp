@@ -21,6 +21,7 @@
 #pragma once
 
 #include "tachi/sim/cloth.hpp"
+#include "tachi/sim/union_find.hpp"
 
 #include <array>
 #include <cstdint>
@@ -118,7 +119,7 @@ class ClothCutter {
   std::vector<std::array<std::uint32_t, 2>> bend_through_;    // per grid coordinate: bends centred there (h, v)
   std::vector<std::uint32_t> copy_scratch_;
   std::vector<std::uint32_t> fan_triangles_;
-  std::vector<std::size_t> fan_parent_;
+  UnionFind<std::size_t> fan_groups_;
   std::vector<std::size_t> fan_roots_;
 };
 

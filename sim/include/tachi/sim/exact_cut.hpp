@@ -23,6 +23,7 @@
 #pragma once
 
 #include "tachi/sim/cloth.hpp"
+#include "tachi/sim/union_find.hpp"
 #include "tachi/sim/cutting.hpp"
 
 #include <Eigen/Core>
@@ -150,7 +151,7 @@ class ExactCutter {
   std::vector<CutEdge> cut_edges_uv_;
   std::vector<std::uint32_t> on_cut_;
   std::vector<std::uint32_t> fan_;  // separate: the triangles around the particle
-  std::vector<std::size_t> fan_parent_;
+  UnionFind<std::size_t> fan_groups_;
   std::vector<std::size_t> fan_roots_;
   std::vector<std::uint32_t> partners_;
   // Results.

@@ -51,6 +51,14 @@ struct StrokeFile {
 inline constexpr double kMaxStrokeTime_s = 1e6;
 inline constexpr double kMaxStrokeCoordinate_m = 100.0;
 
+/// Whether a stroke sample at time `t_s` is due before solver step `step` (step k starts at k dt): a sample
+/// goes to the step that starts nearest its time, t in [(k - 1/2) dt, (k + 1/2) dt). Rounding, not
+/// "the step whose interval holds t": hand samples come on a 30 or 60 Hz clock, i.e. exactly on step
+/// starts, where a time rounded to 6 decimals fell one step later than the unrounded one and the blade
+/// then met the cloth one step apart (the worn blade's cut: 3 or 21 pieces). Half-way between steps no
+/// such clock ticks.
+[[nodiscard]] bool stroke_sample_due(double t_s, long long step, double dt_s);
+
 /// Parses `t,x,y,z` CSV (header required; blank lines ignored; bad rows skipped and counted).
 [[nodiscard]] StrokeFile parse_stroke_csv(std::istream& in);
 

@@ -12,6 +12,9 @@
 // per-particle loops and the strain limit's scan for its first violation are split with the same results
 // as one thread. One thread runs the single-threaded code as before.
 // Why this and not semi-implicit + Provot or an implicit solver: docs/sim.md (with the figures).
+// Where each part is (sim/src): the step and sub-steps solver_step.cpp; the caches solver_caches.cpp; the
+// springs' quads and bands spring_batches.cpp (steps 3-4); the tethers tethers.cpp (step 2), their repair after a
+// cut tether_repair.cpp and tether_release.cpp; Provot's constraint strain_limit.cpp (step 5).
 #pragma once
 
 #include "tachi/sim/cloth.hpp"
@@ -86,7 +89,7 @@ class Solver {
   [[nodiscard]] std::size_t full_builds() const { return full_builds_; }
   [[nodiscard]] std::size_t incremental_updates() const { return incremental_updates_; }
   /// Pin groups of the long-range attachments (one search each): each particle has a tether per group.
-  [[nodiscard]] std::size_t pin_groups() const { return searches_.size(); }
+  [[nodiscard]] std::size_t pin_groups() const { return pin_groups_.size(); }
   /// Rest length of the shortest path along the cloth's springs from pin group `group` to `particle`
   /// (+inf: none, or a repair after a cut has not settled it yet). What its tether is measured from.
   [[nodiscard]] float pin_distance(std::size_t group, std::uint32_t particle) const;
@@ -105,7 +108,7 @@ class Solver {
   };
   /// Four springs that share no particle, projected together (SSE lanes). Particle indices are stored
   /// plus one: index 0 is a particle that never moves, used by padding lanes and blanked (cut) springs.
-  struct Group {
+  struct SpringQuad {
     std::array<std::uint32_t, 4> a;
     std::array<std::uint32_t, 4> b;
     alignas(16) float rest2[4];  ///< squared rest lengths
@@ -114,12 +117,14 @@ class Solver {
  private:
   /// Where a spring sits in the batches.
   struct Slot {
-    std::uint32_t group = 0xFFFFFFFFU;
+    std::uint32_t quad = 0xFFFFFFFFU;
     std::uint8_t lane = 0;
     std::uint8_t family = 0;
   };
-  /// One shortest-path search of the attachments: from one pin (few pins) or from all of them.
-  struct Search {
+  /// A pin group of the long-range attachments (one pin when there are few, else an end or a half of the
+  /// pinned line: build_attachments) with its shortest-path tree over the springs (Dijkstra, search_paths) and
+  /// the state of its repair after a cut.
+  struct PinGroup {
     std::vector<std::uint32_t> sources;
     std::vector<float> dist;
     std::vector<std::uint32_t> parent;     ///< previous particle on the shortest path (none at a source)
@@ -156,29 +161,29 @@ class Solver {
   void append_springs(const Cloth& cloth, const std::vector<std::uint32_t>& springs);
   void order_strain_limit(const Cloth& cloth);
   void build_attachments(const Cloth& cloth);
-  bool run_search(const Cloth& cloth, Search& search, bool repair, std::size_t budget);
-  void continue_searches(const Cloth& cloth);
+  bool search_paths(const Cloth& cloth, PinGroup& group, bool repair, std::size_t budget);
+  void continue_repairs(const Cloth& cloth);
   void refresh_nearest(std::uint32_t i);
   /// `engage`: a repair's tether, which holds the particle where it is and tightens over steps (engage_tethers).
-  void attach(const Cloth& cloth, Search& search, std::uint32_t i, bool engage);
-  static std::uint32_t nearest_bend(const Cloth& cloth, Search& search, std::uint32_t from, std::uint32_t anchor);
-  void open_particle(Search& search, std::uint32_t i);
-  static void seed(const Cloth& cloth, Search& search, std::uint32_t i);
-  static void compact_order(Search& search, std::size_t particles);
-  static void compact_open_list(Search& search);
-  [[nodiscard]] static bool parent_spring_intact(const Cloth& cloth, Search& search, std::uint32_t i);
+  void attach(const Cloth& cloth, PinGroup& group, std::uint32_t i, bool engage);
+  static std::uint32_t nearest_bend(const Cloth& cloth, PinGroup& group, std::uint32_t from, std::uint32_t anchor);
+  void open_particle(PinGroup& group, std::uint32_t i);
+  static void seed(const Cloth& cloth, PinGroup& group, std::uint32_t i);
+  static void compact_order(PinGroup& group, std::size_t particles);
+  static void compact_open_list(PinGroup& group);
+  [[nodiscard]] static bool parent_spring_intact(const Cloth& cloth, PinGroup& group, std::uint32_t i);
   void update_attachments(const Cloth& cloth, const std::vector<std::uint32_t>& touched);
   void release_cut_off(const Cloth& cloth, const std::vector<std::uint32_t>& touched);
   void release_cut_off_by_components(const Cloth& cloth);
-  /// Particle i has no path to search's pin group any more: its tether of that group goes (kept disabled,
+  /// Particle i has no path to `group` any more: its tether of that group goes (kept disabled,
   /// anchored on itself, so that the step reads a valid index).
-  void drop_tether(const Search& search, std::uint32_t i);
-  void release(Search& search, std::uint32_t i);
-  /// A bit per pin group (search): the ones particle i is open in, and the ones it is settled in (reached).
+  void drop_tether(const PinGroup& group, std::uint32_t i);
+  void release(PinGroup& group, std::uint32_t i);
+  /// A bit per pin group: the ones particle i is open in, and the ones it is settled in (reached).
   [[nodiscard]] std::uint32_t open_groups(std::uint32_t i) const;
   [[nodiscard]] std::uint32_t settled_groups(std::uint32_t i) const;
-  static void build_groups(const std::vector<PackedSpring>& springs, const std::vector<std::uint32_t>& keys,
-                           std::vector<Group>& groups);
+  static void pack_quads(const std::vector<PackedSpring>& springs, const std::vector<std::uint32_t>& keys,
+                           std::vector<SpringQuad>& quads);
   /// Splits each family's batches, as fully built, into 2 x threads bands of rows that share no particle with
   /// the other bands of their parity (none: too few rows, or a band's particles reach past its neighbour).
   void build_bands(const Cloth& cloth);
@@ -197,6 +202,9 @@ class Solver {
   /// One sub-step; on several threads in bands (banded()) its step 6 is finished by the next one, the last
   /// one's with the positions written back to the cloth.
   void substep(Cloth& cloth, const Colliders& colliders, float h, bool first, bool last_substep);
+  /// Substep step 5, Provot's deformation constraint: full passes, then sparse ones, then local ones
+  /// (strain_limit.cpp). `premarked`: front_in_bands already read which springs are over the limit.
+  void limit_strain(const Cloth& cloth, Eigen::Vector4f* x, bool premarked);
   /// Provot's sweeps past their budget, over only the springs near the last corrections (substep step 5).
   template <typename LimitSpring>
   void limit_locally(const Cloth& cloth, const LimitSpring& limit_spring);
@@ -219,8 +227,8 @@ class Solver {
   bool cache_valid_ = false;
   std::size_t full_builds_ = 0;
   std::size_t incremental_updates_ = 0;
-  std::array<std::vector<Group>, 3> groups_;  ///< structural, shear, bend, four at a time
-  /// Per family: where each band of rows starts in groups_ (2 x threads + 1 bounds; empty: sweep in order),
+  std::array<std::vector<SpringQuad>, 3> quads_;  ///< structural, shear, bend, four at a time
+  /// Per family: where each band of rows starts in quads_ (2 x threads + 1 bounds; empty: sweep in order),
   /// over the batches of the last full build (a cut's springs, appended after them, go in order after).
   std::array<std::vector<std::size_t>, 3> bands_;
   bool banded_ = false;
@@ -264,7 +272,7 @@ class Solver {
   bool tether_order_stale_ = false;
   void order_tethers();
   void engage_tethers();
-  std::vector<Search> searches_;
+  std::vector<PinGroup> pin_groups_;
   std::vector<float> nearest_;  ///< per particle: rest distance to the nearest pin (+inf: no pin reaches it)
   std::vector<std::uint32_t> opened_;  ///< scratch of the incremental update: particles it opened, once each
   std::vector<std::uint8_t> opened_mark_;  ///< per particle: in opened_ (cleared after each update)
@@ -272,7 +280,7 @@ class Solver {
   // before in this update); the flooded particles in order, component after component.
   std::vector<std::uint8_t> flood_seen_;
   std::vector<std::uint32_t> flood_visited_;
-  // Scratch of release_cut_off_by_components: per particle the searches it is open in, the searches it is
+  // Scratch of release_cut_off_by_components: per particle the pin groups it is open in, the ones it is
   // settled in, the groups it meets (then per component root), and the union-find parent.
   std::vector<std::uint8_t> flood_open_;
   std::vector<std::uint8_t> flood_settled_;

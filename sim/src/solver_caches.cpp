@@ -1,0 +1,158 @@
+// The caches a step reads, derived from the cloth's topology (refresh_caches): built in full (full_build)
+// when the set of fixed particles changes or the cloth was edited in a way it did not log, else updated from the
+// cloth's log of spring edits after a cut (update_incrementally): the cut's lanes blanked, its springs appended,
+// the tethers whose shortest paths it broke opened for repair (tether_repair.cpp, tether_release.cpp).
+#include "tachi/sim/solver.hpp"
+
+#include "solver_common.hpp"
+
+#include <algorithm>
+#include <utility>
+
+namespace tachi::sim {
+
+using solver_detail::kInf;
+using solver_detail::kNone;
+
+void Solver::refresh_caches(const Cloth& cloth) {
+  // Anchors: every particle that does not move by itself, pinned or held by the hand (a held particle
+  // drags the cloth like a pin, so it gets attachments and the strain limit sweeps out from it too).
+  // The same anchors as cached: as many particles with no inverse mass as cached pins, and each of those
+  // still one (distinct indices, so the sets are equal). Counted, not listed: this runs every step, and
+  // listing them cost a 256 x 256 step ~0.6M instructions.
+  std::size_t anchors = 0;
+  for (const float w : cloth.inverse_mass) anchors += w == 0.0F ? 1U : 0U;
+  const bool pins_same =
+      cache_valid_ && anchors == cached_pins_.size() &&
+      std::all_of(cached_pins_.begin(), cached_pins_.end(),
+                  [&](std::uint32_t i) { return i < cloth.particle_count() && cloth.inverse_mass[i] == 0.0F; });
+  const bool topology_same = cache_valid_ && cached_version_ == cloth.topology_version &&
+                             cached_springs_ == cloth.spring_count() &&
+                             cached_particles_ == cloth.particle_count();
+  if (topology_same && pins_same) return;
+  // Incremental only when the change is one the cloth logged: springs edited through its functions and
+  // particles appended. Anything else (new pins, a grab, arrays edited directly) is rebuilt in full.
+  const bool logged = pins_same && cloth.spring_edits.size() > edits_read_ &&
+                      cloth.spring_count() >= cached_springs_ && cloth.particle_count() >= cached_particles_;
+  if (logged) {
+    update_incrementally(cloth);
+  } else {
+    std::vector<std::uint32_t> pins;
+    pins.reserve(anchors);
+    for (std::size_t i = 0; i < cloth.particle_count(); ++i) {
+      if (cloth.inverse_mass[i] == 0.0F) pins.push_back(static_cast<std::uint32_t>(i));
+    }
+    full_build(cloth, std::move(pins));
+  }
+  // Blanked lanes still cost a load and a store each: past half the batches, compact them.
+  if (blanked_ * 2 > lanes_) full_build(cloth, cached_pins_);
+  cached_version_ = cloth.topology_version;
+  cached_springs_ = cloth.spring_count();
+  cached_particles_ = cloth.particle_count();
+  edits_read_ = cloth.spring_edits.size();
+  cache_valid_ = true;
+}
+
+void Solver::full_build(const Cloth& cloth, std::vector<std::uint32_t> pins) {
+  ++full_builds_;
+  for (auto& g : quads_) g.clear();
+  // As much room as the cloth reserved for its cuts (Cloth::reserve): the first cut then grows the solver's
+  // per-particle arrays in place instead of reallocating (and faulting in) every one of them at once, which
+  // made the step of the first cut at 256 x 256 take ~50 ms.
+  const std::size_t particle_room = cloth.position.capacity() + 1;
+  reserve_touched(nearest_, particle_room);
+  reserve_touched(opened_, particle_room);
+  reserve_touched(opened_mark_, particle_room);
+  reserve_touched(touched_mark_, particle_room);
+  reserve_touched(flood_seen_, particle_room);
+  // release_cut_off_by_components sizes its scratch to the cloth on every call, and a cut adds particles.
+  reserve_touched(flood_open_, particle_room);
+  reserve_touched(flood_settled_, particle_room);
+  reserve_touched(flood_met_, particle_room);
+  reserve_touched(flood_parent_, particle_room);
+  reserve_touched(work_, particle_room);
+  reserve_touched(old_work_, particle_room);
+  reserve_touched(slot_, cloth.spring_a.capacity());
+  reserve_touched(limit_slot_, cloth.spring_a.capacity());
+  slot_.assign(cloth.spring_count(), Slot{});
+  lanes_ = 0;
+  blanked_ = 0;
+  std::vector<std::uint32_t> all;
+  all.reserve(cloth.spring_count());
+  for (std::uint32_t k = 0; k < cloth.spring_count(); ++k) {
+    if (cloth.alive[k] != 0) all.push_back(k);
+  }
+  cached_pins_ = std::move(pins);
+  build_attachments(cloth);
+  append_springs(cloth, all);
+  build_bands(cloth);
+  order_strain_limit(cloth);
+  lanes_ = 0;
+  for (auto& g : quads_) {
+    lanes_ += 4 * g.size();
+    reserve_touched(g, g.size() + g.size() / 4);  // the cuts' springs are appended (compacted past half blanked)
+  }
+  reserve_touched(strain_limit_, strain_limit_.size() + strain_limit_.size() / 4);
+}
+
+void Solver::update_incrementally(const Cloth& cloth) {
+  ++incremental_updates_;
+  slot_.resize(cloth.spring_count(), Slot{});
+  // The springs the cut edited, once each; the particles they touched before and after.
+  std::vector<std::uint32_t> edited(cloth.spring_edits.begin() + static_cast<std::ptrdiff_t>(edits_read_),
+                                    cloth.spring_edits.end());
+  std::sort(edited.begin(), edited.end());
+  edited.erase(std::unique(edited.begin(), edited.end()), edited.end());
+  // Each touched particle once (a cut edits several springs of each): marked as it is met, so that only the
+  // distinct ones are sorted (sorting every end of every edited spring was half of this update's time).
+  std::vector<std::uint32_t> touched;
+  touched_mark_.resize(cloth.particle_count(), 0);
+  const auto touch = [&](std::uint32_t i) {
+    if (touched_mark_[i] != 0) return;
+    touched_mark_[i] = 1;
+    touched.push_back(i);
+  };
+  for (const std::uint32_t k : edited) {
+    Slot& s = slot_[k];
+    if (s.quad != kNone) {
+      SpringQuad& g = quads_[s.family][s.quad];
+      touch(g.a[s.lane] - 1);
+      touch(g.b[s.lane] - 1);
+      g.a[s.lane] = 0;  // blanked: both ends on the fixed particle, so the lane does nothing
+      g.b[s.lane] = 0;
+      g.rest2[s.lane] = 1.0F;
+      s = Slot{};
+      ++blanked_;
+    }
+    if (cloth.alive[k] != 0) {
+      touch(cloth.spring_a[k]);
+      touch(cloth.spring_b[k]);
+    }
+  }
+  for (std::size_t i = cached_particles_; i < cloth.particle_count(); ++i) touch(static_cast<std::uint32_t>(i));
+  std::sort(touched.begin(), touched.end());
+  for (const std::uint32_t i : touched) touched_mark_[i] = 0;
+  update_attachments(cloth, touched);
+  release_cut_off(cloth, touched);
+  append_springs(cloth, edited);
+  // The strain limit: the cut's springs leave their places (never over the limit: skipped) and its new
+  // ones go last. Re-ordering outwards from the pins (the distances behind a cut grow) is linear in the
+  // springs, so it waits for the attachments' repair to settle (continue_repairs) or the next compaction.
+  limit_slot_.resize(cloth.spring_count(), kNone);
+  for (const std::uint32_t k : edited) {
+    if (limit_slot_[k] != kNone) {
+      strain_limit_[limit_slot_[k]].rest = kInf;
+      limit_slot_[k] = kNone;
+    }
+    if (cloth.alive[k] == 0 || cloth.kind[k] != SpringKind::Structural) continue;
+    std::uint32_t na = cloth.spring_a[k];
+    std::uint32_t nb = cloth.spring_b[k];
+    if (nearest_[nb] < nearest_[na]) std::swap(na, nb);
+    limit_slot_[k] = static_cast<std::uint32_t>(strain_limit_.size());
+    strain_limit_.push_back({na, nb, cloth.rest_length[k]});
+  }
+  limit_order_stale_ = true;
+  if (!repairing()) pending_limit_order_ = true;
+}
+
+}  // namespace tachi::sim

@@ -1,0 +1,47 @@
+// What the solver's files share (sim/src/solver_*.cpp, spring_batches.cpp, strain_limit.cpp, tethers.cpp,
+// tether_repair.cpp, tether_release.cpp): the "none" markers of its per-particle arrays, the padded position
+// type, and the split of independent loops over threads (OpenMP). Private to tachi_sim.
+#pragma once
+
+#include "tachi/sim/cloth.hpp"
+
+#include <Eigen/Core>
+
+#include <cstddef>
+#include <cstdint>
+#include <limits>
+
+namespace tachi::sim::solver_detail {
+
+inline constexpr std::uint32_t kNone = 0xFFFFFFFFU;
+inline constexpr std::uint32_t kNoBend = 0xFFFFFFFEU;  // PinGroup::last_bend: checked, there is none
+inline constexpr float kInf = std::numeric_limits<float>::infinity();
+
+/// Whether a search has settled a particle, from its open flag and distance: reached, and not open for repair.
+/// (Solver::seed reads only settled neighbours; settled_groups and the labelling of cut-off pieces use it.)
+constexpr bool settled(std::uint8_t open, float dist) { return open == 0 && dist < kInf; }
+
+/// A particle's position (x, y, z) with its inverse mass in w: one aligned 16-byte load (Solver::step).
+using Vec4 = Eigen::Vector4f;
+/// Masks the inverse mass out of a difference of two Vec4.
+inline const Vec4 kXyz{1.0F, 1.0F, 1.0F, 0.0F};
+
+/// Runs body(begin, end) over [0, n) in `threads` contiguous chunks at once (OpenMP, static: chunk t on
+/// thread t), or in one call for one thread or a short range. For loops whose iterations are independent
+/// (each particle on its own, or tethers of distinct particles), so the results do not depend on the split.
+template <typename Body>
+void for_chunks(std::size_t n, int threads, const Body& body) {
+  constexpr std::size_t kWorthSplitting = 2048;  // below this the threads' wake-up costs more than the loop
+  if (threads <= 1 || n < kWorthSplitting) {
+    body(std::size_t{0}, n);
+    return;
+  }
+#pragma omp parallel for schedule(static) num_threads(threads)
+  for (int t = 0; t < threads; ++t) {
+    const auto chunk = static_cast<std::size_t>(t);
+    const auto parts = static_cast<std::size_t>(threads);
+    body(n * chunk / parts, n * (chunk + 1) / parts);
+  }
+}
+
+}  // namespace tachi::sim::solver_detail

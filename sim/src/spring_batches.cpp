@@ -1,0 +1,195 @@
+// The springs' batches: each family (structural, shear, bend) packed four springs that share no particle to a
+// quad (SSE lanes), in a fixed sweep order (row by row, colours within a row), the basis of the Gauss-Seidel
+// sweeps of sub-step steps 3 and 4 (XPBD, Macklin et al. 2016, eq. 18; Mueller et al. 2007, sec. 3.3). A
+// cut's springs are appended (pack_quads). On several threads the quads are split into bands of rows, the
+// even bands swept at once and then the odd ones (build_bands, sweep_springs; docs/sim.md "Threads").
+#include "tachi/sim/solver.hpp"
+
+#include "constraint_kernels.hpp"
+#include "solver_common.hpp"
+
+#include <algorithm>
+#include <limits>
+#include <utility>
+
+namespace tachi::sim {
+
+using solver_detail::Vec4;
+
+namespace {
+
+/// Sweep position of a spring: its upper row, then a colour such that two springs of one row and
+/// colour never share a particle. Sweeping row by row keeps the few rows being worked on in cache
+/// (256^2 positions are 1 MB), and inside a row consecutive projections are independent, so the CPU
+/// overlaps them; the sweep as a whole stays plain Gauss-Seidel in a fixed order.
+std::uint32_t sweep_key(SpringKind k, GridCoord a, GridCoord b) {
+  constexpr int kColoursPerRow = 8;
+  const int umin = std::min(a.u, b.u);
+  const int vmin = std::min(a.v, b.v);
+  const bool along_row = a.v == b.v;
+  int colour = 0;
+  switch (k) {
+    case SpringKind::Structural:
+      colour = along_row ? umin % 2 : 2;  // (u, u+1) alternate; columns of one row never touch
+      break;
+    case SpringKind::Shear:
+      colour = (b.u - a.u) * (b.v - a.v) > 0 ? 0 : 1;  // diagonals, then anti-diagonals
+      break;
+    case SpringKind::Bend:
+      colour = along_row ? umin % 4 : 4;  // (u, u+2) share ends with (u+2, u+4): four classes
+      break;
+  }
+  return static_cast<std::uint32_t>(vmin * kColoursPerRow + colour);
+}
+
+}  // namespace
+
+using solver_detail::sweep_near_rest;
+
+void Solver::pack_quads(const std::vector<PackedSpring>& springs, const std::vector<std::uint32_t>& keys,
+                          std::vector<SpringQuad>& quads) {
+  // Four springs of one sweep class (same row and colour) never share a particle on the grid; the check
+  // below also keeps that true for springs a cut added or rewired, so the four lanes stay independent.
+  SpringQuad g{};
+  int lanes = 0;
+  std::uint32_t quad_key = 0;
+  auto flush = [&] {
+    if (lanes == 0) return;
+    for (int l = lanes; l < 4; ++l) {
+      g.a[l] = 0;  // padding lane: the fixed particle 0 on both ends does nothing
+      g.b[l] = 0;
+      g.rest2[l] = 1.0F;
+    }
+    quads.push_back(g);
+    lanes = 0;
+  };
+  for (std::size_t k = 0; k < springs.size(); ++k) {
+    const PackedSpring& sp = springs[k];
+    const std::uint32_t a = sp.a + 1;
+    const std::uint32_t b = sp.b + 1;
+    bool clash = lanes > 0 && keys[k] != quad_key;
+    for (int l = 0; l < lanes && !clash; ++l) clash = g.a[l] == a || g.a[l] == b || g.b[l] == a || g.b[l] == b;
+    if (clash) flush();
+    if (lanes == 0) quad_key = keys[k];
+    g.a[lanes] = a;
+    g.b[lanes] = b;
+    g.rest2[lanes] = sp.rest * sp.rest;
+    if (++lanes == 4) flush();
+  }
+  flush();
+}
+
+void Solver::append_springs(const Cloth& cloth, const std::vector<std::uint32_t>& springs) {
+  // Sorted by (family, sweep key, spring index): a counting sort would be linear, but the keys of a full
+  // build are few per row and a cut's springs are few, so std::sort on packed 64-bit keys is as fast.
+  std::array<std::vector<std::uint64_t>, 3> order;
+  for (const std::uint32_t k : springs) {
+    if (cloth.alive[k] == 0) continue;
+    const std::uint32_t key = sweep_key(cloth.kind[k], cloth.grid[cloth.spring_a[k]], cloth.grid[cloth.spring_b[k]]);
+    order[static_cast<std::size_t>(cloth.kind[k])].push_back((static_cast<std::uint64_t>(key) << 32U) | k);
+  }
+  std::vector<PackedSpring> packed;
+  std::vector<std::uint32_t> keys;
+  std::vector<SpringQuad> fresh;
+  for (std::size_t f = 0; f < 3; ++f) {
+    std::sort(order[f].begin(), order[f].end());
+    packed.clear();
+    keys.clear();
+    for (const std::uint64_t e : order[f]) {
+      const auto k = static_cast<std::uint32_t>(e & 0xFFFFFFFFU);
+      packed.push_back({cloth.spring_a[k], cloth.spring_b[k], cloth.rest_length[k]});
+      keys.push_back(static_cast<std::uint32_t>(e >> 32U));
+    }
+    fresh.clear();
+    pack_quads(packed, keys, fresh);
+    // Find where each spring landed (pack_quads keeps the order, filling lanes in sequence).
+    const auto base = static_cast<std::uint32_t>(quads_[f].size());
+    std::size_t next = 0;
+    for (std::uint32_t g = 0; g < fresh.size(); ++g) {
+      for (std::uint8_t l = 0; l < 4 && next < order[f].size(); ++l) {
+        const auto k = static_cast<std::uint32_t>(order[f][next] & 0xFFFFFFFFU);
+        if (fresh[g].a[l] != cloth.spring_a[k] + 1 || fresh[g].b[l] != cloth.spring_b[k] + 1) continue;
+        slot_[k] = {base + g, l, static_cast<std::uint8_t>(f)};
+        ++next;
+      }
+    }
+    quads_[f].insert(quads_[f].end(), fresh.begin(), fresh.end());
+  }
+}
+
+void Solver::build_bands(const Cloth& cloth) {
+  // A spring of row v (its upper end's row, the batches' order) touches rows v .. v + 2 (bend springs two
+  // apart; structural and shear v .. v + 1). So bands of at least three rows, every other one swept at once,
+  // share no particle: a two-colouring of a partition, where each band itself is still swept in the
+  // single-threaded order. What a cut changes in place only blanks lanes (particle 0, which never moves);
+  // its new springs go after the bands. The check below reads the particles' rows rather than trusting the
+  // rule: after a full build of a cut cloth an exact cut's particles have the row of their nearest grid point.
+  // The three families share the bands' rows, so that a band can sweep all of its springs at once.
+  banded_ = false;
+  for (auto& bounds : bands_) bounds.clear();
+  const int threads = params_.threads;
+  if (threads <= 1) return;
+  const auto row_of = [&](std::uint32_t padded) { return cloth.grid[padded - 1].v; };
+  const auto first_row = [&](const SpringQuad& g) { return std::min(row_of(g.a[0]), row_of(g.b[0])); };
+  int rows = 0;
+  for (const auto& quads : quads_) {
+    if (!quads.empty()) rows = std::max(rows, first_row(quads.back()) + 1);  // sorted by row (sweep_key)
+  }
+  const int count = 2 * threads;
+  constexpr int kRowsPerBand = 3;
+  if (rows < kRowsPerBand * count) return;
+  std::vector<std::pair<int, int>> reach(static_cast<std::size_t>(count),
+                                         {std::numeric_limits<int>::max(), std::numeric_limits<int>::min()});
+  for (std::size_t f = 0; f < 3; ++f) {
+    std::vector<std::size_t>& bounds = bands_[f];
+    const std::vector<SpringQuad>& quads = quads_[f];
+    bounds.resize(static_cast<std::size_t>(count) + 1);
+    std::size_t at = 0;
+    for (int j = 0; j < count; ++j) {
+      const int from = rows * j / count;
+      while (at < quads.size() && first_row(quads[at]) < from) ++at;
+      bounds[static_cast<std::size_t>(j)] = at;
+    }
+    bounds.back() = quads.size();
+    for (std::size_t j = 0; j < reach.size(); ++j) {
+      for (std::size_t k = bounds[j]; k < bounds[j + 1]; ++k) {
+        for (std::size_t l = 0; l < 4; ++l) {
+          for (const std::uint32_t p : {quads[k].a[l], quads[k].b[l]}) {
+            if (p == 0) continue;
+            reach[j].first = std::min(reach[j].first, row_of(p));
+            reach[j].second = std::max(reach[j].second, row_of(p));
+          }
+        }
+      }
+    }
+  }
+  for (std::size_t j = 0; j + 2 < reach.size(); ++j) {
+    if (reach[j].second >= reach[j + 2].first) {
+      for (auto& bounds : bands_) bounds.clear();
+      return;
+    }
+  }
+  banded_ = true;
+}
+
+void Solver::sweep_springs(Vec4* padded, std::size_t family, float alpha) const {
+  const std::vector<SpringQuad>& quads = quads_[family];
+  const std::vector<std::size_t>& bounds = bands_[family];
+  const SpringQuad* g = quads.data();
+  if (params_.threads <= 1 || bounds.empty()) {
+    sweep_near_rest(padded, g, g + quads.size(), alpha);
+    return;
+  }
+  const int count = static_cast<int>(bounds.size()) - 1;
+#pragma omp parallel num_threads(params_.threads)
+  for (int parity = 0; parity < 2; ++parity) {
+#pragma omp for schedule(static)
+    for (int j = parity; j < count; j += 2) {
+      sweep_near_rest(padded, g + bounds[static_cast<std::size_t>(j)], g + bounds[static_cast<std::size_t>(j) + 1],
+                      alpha);
+    }
+  }
+  sweep_near_rest(padded, g + bounds.back(), g + quads.size(), alpha);  // a cut's springs, in order
+}
+
+}  // namespace tachi::sim

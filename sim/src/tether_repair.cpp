@@ -1,0 +1,300 @@
+// The pin groups' shortest paths (Dijkstra over live structural and shear springs, search_paths) and their
+// repair after a cut: decremental shortest paths (Ramalingam and Reps 1996). The particles whose path the cut
+// broke, and their subtrees, are opened (update_attachments, open_particle; they keep their old tethers) and
+// searched again from their settled neighbours within a budget per step (continue_repairs). Which particles a
+// cut separated from a pin group altogether: tether_release.cpp.
+#include "tachi/sim/solver.hpp"
+
+#include "solver_common.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace tachi::sim {
+
+using solver_detail::kInf;
+using solver_detail::kNone;
+using solver_detail::settled;
+
+float Solver::pin_distance(std::size_t index, std::uint32_t particle) const {
+  if (index >= pin_groups_.size() || particle >= pin_groups_[index].dist.size()) return kInf;
+  const PinGroup& group = pin_groups_[index];
+  return group.open[particle] != 0 ? kInf : group.dist[particle];
+}
+
+std::size_t Solver::open_particles() const {
+  std::size_t open = 0;
+  for (const PinGroup& group : pin_groups_) open += group.open_count;
+  return open;
+}
+
+std::size_t Solver::repair_list_entries() const {
+  std::size_t entries = 0;
+  for (const PinGroup& group : pin_groups_) entries += group.open_list.size();
+  return entries;
+}
+
+bool Solver::repairing() const {
+  return std::any_of(pin_groups_.begin(), pin_groups_.end(),
+                     [](const PinGroup& s) { return !s.heap.empty() || !s.open_list.empty(); });
+}
+
+void Solver::seed(const Cloth& cloth, PinGroup& group, std::uint32_t i) {
+  // An open particle's distance through its settled neighbours, into the heap (the repair's start).
+  for (const std::uint32_t k : cloth.springs_of(i)) {
+    if (cloth.kind[k] == SpringKind::Bend) continue;
+    const std::uint32_t j = cloth.spring_a[k] == i ? cloth.spring_b[k] : cloth.spring_a[k];
+    if (!settled(group.open[j], group.dist[j])) continue;
+    const float d = group.dist[j] + cloth.rest_length[k];
+    if (d < group.dist[i]) {
+      group.dist[i] = d;
+      group.parent[i] = j;
+      group.parent_spring[i] = k;
+      group.owner[i] = group.owner[j];
+    }
+  }
+  if (std::isfinite(group.dist[i])) {
+    group.heap.emplace_back(group.dist[i], i);
+    std::push_heap(group.heap.begin(), group.heap.end(), [](const auto& x, const auto& y) { return x.first > y.first; });
+  }
+}
+
+bool Solver::search_paths(const Cloth& cloth, PinGroup& group, bool repair, std::size_t budget) {
+  // Dijkstra over live structural and shear springs (rest lengths), at most `budget` particles settled per
+  // call. A repair (after a cut) first seeds every open particle with its distance through its settled
+  // neighbours (over as many calls as that takes), then relaxes only the open particles: the others'
+  // distances are final (a cut only lengthens paths, so a particle whose shortest path the cut did not touch
+  // keeps it); each particle it settles gets a tether from its new path (attach; the old one held it meanwhile). Seeding is finished before anything settles, so no particle settles at a
+  // distance a seed not yet in the heap would have shortened. Returns true when the search is complete.
+  auto& heap = group.heap;
+  const auto greater = [](const auto& x, const auto& y) { return x.first > y.first; };
+  const auto neighbour = [&](std::uint32_t k, std::uint32_t i) {
+    return cloth.spring_a[k] == i ? cloth.spring_b[k] : cloth.spring_a[k];
+  };
+  if (repair) {
+    // Seeding has its own allowance per call, four times the settling budget (a seed costs less than a
+    // settle: no heap pops); nothing settles before every open particle is seeded. Counted against the
+    // settling budget itself, seeding kept a large opened region unsettled for twice as long, and the cloth
+    // swinging under cut_bench's long stroke met it folded (a 128 x 128 grid stroke cut off a third piece).
+    std::size_t seeds = 4 * budget;
+    while (group.seeded < group.open_list.size() && seeds > 0) {
+      const std::uint32_t i = group.open_list[group.seeded++];
+      --seeds;
+      if (group.open[i] != 0) seed(cloth, group, i);
+    }
+    if (group.seeded < group.open_list.size()) return false;
+  }
+  while (!heap.empty() && budget > 0) {
+    std::pop_heap(heap.begin(), heap.end(), greater);
+    const auto [d, i] = heap.back();
+    heap.pop_back();
+    if (d != group.dist[i]) continue;  // superseded: a shorter path came, or a later cut reset it
+    if (repair) {
+      if (group.open[i] == 0) continue;
+      group.open[i] = 0;
+      --group.open_count;
+      refresh_nearest(i);
+    }
+    group.order_pos[i] = static_cast<std::uint32_t>(group.order.size());
+    group.order.push_back(i);
+    // In the order particles settle: a particle's anchor comes from its parent's, settled before it.
+    if (params_.long_range_attachments) attach(cloth, group, i, repair);
+    --budget;
+    for (const std::uint32_t k : cloth.springs_of(i)) {
+      if (cloth.kind[k] == SpringKind::Bend) continue;
+      const std::uint32_t j = neighbour(k, i);
+      const float dj = d + cloth.rest_length[k];
+      if (repair ? group.open[j] == 0 : group.order_pos[j] != kNone) continue;
+      if (dj < group.dist[j]) {
+        group.dist[j] = dj;
+        group.parent[j] = i;
+        group.parent_spring[j] = k;
+        group.owner[j] = group.owner[i];
+        heap.emplace_back(dj, j);
+        std::push_heap(heap.begin(), heap.end(), greater);
+      }
+    }
+  }
+  if (!heap.empty()) return false;
+  // What the repair never reached is cut off from this pin: its tether, kept while it was open, goes.
+  for (const std::uint32_t i : group.open_list) {
+    if (group.open[i] != 0) release(group, i);
+  }
+  group.open_list.clear();
+  group.seeded = 0;
+  return true;
+}
+
+void Solver::compact_order(PinGroup& group, std::size_t particles) {
+  // Stale entries (particles that settled again) past half the order: dropped, the live ones keeping their
+  // relative order (each still after its parent). Any time, a repair in progress included.
+  if (group.order.size() <= 2 * particles) return;
+  std::size_t live = 0;
+  for (std::size_t pos = 0; pos < group.order.size(); ++pos) {
+    const std::uint32_t i = group.order[pos];
+    if (group.order_pos[i] != pos) continue;
+    group.order_pos[i] = static_cast<std::uint32_t>(live);
+    group.order[live++] = i;
+  }
+  group.order.resize(live);
+}
+
+void Solver::refresh_nearest(std::uint32_t i) {
+  float d = kInf;
+  for (const PinGroup& group : pin_groups_) {
+    if (i < group.dist.size()) d = std::min(d, group.dist[i]);
+  }
+  nearest_[i] = d;
+}
+
+void Solver::continue_repairs(const Cloth& cloth) {
+  bool pending = false;
+  bool progressed = false;
+  for (PinGroup& group : pin_groups_) {
+    if (group.heap.empty() && group.open_list.empty()) continue;
+    progressed = true;
+    pending = !search_paths(cloth, group, true, static_cast<std::size_t>(params_.repair_per_step)) || pending;
+  }
+  // Settled particles change the strain limit's order (their distance to the pins): redo it once done.
+  if ((progressed && !pending) || (pending_limit_order_ && !pending)) {
+    pending_limit_order_ = false;
+    if (limit_order_stale_) order_strain_limit(cloth);
+  }
+}
+
+bool Solver::parent_spring_intact(const Cloth& cloth, PinGroup& group, std::uint32_t i) {
+  const std::uint32_t p = group.parent[i];
+  const std::uint32_t k = group.parent_spring[i];
+  if (k < cloth.spring_count() && cloth.alive[k] != 0 &&
+      ((cloth.spring_a[k] == i && cloth.spring_b[k] == p) || (cloth.spring_a[k] == p && cloth.spring_b[k] == i))) {
+    return true;
+  }
+  // The cut may have re-made the spring under another index (its particles' springs re-derived).
+  for (const std::uint32_t other : cloth.springs_of(i)) {
+    if (cloth.kind[other] == SpringKind::Bend) continue;
+    if ((cloth.spring_a[other] == i && cloth.spring_b[other] == p) || (cloth.spring_a[other] == p && cloth.spring_b[other] == i)) {
+      group.parent_spring[i] = other;
+      return true;
+    }
+  }
+  return false;
+}
+
+void Solver::open_particle(PinGroup& group, std::uint32_t i) {
+  // Off its shortest-path tree until the repair settles it again. Its tether stays as it was meanwhile (the
+  // cut only lengthened its path, so the old tether is no looser than the new one will be; it was met where
+  // the particle is now): turned off, the region below a stroke advancing into a 256 x 256 cloth hung without
+  // tethers for the whole stroke and fell stretched (9771 springs over 10 %, now none). A particle the cut
+  // separated from a pin group loses that group's tether at once (release_cut_off), or, unreached, when the
+  // repair ends (search_paths).
+  group.dist[i] = kInf;
+  group.parent[i] = kNone;
+  group.parent_spring[i] = kNone;
+  group.owner[i] = kNone;
+  group.order_pos[i] = kNone;  // its entry in the order goes stale
+  if (group.open[i] == 0) {
+    group.open_list.push_back(i);
+    ++group.open_count;
+  }
+  group.open[i] = 1;
+  group.anchor[i] = kNone;
+  if (group.bends[i] != 0) tether_order_stale_ = true;
+  group.bends[i] = 0;
+  // Once per particle, however many searches open it: its nearest pin is looked up again after all of them.
+  if (opened_mark_[i] == 0) {
+    opened_mark_[i] = 1;
+    opened_.push_back(i);
+  }
+}
+
+void Solver::compact_open_list(PinGroup& group) {
+  // A repair that a long stroke keeps re-opening never ends, so its list was never cleared: the particles
+  // that settled again stayed in it (880k entries for 66k particles by the end of a 256 x 256 stroke), and
+  // every cut read them all, as did the repair's seeding (against its budget). Past twice the open ones they
+  // are dropped, the rest keeping their order; `seeded` still counts the same particles.
+  if (group.open_list.size() <= 2 * group.open_count + 64) return;
+  std::size_t kept = 0;
+  std::size_t seeded = 0;
+  for (std::size_t k = 0; k < group.open_list.size(); ++k) {
+    const std::uint32_t i = group.open_list[k];
+    if (group.open[i] == 0) continue;
+    if (k < group.seeded) ++seeded;
+    group.open_list[kept++] = i;
+  }
+  group.open_list.resize(kept);
+  group.seeded = seeded;
+}
+
+void Solver::update_attachments(const Cloth& cloth, const std::vector<std::uint32_t>& touched) {
+  const std::size_t n = cloth.particle_count();
+  nearest_.resize(n, kInf);
+  if (pin_groups_.empty()) return;
+  // Decremental shortest paths (Ramalingam and Reps 1996): a particle is affected when the spring to its
+  // parent on the shortest-path tree is gone, or it is new; so is everything below it on the tree. They are
+  // opened here (distance off, old tether kept); the repair that searches them again from the distances of their
+  // settled neighbours runs within each step's budget (continue_repairs).
+  // A cut may also make a path shorter (an exact cut's new triangles' edges cut across a cell): that is not
+  // searched for, so a repaired distance may exceed a full build's by a few per cent (up to 10 % after a
+  // dozen random strokes on a 24 x 24 cloth, solver_test), never fall short of it. Searching for it too
+  // (re-opening a settled particle that a newly settled one reaches by a shorter way) was tried: the 64 x 64
+  // exact slit of tachi-sim's CutCli test then rested at 14.9 % strain instead of <= 10 %, likely because
+  // attach()'s straightness test, tuned on grid paths, then lets more chains of tethers count as straight
+  // around a cut's tip.
+  // The subtrees are found in one pass over the settle order from the first orphan: a particle there comes
+  // after its parent, so it is opened when its parent was. That is a load and a test per particle, where
+  // walking the subtrees through the springs cost ~500 instructions per particle and search (5 ms for the
+  // lower half of a 128 x 128 cloth over four searches).
+  opened_.clear();
+  opened_mark_.resize(n, 0);
+  for (PinGroup& group : pin_groups_) {
+    const std::size_t old_n = group.dist.size();
+    group.dist.resize(n, kInf);
+    group.parent.resize(n, kNone);
+    group.parent_spring.resize(n, kNone);
+    group.owner.resize(n, kNone);
+    group.attachment.resize(n, kNone);
+    group.anchor.resize(n, kNone);
+    group.bends.resize(n, 0);
+    group.open.resize(n, 0);
+    group.order_pos.resize(n, kNone);
+    compact_order(group, n);
+    compact_open_list(group);
+    const std::size_t open_before = group.open_list.size();
+    std::uint32_t first = kNone;
+    for (const std::uint32_t i : touched) {
+      if (i >= old_n) {
+        if (group.open[i] == 0) open_particle(group, i);
+        continue;
+      }
+      if (group.open[i] != 0 || group.parent[i] == kNone || parent_spring_intact(cloth, group, i)) continue;
+      first = std::min(first, group.order_pos[i]);
+      open_particle(group, i);
+    }
+    for (std::size_t pos = first == kNone ? group.order.size() : first + 1; pos < group.order.size(); ++pos) {
+      const std::uint32_t i = group.order[pos];
+      if (group.order_pos[i] != pos) continue;  // stale: it settled again later
+      const std::uint32_t p = group.parent[i];
+      if (p != kNone && group.open[p] != 0) open_particle(group, i);
+    }
+    // A repair in progress: a particle still open holds a tentative distance through a settled particle
+    // (seeds and relaxations always come from one). If this cut opened that particle or cut the spring to
+    // it, the distance is gone with it, so it is forgotten and the particle seeded again (only it: seeding
+    // the whole open region again on every cut of a long stroke cost a 256 x 256 step 40 ms).
+    for (std::size_t k = 0; k < open_before; ++k) {
+      const std::uint32_t i = group.open_list[k];
+      const std::uint32_t p = group.parent[i];
+      if (p == kNone || (group.open[p] == 0 && parent_spring_intact(cloth, group, i))) continue;
+      group.dist[i] = kInf;
+      group.parent[i] = kNone;
+      group.parent_spring[i] = kNone;
+      group.owner[i] = kNone;
+      if (k < group.seeded) seed(cloth, group, i);  // else the repair's seeding reaches it
+    }
+  }
+  for (const std::uint32_t i : opened_) {
+    refresh_nearest(i);
+    opened_mark_[i] = 0;
+  }
+}
+
+}  // namespace tachi::sim

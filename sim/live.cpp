@@ -316,10 +316,15 @@ int run_live(const OfflineOptions& shared, std::optional<int> max_steps, const L
   for (const auto& report : session.take_cut_reports())
     cut_writer.write(cut_msg(live.cloth_id, session.cloth().topology_version, report, cut_line, session_id));
   publish_state();
-  // Let late readers (viewer, tests) receive the final topology and cuts before the process goes.
-  topology_writer.wait_for_acks(std::chrono::seconds(1));
-  delta_writer.wait_for_acks(std::chrono::seconds(1));
-  cut_writer.wait_for_acks(std::chrono::seconds(1));
+  // Let late readers (viewer, tests) receive the final topology and cuts before the process goes: one
+  // deadline for the three. Stopped by a signal (the whole run stopping, or the launcher's death) the
+  // readers are going too and their acks may never come: then only a glimpse, so that the process is
+  // gone within a second (docs/reliability.md, Signals).
+  const auto acks_due = Clock::now() + (common::stop_requested() ? std::chrono::milliseconds(100) : std::chrono::milliseconds(1000));
+  const auto left = [&] { return std::max<Clock::duration>(acks_due - Clock::now(), Clock::duration::zero()); };
+  topology_writer.wait_for_acks(left());
+  delta_writer.wait_for_acks(left());
+  cut_writer.wait_for_acks(left());
 
   Summary summary = summarize(session.cloth());
   summary.steps = static_cast<int>(session.steps());

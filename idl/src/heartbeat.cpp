@@ -1,5 +1,7 @@
 #include "tachi/bus/heartbeat.hpp"
 
+#include "tachi/common/app.hpp"
+
 #include <unistd.h>
 
 #include <cstdio>
@@ -21,7 +23,9 @@ Heartbeat::~Heartbeat() {
   try {
     status_.state = tachi_msg_NODE_STOPPING;
     publish();
-    writer_.wait_for_acks(std::chrono::milliseconds(200));
+    // Stopped by a signal, the readers (the launcher, the monitor) may be going too: a shorter goodbye
+    // keeps the whole stop within a second.
+    writer_.wait_for_acks(std::chrono::milliseconds(common::stop_requested() ? 50 : 200));
   } catch (...) {
     // Going away anyway: a failed goodbye must not turn a clean exit into a crash.
   }

@@ -20,6 +20,7 @@
 
 #include <csignal>
 #include <fstream>
+#include <map>
 #include <regex>
 
 using namespace std::chrono_literals;
@@ -134,4 +135,49 @@ TEST(NoLostCutsUnderTheLauncher, EachNodeKilledMidStrokeInTurnLeavesTheUndisturb
     EXPECT_EQ(s["cuts"], undisturbed.summary["cuts"]) << killed.log;
     tachi::test::expect_same_cut(s, undisturbed.summary, killed.log);
   }
+}
+
+namespace {
+// A process that is gone, or a zombie waiting for init to reap it (it holds nothing any more).
+bool gone(pid_t pid) {
+  std::ifstream stat("/proc/" + std::to_string(pid) + "/stat");
+  std::string text((std::istreambuf_iterator<char>(stat)), {});
+  if (text.empty()) return true;
+  const auto paren = text.rfind(')');
+  return paren != std::string::npos && paren + 2 < text.size() && (text[paren + 2] == 'Z' || text[paren + 2] == 'X');
+}
+}  // namespace
+
+// Children die with the launcher: `tachi run` SIGKILLed mid-run (nothing of it runs to stop its
+// children) leaves no node running a second later (the kernel sends each the death signal,
+// PR_SET_PDEATHSIG). Domain id 220.
+TEST(ChildrenDieWithTheLauncher, NoNodeOutlivesASigkilledLauncherByASecond) {
+  tachi::test::ScratchDir out("tachi_launcher_death");
+  ChildProcess launcher({kBin + "/tachi", "run", "--recording", kRecordings + "/straight_cut", "--grid", "32", "--domain", "220",
+                         "--out", out.path().string(), "--headless"});
+  std::vector<std::pair<std::string, pid_t>> nodes;
+  // The sensor starts last: once it is logged, all four run.
+  for (const std::string node : {"sim", "viewer", "filter", "sensor"}) {
+    const auto pid = started_pid(launcher, "tachi-" + node, 30s);
+    ASSERT_TRUE(pid) << node << " never started:\n" << launcher.err();
+    nodes.emplace_back(node, *pid);
+  }
+  // Mid-stroke, as in the kill test above: every node busy (the hand crosses between ~1.5 and 3.5 s).
+  std::this_thread::sleep_for(2500ms);
+  for (const auto& [node, pid] : nodes) ASSERT_FALSE(gone(pid)) << node << " ended before the launcher was killed";
+  launcher.signal(SIGKILL);
+  const auto killed = std::chrono::steady_clock::now();
+  std::map<std::string, long> took_ms;
+  while (took_ms.size() < nodes.size() && std::chrono::steady_clock::now() - killed < 5s) {
+    for (const auto& [node, pid] : nodes)
+      if (!took_ms.count(node) && gone(pid))
+        took_ms[node] = std::chrono::duration_cast<std::chrono::milliseconds>(std::chrono::steady_clock::now() - killed).count();
+    std::this_thread::sleep_for(5ms);
+  }
+  for (const auto& [node, pid] : nodes) {
+    ASSERT_TRUE(took_ms.count(node)) << "tachi-" << node << " (pid " << pid << ") still runs 5 s after the launcher died";
+    std::printf("tachi-%s gone %ld ms after the launcher's SIGKILL\n", node.c_str(), took_ms[node]);
+    EXPECT_LT(took_ms[node], 1000) << "tachi-" << node;
+  }
+  launcher.wait(5s);
 }

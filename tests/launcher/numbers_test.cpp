@@ -1,0 +1,122 @@
+// `tachi run`'s figures count what their names say, and a mistake in its flags is named before any
+// node starts. Through the user's path: the real launcher and nodes on the bundled recordings.
+// Domain ids 210-219.
+#include "process.hpp"
+#include "scratch_dir.hpp"
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+#include <sys/mount.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <csignal>
+#include <filesystem>
+#include <fstream>
+#include <set>
+#include <sstream>
+#include <thread>
+
+using namespace std::chrono_literals;
+using tachi::test::ChildProcess;
+namespace fs = std::filesystem;
+
+namespace {
+const std::string kBin = TACHI_BIN_DIR;
+const std::string kRecordings = TACHI_RECORDINGS_DIR;
+const std::string kSource = TACHI_SOURCE_DIR;
+
+std::vector<std::string> run_args(const std::string& recording, unsigned domain, const fs::path& out,
+                                  std::vector<std::string> extra = {}) {
+  std::vector<std::string> args{kBin + "/tachi", "run",   "--recording", recording, "--domain", std::to_string(domain),
+                                "--out",         out.string(), "--headless", "--settle",  "1.5"};
+  args.insert(args.end(), extra.begin(), extra.end());
+  return args;
+}
+
+nlohmann::json read_json(const fs::path& path) {
+  std::ifstream in(path);
+  return in ? nlohmann::json::parse(in, nullptr, false) : nlohmann::json();
+}
+
+std::string read_text(const fs::path& path) {
+  std::ifstream in(path);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+std::string logs(const fs::path& out) {
+  std::string text;
+  for (const char* node : {"sensor", "filter", "sim", "viewer", "plot"})
+    text += std::string("--- ") + node + ".log\n" + read_text(out / (std::string(node) + ".log"));
+  return text;
+}
+
+// A copy of a bundled recording that stops after its first `frames` depth frames (the files are linked).
+fs::path truncated_recording(const std::string& name, std::size_t frames, const fs::path& dir) {
+  const fs::path from = fs::path(kRecordings) / name;
+  fs::create_directories(dir);
+  std::ifstream in(from / "INDEX.txt");
+  std::ofstream index(dir / "INDEX.txt");
+  std::size_t depth = 0;
+  for (std::string line; std::getline(in, line);) {
+    if (line.starts_with("d-") && ++depth > frames) break;
+    index << line << '\n';
+    fs::create_symlink(from / line, dir / line);
+  }
+  for (const auto& entry : fs::directory_iterator(from))
+    if (entry.path().extension() != ".pgm" && entry.path().extension() != ".dump" && entry.path().filename() != "INDEX.txt")
+      fs::create_symlink(entry.path(), dir / entry.path().filename());
+  return dir;
+}
+
+}  // namespace
+
+// A --set typo used to be found by the simulator 7.6 s into the run, which then printed a zeroed
+// headline as if it had run.
+TEST(TachiRunPreflight, ANodeFlagTypoIsNamedBeforeAnyNodeStarts) {
+  tachi::test::ScratchDir out("numbers_typo");
+  const auto r = tachi::test::run(
+      run_args(kRecordings + "/top_edge", 210, out.path(), {"--set", "sim.materal=denim"}), 60s);
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("--set sim.materal=denim"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("tachi-sim"), std::string::npos) << "the node's own reason: " << r.err;
+  EXPECT_EQ(r.out, "") << "no headline: nothing ran";
+  for (const char* log : {"sim.log", "sensor.log", "viewer.log", "filter.log"}) EXPECT_FALSE(fs::exists(out / log)) << log;
+}
+
+TEST(TachiRunPreflight, AnOutUnderAFileIsNamed) {
+  tachi::test::ScratchDir dir("numbers_out_file");
+  std::ofstream(dir / "a_file") << "x";
+  const auto r = tachi::test::run(run_args(kRecordings + "/top_edge", 211, dir / "a_file" / "run"), 60s);
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_NE(r.err.find("tachi run: --out " + (dir / "a_file" / "run").string()), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("is a file"), std::string::npos) << r.err;
+  EXPECT_EQ(r.err.find("filesystem error"), std::string::npos) << "no raw exception: " << r.err;
+  EXPECT_EQ(r.out, "");
+}
+
+// A folder without room for the run's outputs (a 256 KB tmpfs: the video alone needs more) is refused
+// before the run, naming --out; without root (no mount), an unwritable folder is. (Every other run here
+// passes the same check on the temp folder.)
+TEST(TachiRunPreflight, AnOutWithoutRoomOrWritePermissionIsRefused) {
+  tachi::test::ScratchDir dir("numbers_out_full");
+  const fs::path small = dir / "small";
+  fs::create_directories(small);
+  if (::geteuid() == 0) {
+    if (::mount("tmpfs", small.c_str(), "tmpfs", 0, "size=256k") != 0) GTEST_SKIP() << "mount not permitted here";
+    const auto r = tachi::test::run(run_args(kRecordings + "/top_edge", 212, small / "run"), 60s);
+    ::umount2(small.c_str(), MNT_DETACH);
+    EXPECT_EQ(r.exit_code, 1) << r.err;
+    EXPECT_NE(r.err.find("tachi run: --out " + (small / "run").string()), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("free"), std::string::npos) << r.err;
+    EXPECT_EQ(r.out, "");
+  } else {
+    fs::permissions(small, fs::perms::owner_read | fs::perms::owner_exec);
+    const auto r = tachi::test::run(run_args(kRecordings + "/top_edge", 212, small / "run"), 60s);
+    fs::permissions(small, fs::perms::owner_all);
+    EXPECT_EQ(r.exit_code, 1) << r.err;
+    EXPECT_NE(r.err.find("tachi run: --out"), std::string::npos) << r.err;
+  }
+}

@@ -120,3 +120,47 @@ TEST(TachiRunPreflight, AnOutWithoutRoomOrWritePermissionIsRefused) {
     EXPECT_NE(r.err.find("tachi run: --out"), std::string::npos) << r.err;
   }
 }
+
+// The recording ends while the hand is still cutting: the stroke never closes, yet it cut the cloth.
+TEST(TachiRunNumbers, AStrokeStillOpenAtTheEndCountsAsACut) {
+  tachi::test::ScratchDir dir("numbers_open_stroke");
+  // straight_cut's stroke cuts from frame ~23 to ~121: stop at 80.
+  const auto recording = truncated_recording("straight_cut", 80, dir / "rec");
+  const auto r = tachi::test::run(run_args(recording.string(), 214, dir / "run"), 150s);
+  ASSERT_EQ(r.exit_code, 0) << r.err << logs(dir / "run");
+  const auto s = read_json(dir / "run" / "summary.json");
+  EXPECT_GT(s["cut_length_m"].get<double>(), 0.1) << s.dump();
+  EXPECT_EQ(s["cuts"], 1) << s.dump();
+  EXPECT_EQ(s["strokes"], 1) << s.dump();
+}
+
+// A simulator killed in the run's last second: the restarted one replays its journal, settles and
+// ends the run (not a 20 s timeout), and the summary counts the run's samples and cut.
+TEST(TachiRunNumbers, ASimulatorKilledAtTheEndEndsTheRunWithATrueSummary) {
+  tachi::test::ScratchDir out("numbers_late_kill");
+  ChildProcess run(run_args(kRecordings + "/straight_cut", 215, out.path()));
+  // The sensor's last line says the recording was played; the simulator settles 1.5 s after it.
+  bool played = false;
+  for (int i = 0; i < 1200 && !played && run.running(); ++i) {
+    played = read_text(out / "sensor.log").find(" depth frames, hand tracked in ") != std::string::npos;
+    if (!played) std::this_thread::sleep_for(50ms);
+  }
+  ASSERT_TRUE(played) << run.err();
+  const std::string pid_text = [&] {
+    for (const auto& entry : fs::directory_iterator("/proc")) {
+      std::string cmd = read_text(entry.path() / "cmdline");
+      std::replace(cmd.begin(), cmd.end(), '\0', ' ');
+      if (cmd.find("tachi-sim") != std::string::npos && cmd.find("--domain 215 ") != std::string::npos)
+        return entry.path().filename().string();
+    }
+    return std::string();
+  }();
+  ASSERT_FALSE(pid_text.empty());
+  ::kill(std::stoi(pid_text), SIGKILL);
+  ASSERT_EQ(run.wait(120s), 0) << run.err();
+  const auto s = read_json(out / "summary.json");
+  EXPECT_EQ(s["ended"], "recording played, cloth settled") << s.dump();
+  EXPECT_EQ(s["restarts"], 1);
+  EXPECT_EQ(s["hand_samples"], s["frames"]) << s.dump();
+  EXPECT_EQ(s["cuts"], 1) << s.dump();
+}

@@ -121,6 +121,58 @@ TEST(TachiRunPreflight, AnOutWithoutRoomOrWritePermissionIsRefused) {
   }
 }
 
+// top_edge: the hand's first stroke never reaches the cloth, the second cuts it once. The simulator
+// used to count a cut per closed stroke (2); a stroke that cut nothing is no cut.
+TEST(TachiRunNumbers, OneVisibleCutCountsOneAndEverySummaryKeyIsDocumented) {
+  tachi::test::ScratchDir out("numbers_top_edge");
+  const auto r = tachi::test::run(run_args(kRecordings + "/top_edge", 213, out.path()), 150s);
+  ASSERT_EQ(r.exit_code, 0) << r.err << logs(out.path());
+  const auto s = read_json(out / "summary.json");
+  ASSERT_TRUE(s.is_object());
+  EXPECT_EQ(s["cuts"], 1) << "sim.log: " << read_text(out / "sim.log");
+  EXPECT_GT(s["cut_length_m"].get<double>(), 0.3);
+  EXPECT_EQ(s["rejected_inputs"], 0) << "a clean run rejects nothing: " << logs(out.path());
+  // The headline is the summary's.
+  const auto headline = nlohmann::json::parse(r.out.substr(0, r.out.find('\n')), nullptr, false);
+  ASSERT_TRUE(headline.is_object()) << r.out;
+  EXPECT_EQ(headline["cuts"], s["cuts"]);
+
+  const std::string docs = read_text(fs::path(kSource) / "docs" / "cli.md");
+  const auto documented = [&](const std::string& word) { return docs.find("`" + word + "`") != std::string::npos; };
+  for (const auto& [key, value] : s.items()) {
+    bool found = documented(key);
+    for (const char* stage : {"sensor", "filter", "sim", "viewer"})
+      for (const char* p : {"_p50_ms", "_p99_ms"})
+        if (key == std::string(stage) + p) found = found || documented(std::string("<stage>") + p);
+    EXPECT_TRUE(found) << "summary.json key `" << key << "` is not documented in docs/cli.md";
+  }
+
+  // latency.png draws the stages' figures the summary has, not other delays under their names.
+  const std::string plot = read_text(out / "plot.log");
+  for (const char* stage : {"sensor", "filter", "sim", "viewer"}) {
+    const std::string key = std::string(stage) + "_p99_ms";
+    if (s[key].is_null()) continue;
+    char expected[96];
+    std::snprintf(expected, sizeof expected, "latency.png: %s p50 %.1f ms p99 %.1f ms", stage,
+                  s[std::string(stage) + "_p50_ms"].get<double>(), s[key].get<double>());
+    EXPECT_NE(plot.find(expected), std::string::npos) << expected << " in plot.log:\n" << plot;
+  }
+  // pattern.svg: one path per piece, every subpath of it closed (the rim, and a hole's rim), no loose segments.
+  const std::string svg = read_text(out / "pattern.svg");
+  std::size_t paths = 0;
+  for (auto at = svg.find("id=\"piece_"); at != std::string::npos; at = svg.find("id=\"piece_", at + 1), ++paths) {
+    const auto d = svg.find(" d=\"", at) + 4;
+    const std::string path = svg.substr(d, svg.find('"', d) - d);
+    const auto moves = std::count(path.begin(), path.end(), 'M');
+    EXPECT_GE(moves, 1);
+    EXPECT_LE(moves, 3) << "the rim and at most a hole or two, not loose segments";
+    EXPECT_EQ(std::count(path.begin(), path.end(), 'Z'), moves) << "every outline closed";
+  }
+  EXPECT_EQ(paths, s["pieces"].get<std::size_t>());
+  // The viewer's `p` snapshots go to --out.
+  EXPECT_NE(read_text(out / "viewer.log").find("--snapshot-dir " + out.path().string()), std::string::npos);
+}
+
 // The recording ends while the hand is still cutting: the stroke never closes, yet it cut the cloth.
 TEST(TachiRunNumbers, AStrokeStillOpenAtTheEndCountsAsACut) {
   tachi::test::ScratchDir dir("numbers_open_stroke");

@@ -2,6 +2,7 @@
 // run's outputs in a folder; `tachi topics|echo|hz|bw|status` show what is on a domain's bus and
 // `tachi record|play` record it into MCAP and publish it again (docs/cli.md "tachi").
 #include "src/bus_adapter.hpp"
+#include "src/preflight.hpp"
 #include "src/record.hpp"
 #include "src/run.hpp"
 #include "tachi/bus/discovery.hpp"
@@ -118,6 +119,13 @@ int cmd_run(const CLI::App& run, const RunFlags& f, const fs::path& bin_dir) {
     return launcher::kRunUsage;
   }
   if (!config.recording.empty()) config.recording = fs::absolute(config.recording).string();
+  // Before any node starts: a mistake is named now, and no headline follows that could pass for a run.
+  auto error = launcher::check_out_folder(config, launcher::estimate_output_bytes(config));
+  if (!error) error = launcher::check_node_flags(config, bin_dir);
+  if (error) {
+    std::cerr << "tachi run: " << error->message << '\n';
+    return error->exit_code;
+  }
   tachi::common::install_stop_handlers();
   // The run id names the DDS partition of every node of this run (bus/run_partition.hpp), passed down in
   // the environment. A whole pipeline gets a fresh one; one split over launchers (--nodes) shares the

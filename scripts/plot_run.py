@@ -1,11 +1,12 @@
 #!/usr/bin/env python3
 """Plots of one `tachi run` (called by the launcher after the run; usage: plot_run.py OUT_DIR).
 
-latency.png: histogram per stage and end to end. Hand samples and strokes: capture of the depth frame
--> the sample's arrival at the launcher (OUT_DIR/trace/*.csv). End to end: capture -> the simulator's
-publication of the cloth state reflecting it, per depth frame, as the simulator measured it
-(summary.json `latency_ms`; exact on one host). The viewer's capture -> rendered image figures come from
-its heartbeat (summary.json `viewer_p50_ms`, `viewer_p99_ms`): drawn as lines.
+latency.png: left, each stage's delay from the capture of the depth frame to that stage's output, p50
+and p99 as the stage itself measured it (summary.json `<stage>_p50_ms`, `<stage>_p99_ms`: the same figures,
+printed to stdout as `latency.png: <stage> p50 X ms p99 Y ms`); right, the end-to-end histogram: capture ->
+the simulator's publication of the cloth state reflecting it, per depth frame (summary.json `latency_ms`).
+The hand samples' arrival at the launcher (trace/*.csv) is no stage of the pipeline (it includes the
+launcher's own scheduling) and is not drawn as one.
 trajectory.png: raw hand (mapped onto the cloth the way the filter's default mirror mapping does),
 smoothed hand (the filter's strokes) and the simulator's cut line, over the cloth's outline.
 """
@@ -27,15 +28,6 @@ def read_csv(path):
         return list(csv.DictReader(f))
 
 
-def delays_ms(rows, start, end):
-    out = []
-    for r in rows:
-        a, b = int(r[start]), int(r[end])
-        if a > 0 and b >= a:
-            out.append((b - a) * 1e-6)
-    return out
-
-
 def main(out_dir):
     trace = os.path.join(out_dir, "trace")
     hands = read_csv(os.path.join(trace, "hands.csv"))
@@ -45,25 +37,32 @@ def main(out_dir):
     config_path = os.path.join(out_dir, "config.json")
     config = json.load(open(config_path)) if os.path.exists(config_path) else {}
 
-    series = [
-        ("sensor -> launcher (raw hand)", delays_ms(hands, "acquired_ns", "received_ns")),
-        ("filter -> launcher (stroke)", delays_ms(strokes, "acquired_ns", "received_ns")),
-        ("end to end: capture -> cloth state published", list(summary.get("latency_ms") or [])),
-    ]
-    fig, ax = plt.subplots(figsize=(8, 5))
-    for label, values in series:
-        if values:
-            values.sort()
-            p50 = values[len(values) // 2]
-            p99 = values[min(len(values) - 1, int(0.99 * len(values)))]
-            ax.hist(values, bins=40, alpha=0.5, label=f"{label}: n {len(values)}, p50 {p50:.2f} ms, p99 {p99:.2f} ms")
-    for key, style in (("viewer_p50_ms", "--"), ("viewer_p99_ms", ":")):
-        if summary.get(key) is not None:
-            ax.axvline(summary[key], color="k", linestyle=style, label=f"viewer capture -> image {key[7:10]}: {summary[key]:.1f} ms")
+    stages = []
+    for stage in ("sensor", "filter", "sim", "viewer"):
+        p50, p99 = summary.get(f"{stage}_p50_ms"), summary.get(f"{stage}_p99_ms")
+        if p50 is not None and p99 is not None:
+            stages.append((stage, float(p50), float(p99)))
+            print(f"latency.png: {stage} p50 {float(p50):.1f} ms p99 {float(p99):.1f} ms")
+    fig, (ax_stages, ax) = plt.subplots(1, 2, figsize=(12, 5))
+    if stages:
+        xs = range(len(stages))
+        ax_stages.bar([x - 0.2 for x in xs], [p50 for _, p50, _ in stages], width=0.4, label="p50")
+        ax_stages.bar([x + 0.2 for x in xs], [p99 for _, _, p99 in stages], width=0.4, label="p99")
+        ax_stages.set_xticks(list(xs))
+        ax_stages.set_xticklabels([name for name, _, _ in stages])
+        ax_stages.legend(fontsize=8)
+    ax_stages.set_ylabel("capture -> the stage's output (ms)")
+    ax_stages.set_title("per stage (summary.json <stage>_p50_ms / _p99_ms)")
+    e2e = sorted(summary.get("latency_ms") or [])
+    if e2e:
+        p50 = e2e[len(e2e) // 2]
+        p99 = e2e[min(len(e2e) - 1, int(0.99 * len(e2e)))]
+        ax.hist(e2e, bins=40, alpha=0.6, label=f"capture -> cloth state published: n {len(e2e)}, p50 {p50:.2f} ms, p99 {p99:.2f} ms")
+        ax.legend(fontsize=8)
     ax.set_xlabel("delay since the depth frame reached tachi-sensor (ms)")
-    ax.set_ylabel("samples")
-    ax.set_title("tachi run: latency per stage")
-    ax.legend(fontsize=8)
+    ax.set_ylabel("depth frames")
+    ax.set_title("end to end (the simulator's last 1024 frames)")
+    fig.suptitle("tachi run: latency")
     fig.tight_layout()
     fig.savefig(os.path.join(out_dir, "latency.png"), dpi=100)
     plt.close(fig)

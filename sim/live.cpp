@@ -74,10 +74,12 @@ int run_live(const OfflineOptions& shared, std::optional<int> max_steps, const L
   // No lost cuts: replay what a previous run of this journal applied, then append to it.
   std::optional<Journal> journal;
   std::map<std::pair<std::uint32_t, std::uint64_t>, std::int64_t> replayed;
+  std::uint64_t replayed_samples = 0;  // hand samples a previous run of this journal applied
   if (!live.journal.empty()) {
     const auto t0 = Clock::now();
     journal.emplace(live.journal, journal_fingerprint(options));
     replayed = replay(journal->recovered(), session);
+    for (const auto& record : journal->recovered()) replayed_samples += record.kind == JournalRecord::Kind::Hand ? 1 : 0;
     (void)session.take_cut_reports();  // the previous run reported them
     (void)session.take_topology_change();  // published whole below
     spdlog::info("tachi-sim: replayed {} journal records ({} steps, {} cut particles) from {} in {:.0f} ms",
@@ -124,7 +126,7 @@ int run_live(const OfflineOptions& shared, std::optional<int> max_steps, const L
   const auto start = Clock::now();
   auto next_step = start;
   auto last_hand = start;
-  std::uint64_t samples_in = 0, messages_out = 1, overruns = 0, cuts = 0, grabs_refused = 0;
+  std::uint64_t samples_in = 0, messages_out = 1, overruns = 0, grabs_refused = 0;
   double cut_length_m = 0.0;
   bool had_filter = false;
   // A stroke whose publisher went away stays open this long for it to come back: a filter restarted
@@ -176,7 +178,6 @@ int run_live(const OfflineOptions& shared, std::optional<int> max_steps, const L
     for (const auto& report : session.take_cut_reports()) {
       cut_writer.write(cut_msg(live.cloth_id, session.cloth().topology_version, report, cut_line, session_id));
       ++messages_out;
-      ++cuts;
       spdlog::info("tachi-sim: stroke {} cut {} particles over {:.3f} m; {} pieces, {} falling", report.stroke_id,
                    report.stroke.particles_duplicated, report.stroke.cut_length_m, report.pieces, report.fallen_pieces);
       heartbeat.set_metric("pieces", static_cast<double>(report.pieces));
@@ -285,15 +286,18 @@ int run_live(const OfflineOptions& shared, std::optional<int> max_steps, const L
         if (pending_latency_ns > 0) latency.add_since(pending_latency_ns, published_ns);
         pending_latency_ns = 0;
       }
-      heartbeat.set_metric("cuts", static_cast<double>(cuts));
+      heartbeat.set_metric("cuts", static_cast<double>(session.cuts()));  // strokes that cut, the open one included
       heartbeat.set_metric("cut_length_m", cut_length_m);
       heartbeat.set_metric("steps", static_cast<double>(session.steps()));
+      // Degraded says why: the solver fell behind real time.
       heartbeat.update(overruns > 0 ? tachi_msg_NODE_DEGRADED : tachi_msg_NODE_RUNNING, samples_in, messages_out,
-                       "steps " + std::to_string(session.steps()));
+                       (overruns > 0 ? std::to_string(overruns) + " steps overran their real-time slot; " : std::string()) +
+                           "steps " + std::to_string(session.steps()));
     }
     if (max_steps && session.steps() >= static_cast<std::uint64_t>(*max_steps)) return false;
     if (live.duration_s > 0 && Clock::now() - start > std::chrono::duration<double>(live.duration_s)) return false;
-    if (live.exit_when_idle_s > 0 && samples_in > 0 &&
+    // A simulator restarted late in a run has had its hand samples (the replayed journal): idle counts too.
+    if (live.exit_when_idle_s > 0 && samples_in + replayed_samples > 0 &&
         Clock::now() - last_hand > std::chrono::duration<double>(live.exit_when_idle_s))
       return false;
     return true;
@@ -331,7 +335,7 @@ int run_live(const OfflineOptions& shared, std::optional<int> max_steps, const L
   add_cut_summary(summary, session.cloth(), session.cutter());
   add_session_summary(summary, session);
   add_step_times(summary, step_ms);
-  summary.extra["hand_samples"] = samples_in;
+  summary.extra["hand_samples"] = samples_in + replayed_samples;  // the run's, across restarts
   summary.extra["hand_samples_rejected"] = rejected;
   summary.extra["step_overruns"] = overruns;
   summary.extra["grabs_refused"] = grabs_refused;

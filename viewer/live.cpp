@@ -71,7 +71,10 @@ class Outputs {
     if (!o.video.empty()) video_ = open_video(o.video, o.fps, size);
     video_size_ = size;
   }
-  void frame(const cv::Mat& image) {
+  /// One rendered frame, shown at `now`. The video's time stamps are its frame numbers over --fps, so
+  /// a frame is written as many times as --fps frames fit since the first one: a viewer that renders
+  /// slower than --fps (a busy machine) makes a video that still plays at the speed the run went.
+  void frame(const cv::Mat& image, Clock::time_point now) {
     last_ = image;
     if (!options_.frames_dir.empty()) {
       char name[32];
@@ -79,13 +82,17 @@ class Outputs {
       write_image((std::filesystem::path(options_.frames_dir) / name).string(), image);
     }
     if (video_.isOpened()) {
-      // A video keeps one frame size: a resized window is scaled to it.
-      if (image.size() == video_size_) {
-        video_.write(image);
-      } else {
+      if (!video_start_) video_start_ = now;
+      const double t = std::chrono::duration<double>(now - *video_start_).count();
+      // Frame k shows time k / fps: this image stands for every slot up to now (a frame rendered early,
+      // before its slot, waits for the next call rather than running the video ahead).
+      const auto due = static_cast<std::uint64_t>(std::floor(t * options_.fps + 1e-6)) + 1;
+      if (due > video_frames_) {
+        // A video keeps one frame size: a resized window is scaled to it.
         cv::Mat scaled;
-        cv::resize(image, scaled, video_size_, 0, 0, cv::INTER_AREA);
-        video_.write(scaled);
+        if (image.size() != video_size_) cv::resize(image, scaled, video_size_, 0, 0, cv::INTER_AREA);
+        const cv::Mat& written = scaled.empty() ? image : scaled;
+        for (; video_frames_ < due; ++video_frames_) video_.write(written);
       }
     }
     ++frames_;
@@ -101,7 +108,8 @@ class Outputs {
     if (!options_.snapshot.empty()) write_image(options_.snapshot, last);
     if (video_.isOpened()) {
       video_.release();
-      spdlog::info("tachi-viewer: {} frames written to {}", frames_, options_.video);
+      spdlog::info("tachi-viewer: {} frames rendered, {} video frames at {} fps written to {}", frames_, video_frames_,
+                   options_.fps, options_.video);
     }
   }
   bool any() const { return !options_.snapshot.empty() || !options_.frames_dir.empty() || !options_.video.empty(); }
@@ -112,6 +120,8 @@ class Outputs {
   cv::Size video_size_;
   cv::Mat last_;
   std::uint64_t frames_ = 0;
+  std::optional<Clock::time_point> video_start_;
+  std::uint64_t video_frames_ = 0;
   unsigned snapshots_ = 0;
 };
 
@@ -388,8 +398,10 @@ int run_live(const ViewerOptions& o) {
         last_warning = now;
       }
     }
+    // Degraded says why (the warning); running says what it waits for, if anything.
     heartbeat.update(warning.empty() ? tachi_msg_NODE_RUNNING : tachi_msg_NODE_DEGRADED, messages_in,
-                     messages_out + stats.frames(), state.has_cloth() ? "" : "waiting for the cloth");
+                     messages_out + stats.frames(),
+                     !warning.empty() ? warning : state.has_cloth() ? "" : "waiting for the cloth");
 
     if (now >= next_frame) {
       next_frame += frame_period;
@@ -409,11 +421,11 @@ int run_live(const ViewerOptions& o) {
       state.advance(seconds(now));
       Scene& scene = state.scene();
       if (!scene.hud) scene.hud.emplace();
-      fill_hud(*scene.hud, state, stats, age_ms, mouse.label().empty() ? sim_blade : sim_blade + " " + mouse.label(),
+      fill_hud(*scene.hud, state, stats, stats.latest_age_ms(), mouse.label().empty() ? sim_blade : sim_blade + " " + mouse.label(),
                heartbeat.rejected(), warning);
       scene.blade = mouse.cursor();
       image = render(scene, view);
-      outputs.frame(image);
+      outputs.frame(image, now);
       if (window) window->show(image);
       heartbeat.set_metric("fps", stats.fps());
       heartbeat.set_metric("frames", static_cast<double>(stats.frames()));
@@ -473,7 +485,7 @@ int run_mesh(const ViewerOptions& o) {
     view.width = now_size.width;
     view.height = now_size.height;
     image = render(scene, view);
-    outputs.frame(image);
+    outputs.frame(image, Clock::now());
     window.show(image);
     const int key = window.poll(static_cast<int>(1000.0 / o.fps));
     if (!window.open()) return false;

@@ -88,6 +88,9 @@ int parse(CLI::App& app, int argc, char** argv) {
     std::cerr << app.get_name() << ": " << *bad << '\n';
     return kExitUsage;
   }
+  // `tachi run` checks every node's command line before it starts any node: the flags parse (exit 0)
+  // or the one line naming the bad flag comes now (exit 2), not seconds into a run.
+  if (const char* check = std::getenv(kCheckFlagsEnv); check != nullptr && *check != '\0') return kExitOk;
   return -1;
 }
 

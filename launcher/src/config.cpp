@@ -227,7 +227,8 @@ std::vector<ChildSpec> plan(const RunConfig& c) {
       child.finite = recording;
     } else if (node == "viewer") {
       if (c.headless) a.push_back("--headless");
-      a.insert(a.end(), {"--snapshot", (out / "final.png").string()});
+      // The `p` key's snapshots join the run's other outputs, not the folder tachi was started in.
+      a.insert(a.end(), {"--snapshot", (out / "final.png").string(), "--snapshot-dir", out.string()});
       if (!c.video.empty()) a.insert(a.end(), {"--video", (out / c.video).string()});
       if (c.mouse) a.push_back("--mouse");
       // The simulator publishes states until it ends: a second without one means it has.

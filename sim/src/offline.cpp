@@ -347,8 +347,12 @@ void write_pattern_svg(const Cloth& cloth, const StrokeCutter& cutter, const std
                 width + 2 * kMargin, height + 2 * kMargin, -kMargin, -kMargin, width + 2 * kMargin,
                 height + 2 * kMargin);
   out << buffer << "<!-- tachi pattern: piece outlines in rest coordinates (mm) and the cut paths -->\n";
-  // A piece's outline: its mesh edges that border one live triangle only.
+  // A piece's outline: its mesh edges that border one live triangle only, as that triangle's half-edges
+  // (a -> b in its winding). Each boundary vertex of a manifold mesh has as many boundary half-edges
+  // leaving as arriving, so following them from any one returns to it: one closed subpath per loop (the
+  // piece's rim, and one per hole), which cutters and Inkscape can fill (even-odd) and offset.
   std::map<std::pair<std::uint32_t, std::uint32_t>, int> edges;
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> half_edges;
   for (std::size_t t = 0; t < cloth.triangle_count(); ++t) {
     if (cloth.triangle_alive[t] == 0) continue;
     const auto& tri = cloth.triangles[t];
@@ -356,22 +360,41 @@ void write_pattern_svg(const Cloth& cloth, const StrokeCutter& cutter, const std
       const std::uint32_t a = tri[i];
       const std::uint32_t b = tri[(i + 1) % 3];
       ++edges[{std::min(a, b), std::max(a, b)}];
+      half_edges.emplace_back(a, b);
     }
   }
+  std::map<std::uint32_t, std::vector<std::uint32_t>> leaving;  // boundary half-edges a -> b, by a
+  for (const auto& [a, b] : half_edges)
+    if (edges[{std::min(a, b), std::max(a, b)}] == 1) leaving[a].push_back(b);
   const Pieces pieces = find_pieces(cloth);
   std::vector<std::string> outline(pieces.count());
   const auto point = [&](const Eigen::Vector2f& uv) {
     std::snprintf(buffer, sizeof buffer, "%.2f %.2f", uv.x() * mm_u, uv.y() * mm_v);
     return std::string{buffer};
   };
-  for (const auto& [edge, count] : edges) {
-    if (count != 1) continue;
-    outline[pieces.piece_of[edge.first]] +=
-        "M" + point(cloth.rest_uv[edge.first]) + " L" + point(cloth.rest_uv[edge.second]) + " ";
+  for (auto& [first, next] : leaving) {
+    while (!next.empty()) {
+      std::string loop = "M" + point(cloth.rest_uv[first]);
+      std::uint32_t at = first;
+      bool closed = false;
+      while (true) {
+        auto& out_edges = leaving[at];
+        if (out_edges.empty()) break;  // not manifold here: the chain ends open
+        const std::uint32_t to = out_edges.back();
+        out_edges.pop_back();
+        if (to == first) {
+          closed = true;
+          break;
+        }
+        loop += " L" + point(cloth.rest_uv[to]);
+        at = to;
+      }
+      outline[pieces.piece_of[first]] += loop + (closed ? " Z " : " ");
+    }
   }
   for (std::size_t piece = 0; piece < outline.size(); ++piece) {
     if (outline[piece].empty()) continue;
-    out << "<path id=\"piece_" << piece << "\" fill=\"none\" stroke=\"black\" stroke-width=\"0.5\" d=\""
+    out << "<path id=\"piece_" << piece << "\" fill=\"none\" fill-rule=\"evenodd\" stroke=\"black\" stroke-width=\"0.5\" d=\""
         << outline[piece] << "\"/>\n";
   }
   for (const auto& path : cutter.paths()) {
@@ -464,6 +487,9 @@ void add_session_summary(Summary& summary, const Session& session) {
   summary.extra["blade_max_contact_force_n"] = session.max_contact_force_n();
   summary.extra["solver"] = std::string{to_string(session.solver_kind())};
   summary.extra["object_points"] = session.object() ? session.object()->points().size() : 0U;
+  // Counted where the cuts are made: a stroke that cut nothing is no cut, one still open at the end is.
+  summary.extra["strokes"] = session.strokes();
+  summary.extra["cuts"] = session.cuts();
   const Cloth& cloth = session.cloth();
   float lowest = std::numeric_limits<float>::infinity();
   for (std::size_t i = 0; i < cloth.particle_count(); ++i) lowest = std::min(lowest, cloth.position[i].y());

@@ -55,11 +55,20 @@ void Session::absorb(const TopologyChange& change) {
   }
 }
 
+namespace {
+bool cut_something(const StrokeReport& report) { return report.particles_duplicated > 0 || report.cut_length_m > 0.0F; }
+}  // namespace
+
+std::uint64_t Session::cuts() const {
+  return closed_cuts_ + (stroke_active_ && cut_something(cutter_.report()) ? 1 : 0);
+}
+
 void Session::close_stroke() {
   if (!stroke_active_) return;
   stroke_active_ = false;
   approach_.reset();
   absorb(cutter_.end_stroke());
+  if (cut_something(cutter_.report())) ++closed_cuts_;
   const Pieces pieces = find_pieces(cloth_);
   reports_.push_back(
       {stroke_id_, cutter_.report(), pieces.count(), pieces.fallen(), stroke_sensor_, blade_.max_force_n(), blade_.drag_m()});
@@ -129,6 +138,7 @@ void Session::on_hand(const HandInput& hand) {
     stroke_sensor_ = hand.sensor_id;
     stroke_session_ = hand.session_id;
     stroke_active_ = true;
+    ++strokes_;
     absorb(cutter_.begin_stroke());
   }
   const StrokeSample sample{hand.time_s, hand.position_m};

@@ -28,6 +28,10 @@ xdotool mousemove --window "$window" $((WIDTH / 20)) $y mousedown 1
 for i in $(seq 1 30); do xdotool mousemove --window "$window" $((WIDTH / 20 + WIDTH * 9 * i / 300)) $y; sleep 0.03; done
 xdotool mouseup 1
 sleep 1.5
+# `p` saves a snapshot into the run's --out (not the folder tachi was started in): wait for it.
+xdotool key --window "$window" p
+for i in $(seq 1 100); do [ -e "$work/run/tachi_snapshot_1.png" ] && break; sleep 0.05; done
+[ -e "$work/run/tachi_snapshot_1.png" ] || fail "p saved no snapshot into --out: $(ls "$work/run")"
 xdotool key --window "$window" q
 wait "$run"; status=$?
 pids=()
@@ -40,6 +44,7 @@ import json, sys
 s = json.load(open(sys.argv[1]))
 assert s["ended"] == "viewer window closed", s["ended"]
 assert s["cuts"] >= 1, "the mouse drag cut the cloth"
+assert s["strokes"] >= s["cuts"], ("the mouse blade's strokes count as strokes", s["strokes"], s["cuts"])
 assert s["cut_particles"] > 3, s["cut_particles"]
 PY
 echo "tachi run --mouse: $(python3 -c "import json;s=json.load(open('$work/run/summary.json'));print(s['cuts'],'cut(s),',s['cut_particles'],'particles,',s['pieces'],'pieces')")"

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <chrono>
 #include <filesystem>
 #include <fstream>
@@ -123,6 +124,14 @@ TEST_F(CutCli, ExactModeFollowsTheStrokeAndExportsPiecesAndThePattern) {
     ++pieces;
   }
   EXPECT_EQ(pieces, 2U);
+  // Each piece is one closed outline (one subpath, "M ... Z"), not loose two-point segments: a cutter or
+  // Inkscape fills and offsets it.
+  for (std::size_t at = pattern.find("id=\"piece_"); at != std::string::npos; at = pattern.find("id=\"piece_", at + 1)) {
+    const auto d = pattern.find(" d=\"", at) + 4;
+    const std::string path = pattern.substr(d, pattern.find('"', d) - d);
+    EXPECT_EQ(std::count(path.begin(), path.end(), 'M'), 1) << path.substr(0, 200);
+    EXPECT_EQ(std::count(path.begin(), path.end(), 'Z'), 1) << path.substr(0, 200);
+  }
   EXPECT_NE(pattern.find("class=\"cut\""), std::string::npos);
   EXPECT_NE(pattern.find("1000.00 "), std::string::npos);
 }

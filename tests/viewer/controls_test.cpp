@@ -109,3 +109,16 @@ TEST(FrameStats, CountsFramesPerSecondAndQuantilesOfTheStateAge) {
   EXPECT_DOUBLE_EQ(*stats.age_ms(0.5), 10.0);
   EXPECT_DOUBLE_EQ(*stats.age_ms(1.0), 100.0);
 }
+
+// The HUD's "state age" is the newest hand sample's capture -> picture delay, measured when it was first
+// shown; while the hand rests (frames with no new sample) it holds, instead of climbing to 30 s.
+TEST(FrameStats, TheHudsStateAgeHoldsWhileNoNewSampleComes) {
+  FrameStats stats;
+  EXPECT_FALSE(stats.latest_age_ms());
+  const auto t0 = std::chrono::steady_clock::now();
+  stats.frame(t0, 12.0);
+  stats.frame(t0 + std::chrono::milliseconds(33), 15.0);
+  for (int i = 2; i < 900; ++i) stats.frame(t0 + std::chrono::milliseconds(33 * i), std::nullopt);  // 30 s idle
+  ASSERT_TRUE(stats.latest_age_ms());
+  EXPECT_DOUBLE_EQ(*stats.latest_age_ms(), 15.0);
+}

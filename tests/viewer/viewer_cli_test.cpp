@@ -263,3 +263,27 @@ TEST(ViewerCli, FollowsASimulatorRestart) {
   second.signal(SIGINT);
   EXPECT_EQ(second.wait(10s), 0);
 }
+
+// The video's time stamps follow the frames' real times: a viewer that renders fewer frames a second
+// than --fps (here 120 at 400 px: ~12 a second on a 2-core machine under a parallel build) still writes a video as long as it ran, instead of
+// one that plays fast (the 30 fps video of a viewer rendering ~21 played 1.4x too fast). Domain 216.
+TEST(ViewerCli, TheVideoLastsAsLongAsTheViewerRan) {
+  const tachi::test::ScratchDir dir{"viewer_video_time"};
+  const auto video = (dir / "run.mp4").string();
+  const auto started = std::chrono::steady_clock::now();
+  const auto r = tachi::test::run({kViewer, "--headless", "--domain", "216", "--video", video, "--size", "400", "--fps", "120",
+                                   "--duration", "2"},
+                                  60s);
+  const double ran_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  cv::VideoCapture capture(video);
+  ASSERT_TRUE(capture.isOpened()) << video;
+  int frames = 0;
+  for (cv::Mat frame; capture.read(frame);) ++frames;
+  const double fps = capture.get(cv::CAP_PROP_FPS);
+  ASSERT_GT(fps, 0.0);
+  // --duration 2: the video covers the 2 s (its last frame is drawn at most a frame's rendering before
+  // the viewer stops), and no more than the process ran (writing may make a loaded viewer overrun 2 s).
+  EXPECT_GT(frames / fps, 1.75) << frames << " frames at " << fps << " fps\n" << r.err;
+  EXPECT_LT(frames / fps, ran_s) << frames << " frames at " << fps << " fps\n" << r.err;
+}

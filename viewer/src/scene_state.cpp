@@ -132,6 +132,12 @@ std::optional<Rejection> SceneState::on_state(StateUpdate update) {
     adopt(std::move(*candidate_));
   if (has_topology_) {
     if (update.session_id != session_id_) return reject(Rejection::StaleSession);
+    // A state of a topology a cut has already replaced (it was queued behind the cut's delta) is
+    // outdated, not bad input: it is dropped without counting as a rejection.
+    if (update.topology_version < scene_.mesh.topology_version) {
+      ++outdated_states_;
+      return std::nullopt;
+    }
     // Fewer positions than the shown triangles index would blank part of the cloth; the same version
     // must have exactly its particle count. (More positions: a newer topology is on its way.)
     if (update.positions.size() < particles_ ||

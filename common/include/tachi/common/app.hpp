@@ -35,7 +35,11 @@ void add_bus_flags(CLI::App& app, BusOptions& options);
 
 /// Routes spdlog's default logger to stderr under the program's name, then parses argv. Returns an exit code when the process should stop now (help printed: 0;
 /// bad flag: one line "<program>: <flag>: <reason>" on stderr, kExitUsage), else -1.
+/// With the environment variable kCheckFlagsEnv set, a command line that parses returns kExitOk
+/// at once: the process only checks its flags (tachi run's preflight).
 int parse(CLI::App& app, int argc, char** argv);
+/// Set (to anything non-empty) when a process should check its flags and exit (see parse()).
+inline constexpr const char* kCheckFlagsEnv = "TACHI_CHECK_FLAGS";
 
 /// Sets spdlog's level from a name (trace, debug, info, warn, error, critical, off).
 void set_log_level(const std::string& level);

@@ -108,6 +108,12 @@ class Session {
   /// The particle the hand holds (grab), if any.
   [[nodiscard]] std::optional<std::uint32_t> held_particle() const { return grab_.held(); }
   [[nodiscard]] std::uint64_t steps() const { return steps_; }
+  /// Strokes the cloth received (opened by a cutting sample), whatever their source: the hand's
+  /// filter or the viewer's mouse blade.
+  [[nodiscard]] std::uint64_t strokes() const { return strokes_; }
+  /// Strokes that cut the cloth (split particles or cut length), the stroke still open included: a
+  /// stroke whose blade never reached the cloth is no cut.
+  [[nodiscard]] std::uint64_t cuts() const;
   [[nodiscard]] double time_s() const { return static_cast<double>(steps_) * solver_.dt(); }
 
  private:
@@ -141,6 +147,8 @@ class Session {
   std::optional<TopologyChange> pending_;
   std::vector<CutReport> reports_;
   std::uint64_t steps_ = 0;
+  std::uint64_t strokes_ = 0;
+  std::uint64_t closed_cuts_ = 0;  ///< closed strokes that cut
 };
 
 }  // namespace tachi::sim

@@ -22,6 +22,11 @@ class FrameStats {
   [[nodiscard]] std::uint64_t frames() const { return frames_; }
   /// Quantile q (0..1) of the recent state ages, or nothing before the first.
   [[nodiscard]] std::optional<double> age_ms(double q) const;
+  /// The newest hand sample's latency (capture -> its first showing): what the HUD shows. It holds
+  /// while the hand rests; the time since that sample is no delay of the pipeline.
+  [[nodiscard]] std::optional<double> latest_age_ms() const {
+    return ages_.empty() ? std::nullopt : std::optional<double>(ages_.back());
+  }
 
  private:
   std::deque<std::chrono::steady_clock::time_point> recent_;  // frame times of the last second

@@ -84,6 +84,8 @@ class SceneState {
   std::optional<Rejection> on_state(StateUpdate update);
   void on_hand(const HandUpdate& update);
   std::optional<Rejection> on_cut(const CutUpdate& update, double now_s);
+  /// States of a topology that a newer one (a cut's) had already replaced when they came: dropped.
+  [[nodiscard]] std::uint64_t outdated_states() const { return outdated_states_; }
   /// Fades the cut flash; call before drawing a frame.
   void advance(double now_s);
 
@@ -120,6 +122,7 @@ class SceneState {
   std::uint32_t positions_version_ = 0;
   std::uint64_t frame_ = 0;
   std::uint64_t states_received_ = 0;
+  std::uint64_t outdated_states_ = 0;
   std::int64_t acquired_ns_ = 0;
   // The hand mark and the trail: a source that is cutting keeps the mark until its stroke ends.
   std::uint32_t hand_sensor_ = 0;

@@ -30,5 +30,10 @@ target_include_directories(tachi_voice PUBLIC include)
 target_link_libraries(tachi_voice
   PRIVATE tachi_pocketsphinx PkgConfig::FREENECT nlohmann_json::nlohmann_json tachi::common tachi_warnings)
 
-add_executable(tachi-voice voice_main.cpp)
-target_link_libraries(tachi-voice PRIVATE tachi::voice tachi::bus tachi::common spdlog::spdlog tachi_warnings)
+# The stage on the bus (VoiceNode, src/voice_node.cpp) and the thin executable (voice_cli.cpp: flags).
+add_library(tachi_voice_node STATIC src/voice_node.cpp)
+target_include_directories(tachi_voice_node PUBLIC include)
+target_link_libraries(tachi_voice_node PUBLIC tachi_voice
+  PRIVATE tachi_sensor_bus tachi::bus tachi::common spdlog::spdlog tachi_warnings)
+add_executable(tachi-voice voice_main.cpp voice_cli.cpp)
+target_link_libraries(tachi-voice PRIVATE tachi_voice_node tachi::voice tachi::bus tachi::common spdlog::spdlog tachi_warnings)

@@ -45,6 +45,8 @@ constexpr double kPalmHalfLengthM = 0.045;   // the palm spans this either side 
 constexpr double kArmSearchM = 0.25;         // the forearm: the surface that runs on from the hand, this near it
 constexpr double kFrontSurfaceM = 0.02;     // a candidate's front surface (find_arm_end's border test): a palm is flat within ~1 cm
 constexpr double kSurfaceStepM = 0.03;       // a step between grid neighbours on one surface (as reaches_back)
+/// walk_surface: what to do with a neighbouring cell on the surface.
+enum class Step { kTake, kSkip, kAbort };
 constexpr int kMinArmCells = 3;              // fewer: which end is the wrist is not known, no estimate
 constexpr int kMinBorderReadings = 5;        // a hand leaving the image: this many readings at its border
 constexpr double kMinPalmShare = 0.55;       // of the palm stretch's flat readings, within the palm placed
@@ -214,6 +216,9 @@ struct HandFinder::Impl {
   bool measure_in_band(std::span<const std::uint16_t> raw, const cv::Rect& cells, std::uint16_t near_raw, std::uint16_t far_raw,
                        cv::Point seed_cell, Palm& palm, int grow);
   int touched = 0;
+  template <class OnCell, class OnStep>
+  bool walk_surface(cv::Point seed, OnCell&& on_cell, OnStep&& on_step);
+  static std::size_t grid_index(cv::Point p) { return static_cast<std::size_t>(p.y) * kGridW + static_cast<std::size_t>(p.x); }
   bool reaches_back(cv::Point seed, std::uint16_t near_raw);
   bool is_joint(cv::Point seed, std::uint16_t near_raw);
   std::vector<cv::Point> slab;  // is_joint's cells 5-10 cm behind the candidate
@@ -891,93 +896,92 @@ bool HandFinder::Impl::make_plane_grid(const Roi& roi, const Plane& plane, Plane
   return true;
 }
 
-/// Whether the surface at grid cell `seed` continues, without a depth jump (steps under
-/// kStepM between grid neighbours), to at least `arm_protrusion_m` behind `near_raw`, and nowhere
-/// nearer: an arm's end reaching out of a body. A head, a torso, a box or a person farther back
-/// has no such depth; the upper arm of a hand out of view has its forearm nearer.
-bool HandFinder::Impl::reaches_back(cv::Point seed, std::uint16_t near_raw) {
-  constexpr float kStepM = 0.03f;
-  const float z0 = model.metres(near_raw);
-  const double protrusion = z0 > params.max_acquire_depth_m ? params.far_arm_protrusion_m : params.arm_protrusion_m;
-  const float goal = z0 + static_cast<float>(protrusion);
+/// Breadth-first walk over the surface at grid cell `seed` on the grid: 8-neighbours with a
+/// reading, less than kSurfaceStepM nearer or farther than the cell they are reached from (one
+/// surface: no depth jump). `on_cell(cell, z)` sees each cell taken, in order, and may end the walk
+/// (returns true: the walk returns true); `on_step(z)` decides for each neighbour: kTake, kSkip, or
+/// kAbort (the walk returns false). Shared by reaches_back and is_joint.
+template <class OnCell, class OnStep>
+bool HandFinder::Impl::walk_surface(cv::Point seed, OnCell&& on_cell, OnStep&& on_step) {
   if (++visit_generation == 0) {
     std::fill(visited.begin(), visited.end(), 0u);
     visit_generation = 1;
   }
   queue.clear();
-  const auto at = [](cv::Point p) { return static_cast<std::size_t>(p.y) * kGridW + static_cast<std::size_t>(p.x); };
-  visited[at(seed)] = visit_generation;
+  visited[grid_index(seed)] = visit_generation;
   queue.push_back(seed);
   for (std::size_t head = 0; head < queue.size(); ++head) {
     const cv::Point c = queue[head];
     const float zc = model.metres(grid.at<std::uint16_t>(c));
-    if (zc >= goal) return true;
+    if (on_cell(c, zc)) return true;
     for (int dy = -1; dy <= 1; ++dy)
       for (int dx = -1; dx <= 1; ++dx) {
         const cv::Point n{c.x + dx, c.y + dy};
-        if (n.x < 0 || n.y < 0 || n.x >= kGridW || n.y >= kGridH || visited[at(n)] == visit_generation) continue;
+        if (n.x < 0 || n.y < 0 || n.x >= kGridW || n.y >= kGridH || visited[grid_index(n)] == visit_generation) continue;
         const std::uint16_t d = grid.at<std::uint16_t>(n);
         if (d >= kNoReading) continue;
         const float zn = model.metres(d);
-        if (zn <= 0 || std::abs(zn - zc) > kStepM) continue;
-        if (zn < z0 - kStepM) return false;  // the surface goes on toward the sensor: a limb's middle, not its end
-        visited[at(n)] = visit_generation;
+        if (zn <= 0 || std::abs(zn - zc) > static_cast<float>(kSurfaceStepM)) continue;
+        const Step step = on_step(zn);
+        if (step == Step::kAbort) return false;
+        if (step == Step::kSkip) continue;
+        visited[grid_index(n)] = visit_generation;
         queue.push_back(n);
       }
   }
   return false;
 }
 
+/// Whether the surface at grid cell `seed` continues, without a depth jump (walk_surface), to at
+/// least `arm_protrusion_m` behind `near_raw`, and nowhere nearer: an arm's end reaching out of a
+/// body. A head, a torso, a box or a person farther back has no such depth; the upper arm of a
+/// hand out of view has its forearm nearer.
+bool HandFinder::Impl::reaches_back(cv::Point seed, std::uint16_t near_raw) {
+  const float z0 = model.metres(near_raw);
+  const double protrusion = z0 > params.max_acquire_depth_m ? params.far_arm_protrusion_m : params.arm_protrusion_m;
+  const float goal = z0 + static_cast<float>(protrusion);
+  const auto nearer_floor = z0 - static_cast<float>(kSurfaceStepM);
+  return walk_surface(
+      seed, [&](cv::Point, float zc) { return zc >= goal; },
+      // The surface goes on toward the sensor: a limb's middle, not its end.
+      [&](float zn) { return zn < nearer_floor ? Step::kAbort : Step::kTake; });
+}
+
 /// Whether the candidate at grid cell `seed` (nearest reading `near_raw`) is a limb's joint rather
-/// than its end: on the surface connected to it without a depth jump, the cells 5-10 cm behind it
-/// form two separate groups (an elbow pointing at the camera, with the upper arm and the forearm
-/// running back from it), where a hand has one (its forearm; the torso behind a hand held against
-/// it is one ring).
+/// than its end: on the surface connected to it without a depth jump (walk_surface, up to 10 cm
+/// behind it), the cells 5-10 cm behind it form two separate groups (an elbow pointing at the
+/// camera, with the upper arm and the forearm running back from it), where a hand has one (its
+/// forearm; the torso behind a hand held against it is one ring).
 bool HandFinder::Impl::is_joint(cv::Point seed, std::uint16_t near_raw) {
-  constexpr float kStepM = 0.03f;
   const float z0 = model.metres(near_raw);
   const float slab_near = z0 + 0.05f, slab_far = z0 + 0.10f;
-  if (visit_generation > 0xfffffff0u) {  // three generations are used here; none may wrap to 0
+  slab.clear();
+  walk_surface(
+      seed,
+      [&](cv::Point c, float zc) {
+        if (zc >= slab_near) slab.push_back(c);
+        return false;
+      },
+      [&](float zn) { return zn > slab_far ? Step::kSkip : Step::kTake; });
+  // Groups of the slab's cells (8-connected among themselves), those of 3 cells or more.
+  if (visit_generation > 0xfffffff0u) {  // two more generations are used here; none may wrap to 0
     std::fill(visited.begin(), visited.end(), 0u);
     visit_generation = 0;
   }
-  ++visit_generation;
-  const auto at = [](cv::Point p) { return static_cast<std::size_t>(p.y) * kGridW + static_cast<std::size_t>(p.x); };
-  queue.clear();
-  slab.clear();
-  visited[at(seed)] = visit_generation;
-  queue.push_back(seed);
-  for (std::size_t head = 0; head < queue.size(); ++head) {
-    const cv::Point c = queue[head];
-    const float zc = model.metres(grid.at<std::uint16_t>(c));
-    if (zc >= slab_near) slab.push_back(c);
-    for (int dy = -1; dy <= 1; ++dy)
-      for (int dx = -1; dx <= 1; ++dx) {
-        const cv::Point n{c.x + dx, c.y + dy};
-        if (n.x < 0 || n.y < 0 || n.x >= kGridW || n.y >= kGridH || visited[at(n)] == visit_generation) continue;
-        const std::uint16_t d = grid.at<std::uint16_t>(n);
-        if (d >= kNoReading) continue;
-        const float zn = model.metres(d);
-        if (zn <= 0 || std::abs(zn - zc) > kStepM || zn > slab_far) continue;
-        visited[at(n)] = visit_generation;
-        queue.push_back(n);
-      }
-  }
-  // Groups of the slab's cells (8-connected among themselves), those of 3 cells or more.
   const std::uint32_t in_slab = ++visit_generation, grouped = ++visit_generation;
-  for (const auto& c : slab) visited[at(c)] = in_slab;
+  for (const auto& c : slab) visited[grid_index(c)] = in_slab;
   int groups = 0;
   for (const auto& start : slab) {
-    if (visited[at(start)] != in_slab) continue;
+    if (visited[grid_index(start)] != in_slab) continue;
     queue.clear();
     queue.push_back(start);
-    visited[at(start)] = grouped;
+    visited[grid_index(start)] = grouped;
     for (std::size_t head = 0; head < queue.size(); ++head)
       for (int dy = -1; dy <= 1; ++dy)
         for (int dx = -1; dx <= 1; ++dx) {
           const cv::Point n{queue[head].x + dx, queue[head].y + dy};
-          if (n.x < 0 || n.y < 0 || n.x >= kGridW || n.y >= kGridH || visited[at(n)] != in_slab) continue;
-          visited[at(n)] = grouped;
+          if (n.x < 0 || n.y < 0 || n.x >= kGridW || n.y >= kGridH || visited[grid_index(n)] != in_slab) continue;
+          visited[grid_index(n)] = grouped;
           queue.push_back(n);
         }
     if (queue.size() >= 3 && ++groups >= 2) return true;

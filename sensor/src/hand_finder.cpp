@@ -70,6 +70,23 @@ cv::Point2d plateau_centre(const cv::Mat& dist, double peak, cv::Point at) {
   return {su / sw, sv / sw};
 }
 
+/// How far (pixels) from a distance transform's maximum `peak` at `at` the region stays nearly as
+/// wide (values >= kRidgeShare of the peak): a palm is a compact blob, its widest place a short
+/// ridge (the palm and the fingers beside it); a limb is a tube of constant width (the upper arm,
+/// 4.5 cm in radius, holds a palm-sized circle all along its length).
+constexpr double kRidgeShare = 0.85;
+double ridge_length(const cv::Mat& dist, double peak, cv::Point at) {
+  const auto level = static_cast<float>(kRidgeShare * peak);
+  int far2 = 0;
+  for (int y = 0; y < dist.rows; ++y) {
+    const float* row = dist.ptr<float>(y);
+    const int dy2 = (y - at.y) * (y - at.y);
+    for (int x = 0; x < dist.cols; ++x)
+      if (row[x] >= level) far2 = std::max(far2, dy2 + (x - at.x) * (x - at.x));
+  }
+  return std::sqrt(static_cast<double>(far2));
+}
+
 /// One grid row of HandFinder's background learning (update_background): a reading steady for
 /// kSteadyFrames becomes the background where it is nearer than the current one (a resting arm,
 /// an object put down later); a steady one replaces it whatever its depth after kLongSteadyFrames
@@ -204,6 +221,7 @@ struct HandFinder::Impl {
     double valid_fraction = 0;    ///< share of the circle with readings
     bool cut_by_border = false;   ///< the hand leaves the image within a palm diameter of the circle
     bool placed_by_model = false; ///< an edge-on palm: its centre placed by the hand's shape (lower confidence)
+    double ridge_m = 0;           ///< how far from the circle's centre the region stays nearly as wide (ridge_length)
   };
 
   HandObservation find(std::span<const std::uint16_t> raw);
@@ -220,6 +238,7 @@ struct HandFinder::Impl {
   bool walk_surface(cv::Point seed, OnCell&& on_cell, OnStep&& on_step);
   static std::size_t grid_index(cv::Point p) { return static_cast<std::size_t>(p.y) * kGridW + static_cast<std::size_t>(p.x); }
   bool reaches_back(cv::Point seed, std::uint16_t near_raw);
+  bool front_touches_border(cv::Point seed, std::uint16_t near_raw);
   bool is_joint(cv::Point seed, std::uint16_t near_raw);
   std::vector<cv::Point> slab;  // is_joint's cells 5-10 cm behind the candidate
   /// A plane (camera frame, metres) through the readings under a mask.
@@ -424,6 +443,7 @@ bool HandFinder::Impl::measure_in_band(std::span<const std::uint16_t> raw, const
   cv::Point max_at;
   distance_peak(roi_dist, max_dist, max_at);
   if (max_dist < 2.0) return false;
+  const double ridge_px = ridge_length(roi_dist, max_dist, max_at);
   cv::Point2d centre = plateau_centre(roi_dist, max_dist, max_at);
   // A palm turned away from the sensor is foreshortened across the turn, and its far side falls
   // out of the depth band of the nearest reading (the thumb): its inscribed circle shrinks toward
@@ -445,6 +465,7 @@ bool HandFinder::Impl::measure_in_band(std::span<const std::uint16_t> raw, const
   };
   if (max_dist * z_near / k.fx < params.min_palm_radius_m && turned_palm()) {
     circle_px = palm.radius_m * k.fx / palm.z;
+    palm.ridge_m = 0;  // measured in its own plane: the flattest palm-sized place, not a tube
   } else {
     const double u = rx0 - 1 + centre.x, v = ry0 - 1 + centre.y;
     // Palm depth: median reading inside the palm circle.
@@ -468,6 +489,7 @@ bool HandFinder::Impl::measure_in_band(std::span<const std::uint16_t> raw, const
     palm.u = u;
     palm.v = v;
     palm.radius_m = max_dist * palm.z / k.fx;
+    palm.ridge_m = ridge_px * palm.z / k.fx;
     palm.valid_fraction = static_cast<double>(palm_raw.size()) / std::max(1, circle_pixels);
   }
   const double u = palm.u, v = palm.v;
@@ -989,6 +1011,16 @@ bool HandFinder::Impl::is_joint(cv::Point seed, std::uint16_t near_raw) {
   return false;
 }
 
+/// Whether the candidate's front surface (the grid cells within kFrontSurfaceM of its nearest
+/// reading `near_raw`, connected to `seed`: a palm and its fingers, or the face of a box) reaches the
+/// image's border: what the border cuts may be anything, and a hand is reported only whole in view.
+bool HandFinder::Impl::front_touches_border(cv::Point seed, std::uint16_t near_raw) {
+  cv::compare(grid, front_limit[near_raw], front_cells, cv::CMP_LE);
+  cv::Rect front;
+  cv::floodFill(front_cells, seed, cv::Scalar(128), &front, cv::Scalar(0), cv::Scalar(0), 8);
+  return touches_border(front);
+}
+
 /// Acquisition without a background: the nearest readings of the grid in turn (up to
 /// kCandidates regions), each taken with its depth band as a hand if it is palm-shaped, clear of the
 /// border, and an arm's end (reaches_back). Finds a hand held still since the first frame, which
@@ -1029,12 +1061,10 @@ bool HandFinder::Impl::find_arm_end(std::span<const std::uint16_t> raw, Palm& pa
     // What the border cuts is not taken: the candidate's front surface (within kFrontSurfaceM of
     // its nearest reading: a palm and its fingers, or the face of a box) must be whole in view. A
     // hand held against the chest keeps the torso out of it (4-8 cm behind).
-    cv::compare(grid, front_limit[near_raw], front_cells, cv::CMP_LE);
-    cv::Rect front;
-    cv::floodFill(front_cells, seed, cv::Scalar(128), &front, cv::Scalar(0), cv::Scalar(0), 8);
     // The grid test first: it is cheap, the full-resolution measure is not.
-    if (touches_border(front) || !reaches_back(seed, near_raw) || !measure(raw, box, near_raw, seed, palm) || !palm_accepted(palm) ||
-        palm.radius_m > params.max_new_palm_radius_m)
+    if (front_touches_border(seed, near_raw) || !reaches_back(seed, near_raw) ||
+        !measure(raw, box, near_raw, seed, palm) || !palm_accepted(palm) || palm.radius_m > params.max_new_palm_radius_m ||
+        palm.ridge_m > params.max_palm_ridge_m)
       continue;
     band_region.copyTo(arm);
     cv::dilate(arm, arm, kernel3);
@@ -1153,7 +1183,7 @@ HandObservation HandFinder::Impl::find(std::span<const std::uint16_t> raw) {
       // A new track does not start on a person walking by behind the user.
       const bool jump = jumped(palm);
       found = palm_accepted(palm) && !jump &&
-              (continuing || (palm.radius_m <= params.max_new_palm_radius_m &&
+              (continuing || (palm.radius_m <= params.max_new_palm_radius_m && palm.ridge_m <= params.max_palm_ridge_m &&
                               (palm.z <= params.max_acquire_depth_m ||
                                (palm.z <= params.max_track_depth_m && reaches_back(seed, near_raw))) &&
                               !is_joint(seed, near_raw)));

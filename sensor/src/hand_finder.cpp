@@ -45,6 +45,8 @@ constexpr double kPalmHalfLengthM = 0.045;   // the palm spans this either side 
 constexpr double kArmSearchM = 0.25;         // the forearm: the surface that runs on from the hand, this near it
 constexpr double kFrontSurfaceM = 0.02;     // a candidate's front surface (find_arm_end's border test): a palm is flat within ~1 cm
 constexpr double kSurfaceStepM = 0.03;       // a step between grid neighbours on one surface (as reaches_back)
+/// walk_surface: what to do with a neighbouring cell on the surface.
+enum class Step { kTake, kSkip, kAbort };
 constexpr int kMinArmCells = 3;              // fewer: which end is the wrist is not known, no estimate
 constexpr int kMinBorderReadings = 5;        // a hand leaving the image: this many readings at its border
 constexpr double kMinPalmShare = 0.55;       // of the palm stretch's flat readings, within the palm placed
@@ -66,6 +68,23 @@ cv::Point2d plateau_centre(const cv::Mat& dist, double peak, cv::Point at) {
       }
   }
   return {su / sw, sv / sw};
+}
+
+/// How far (pixels) from a distance transform's maximum `peak` at `at` the region stays nearly as
+/// wide (values >= kRidgeShare of the peak): a palm is a compact blob, its widest place a short
+/// ridge (the palm and the fingers beside it); a limb is a tube of constant width (the upper arm,
+/// 4.5 cm in radius, holds a palm-sized circle all along its length).
+constexpr double kRidgeShare = 0.85;
+double ridge_length(const cv::Mat& dist, double peak, cv::Point at) {
+  const auto level = static_cast<float>(kRidgeShare * peak);
+  int far2 = 0;
+  for (int y = 0; y < dist.rows; ++y) {
+    const float* row = dist.ptr<float>(y);
+    const int dy2 = (y - at.y) * (y - at.y);
+    for (int x = 0; x < dist.cols; ++x)
+      if (row[x] >= level) far2 = std::max(far2, dy2 + (x - at.x) * (x - at.x));
+  }
+  return std::sqrt(static_cast<double>(far2));
 }
 
 /// One grid row of HandFinder's background learning (update_background): a reading steady for
@@ -202,6 +221,7 @@ struct HandFinder::Impl {
     double valid_fraction = 0;    ///< share of the circle with readings
     bool cut_by_border = false;   ///< the hand leaves the image within a palm diameter of the circle
     bool placed_by_model = false; ///< an edge-on palm: its centre placed by the hand's shape (lower confidence)
+    double ridge_m = 0;           ///< how far from the circle's centre the region stays nearly as wide (ridge_length)
   };
 
   HandObservation find(std::span<const std::uint16_t> raw);
@@ -214,7 +234,11 @@ struct HandFinder::Impl {
   bool measure_in_band(std::span<const std::uint16_t> raw, const cv::Rect& cells, std::uint16_t near_raw, std::uint16_t far_raw,
                        cv::Point seed_cell, Palm& palm, int grow);
   int touched = 0;
+  template <class OnCell, class OnStep>
+  bool walk_surface(cv::Point seed, OnCell&& on_cell, OnStep&& on_step);
+  static std::size_t grid_index(cv::Point p) { return static_cast<std::size_t>(p.y) * kGridW + static_cast<std::size_t>(p.x); }
   bool reaches_back(cv::Point seed, std::uint16_t near_raw);
+  bool front_touches_border(cv::Point seed, std::uint16_t near_raw);
   bool is_joint(cv::Point seed, std::uint16_t near_raw);
   std::vector<cv::Point> slab;  // is_joint's cells 5-10 cm behind the candidate
   /// A plane (camera frame, metres) through the readings under a mask.
@@ -419,6 +443,7 @@ bool HandFinder::Impl::measure_in_band(std::span<const std::uint16_t> raw, const
   cv::Point max_at;
   distance_peak(roi_dist, max_dist, max_at);
   if (max_dist < 2.0) return false;
+  const double ridge_px = ridge_length(roi_dist, max_dist, max_at);
   cv::Point2d centre = plateau_centre(roi_dist, max_dist, max_at);
   // A palm turned away from the sensor is foreshortened across the turn, and its far side falls
   // out of the depth band of the nearest reading (the thumb): its inscribed circle shrinks toward
@@ -440,6 +465,7 @@ bool HandFinder::Impl::measure_in_band(std::span<const std::uint16_t> raw, const
   };
   if (max_dist * z_near / k.fx < params.min_palm_radius_m && turned_palm()) {
     circle_px = palm.radius_m * k.fx / palm.z;
+    palm.ridge_m = 0;  // measured in its own plane: the flattest palm-sized place, not a tube
   } else {
     const double u = rx0 - 1 + centre.x, v = ry0 - 1 + centre.y;
     // Palm depth: median reading inside the palm circle.
@@ -463,6 +489,7 @@ bool HandFinder::Impl::measure_in_band(std::span<const std::uint16_t> raw, const
     palm.u = u;
     palm.v = v;
     palm.radius_m = max_dist * palm.z / k.fx;
+    palm.ridge_m = ridge_px * palm.z / k.fx;
     palm.valid_fraction = static_cast<double>(palm_raw.size()) / std::max(1, circle_pixels);
   }
   const double u = palm.u, v = palm.v;
@@ -891,98 +918,107 @@ bool HandFinder::Impl::make_plane_grid(const Roi& roi, const Plane& plane, Plane
   return true;
 }
 
-/// Whether the surface at grid cell `seed` continues, without a depth jump (steps under
-/// kStepM between grid neighbours), to at least `arm_protrusion_m` behind `near_raw`, and nowhere
-/// nearer: an arm's end reaching out of a body. A head, a torso, a box or a person farther back
-/// has no such depth; the upper arm of a hand out of view has its forearm nearer.
-bool HandFinder::Impl::reaches_back(cv::Point seed, std::uint16_t near_raw) {
-  constexpr float kStepM = 0.03f;
-  const float z0 = model.metres(near_raw);
-  const double protrusion = z0 > params.max_acquire_depth_m ? params.far_arm_protrusion_m : params.arm_protrusion_m;
-  const float goal = z0 + static_cast<float>(protrusion);
+/// Breadth-first walk over the surface at grid cell `seed` on the grid: 8-neighbours with a
+/// reading, less than kSurfaceStepM nearer or farther than the cell they are reached from (one
+/// surface: no depth jump). `on_cell(cell, z)` sees each cell taken, in order, and may end the walk
+/// (returns true: the walk returns true); `on_step(z)` decides for each neighbour: kTake, kSkip, or
+/// kAbort (the walk returns false). Shared by reaches_back and is_joint.
+template <class OnCell, class OnStep>
+bool HandFinder::Impl::walk_surface(cv::Point seed, OnCell&& on_cell, OnStep&& on_step) {
   if (++visit_generation == 0) {
     std::fill(visited.begin(), visited.end(), 0u);
     visit_generation = 1;
   }
   queue.clear();
-  const auto at = [](cv::Point p) { return static_cast<std::size_t>(p.y) * kGridW + static_cast<std::size_t>(p.x); };
-  visited[at(seed)] = visit_generation;
+  visited[grid_index(seed)] = visit_generation;
   queue.push_back(seed);
   for (std::size_t head = 0; head < queue.size(); ++head) {
     const cv::Point c = queue[head];
     const float zc = model.metres(grid.at<std::uint16_t>(c));
-    if (zc >= goal) return true;
+    if (on_cell(c, zc)) return true;
     for (int dy = -1; dy <= 1; ++dy)
       for (int dx = -1; dx <= 1; ++dx) {
         const cv::Point n{c.x + dx, c.y + dy};
-        if (n.x < 0 || n.y < 0 || n.x >= kGridW || n.y >= kGridH || visited[at(n)] == visit_generation) continue;
+        if (n.x < 0 || n.y < 0 || n.x >= kGridW || n.y >= kGridH || visited[grid_index(n)] == visit_generation) continue;
         const std::uint16_t d = grid.at<std::uint16_t>(n);
         if (d >= kNoReading) continue;
         const float zn = model.metres(d);
-        if (zn <= 0 || std::abs(zn - zc) > kStepM) continue;
-        if (zn < z0 - kStepM) return false;  // the surface goes on toward the sensor: a limb's middle, not its end
-        visited[at(n)] = visit_generation;
+        if (zn <= 0 || std::abs(zn - zc) > static_cast<float>(kSurfaceStepM)) continue;
+        const Step step = on_step(zn);
+        if (step == Step::kAbort) return false;
+        if (step == Step::kSkip) continue;
+        visited[grid_index(n)] = visit_generation;
         queue.push_back(n);
       }
   }
   return false;
 }
 
+/// Whether the surface at grid cell `seed` continues, without a depth jump (walk_surface), to at
+/// least `arm_protrusion_m` behind `near_raw`, and nowhere nearer: an arm's end reaching out of a
+/// body. A head, a torso, a box or a person farther back has no such depth; the upper arm of a
+/// hand out of view has its forearm nearer.
+bool HandFinder::Impl::reaches_back(cv::Point seed, std::uint16_t near_raw) {
+  const float z0 = model.metres(near_raw);
+  const double protrusion = z0 > params.max_acquire_depth_m ? params.far_arm_protrusion_m : params.arm_protrusion_m;
+  const float goal = z0 + static_cast<float>(protrusion);
+  const auto nearer_floor = z0 - static_cast<float>(kSurfaceStepM);
+  return walk_surface(
+      seed, [&](cv::Point, float zc) { return zc >= goal; },
+      // The surface goes on toward the sensor: a limb's middle, not its end.
+      [&](float zn) { return zn < nearer_floor ? Step::kAbort : Step::kTake; });
+}
+
 /// Whether the candidate at grid cell `seed` (nearest reading `near_raw`) is a limb's joint rather
-/// than its end: on the surface connected to it without a depth jump, the cells 5-10 cm behind it
-/// form two separate groups (an elbow pointing at the camera, with the upper arm and the forearm
-/// running back from it), where a hand has one (its forearm; the torso behind a hand held against
-/// it is one ring).
+/// than its end: on the surface connected to it without a depth jump (walk_surface, up to 10 cm
+/// behind it), the cells 5-10 cm behind it form two separate groups (an elbow pointing at the
+/// camera, with the upper arm and the forearm running back from it), where a hand has one (its
+/// forearm; the torso behind a hand held against it is one ring).
 bool HandFinder::Impl::is_joint(cv::Point seed, std::uint16_t near_raw) {
-  constexpr float kStepM = 0.03f;
   const float z0 = model.metres(near_raw);
   const float slab_near = z0 + 0.05f, slab_far = z0 + 0.10f;
-  if (visit_generation > 0xfffffff0u) {  // three generations are used here; none may wrap to 0
+  slab.clear();
+  walk_surface(
+      seed,
+      [&](cv::Point c, float zc) {
+        if (zc >= slab_near) slab.push_back(c);
+        return false;
+      },
+      [&](float zn) { return zn > slab_far ? Step::kSkip : Step::kTake; });
+  // Groups of the slab's cells (8-connected among themselves), those of 3 cells or more.
+  if (visit_generation > 0xfffffff0u) {  // two more generations are used here; none may wrap to 0
     std::fill(visited.begin(), visited.end(), 0u);
     visit_generation = 0;
   }
-  ++visit_generation;
-  const auto at = [](cv::Point p) { return static_cast<std::size_t>(p.y) * kGridW + static_cast<std::size_t>(p.x); };
-  queue.clear();
-  slab.clear();
-  visited[at(seed)] = visit_generation;
-  queue.push_back(seed);
-  for (std::size_t head = 0; head < queue.size(); ++head) {
-    const cv::Point c = queue[head];
-    const float zc = model.metres(grid.at<std::uint16_t>(c));
-    if (zc >= slab_near) slab.push_back(c);
-    for (int dy = -1; dy <= 1; ++dy)
-      for (int dx = -1; dx <= 1; ++dx) {
-        const cv::Point n{c.x + dx, c.y + dy};
-        if (n.x < 0 || n.y < 0 || n.x >= kGridW || n.y >= kGridH || visited[at(n)] == visit_generation) continue;
-        const std::uint16_t d = grid.at<std::uint16_t>(n);
-        if (d >= kNoReading) continue;
-        const float zn = model.metres(d);
-        if (zn <= 0 || std::abs(zn - zc) > kStepM || zn > slab_far) continue;
-        visited[at(n)] = visit_generation;
-        queue.push_back(n);
-      }
-  }
-  // Groups of the slab's cells (8-connected among themselves), those of 3 cells or more.
   const std::uint32_t in_slab = ++visit_generation, grouped = ++visit_generation;
-  for (const auto& c : slab) visited[at(c)] = in_slab;
+  for (const auto& c : slab) visited[grid_index(c)] = in_slab;
   int groups = 0;
   for (const auto& start : slab) {
-    if (visited[at(start)] != in_slab) continue;
+    if (visited[grid_index(start)] != in_slab) continue;
     queue.clear();
     queue.push_back(start);
-    visited[at(start)] = grouped;
+    visited[grid_index(start)] = grouped;
     for (std::size_t head = 0; head < queue.size(); ++head)
       for (int dy = -1; dy <= 1; ++dy)
         for (int dx = -1; dx <= 1; ++dx) {
           const cv::Point n{queue[head].x + dx, queue[head].y + dy};
-          if (n.x < 0 || n.y < 0 || n.x >= kGridW || n.y >= kGridH || visited[at(n)] != in_slab) continue;
-          visited[at(n)] = grouped;
+          if (n.x < 0 || n.y < 0 || n.x >= kGridW || n.y >= kGridH || visited[grid_index(n)] != in_slab) continue;
+          visited[grid_index(n)] = grouped;
           queue.push_back(n);
         }
     if (queue.size() >= 3 && ++groups >= 2) return true;
   }
   return false;
+}
+
+/// Whether the candidate's front surface (the grid cells within kFrontSurfaceM of its nearest
+/// reading `near_raw`, connected to `seed`: a palm and its fingers, or the face of a box) reaches the
+/// image's border: what the border cuts may be anything, and a hand is reported only whole in view.
+bool HandFinder::Impl::front_touches_border(cv::Point seed, std::uint16_t near_raw) {
+  cv::compare(grid, front_limit[near_raw], front_cells, cv::CMP_LE);
+  cv::Rect front;
+  cv::floodFill(front_cells, seed, cv::Scalar(128), &front, cv::Scalar(0), cv::Scalar(0), 8);
+  return touches_border(front);
 }
 
 /// Acquisition without a background: the nearest readings of the grid in turn (up to
@@ -1025,12 +1061,10 @@ bool HandFinder::Impl::find_arm_end(std::span<const std::uint16_t> raw, Palm& pa
     // What the border cuts is not taken: the candidate's front surface (within kFrontSurfaceM of
     // its nearest reading: a palm and its fingers, or the face of a box) must be whole in view. A
     // hand held against the chest keeps the torso out of it (4-8 cm behind).
-    cv::compare(grid, front_limit[near_raw], front_cells, cv::CMP_LE);
-    cv::Rect front;
-    cv::floodFill(front_cells, seed, cv::Scalar(128), &front, cv::Scalar(0), cv::Scalar(0), 8);
     // The grid test first: it is cheap, the full-resolution measure is not.
-    if (touches_border(front) || !reaches_back(seed, near_raw) || !measure(raw, box, near_raw, seed, palm) || !palm_accepted(palm) ||
-        palm.radius_m > params.max_new_palm_radius_m)
+    if (front_touches_border(seed, near_raw) || !reaches_back(seed, near_raw) ||
+        !measure(raw, box, near_raw, seed, palm) || !palm_accepted(palm) || palm.radius_m > params.max_new_palm_radius_m ||
+        palm.ridge_m > params.max_palm_ridge_m)
       continue;
     band_region.copyTo(arm);
     cv::dilate(arm, arm, kernel3);
@@ -1149,7 +1183,7 @@ HandObservation HandFinder::Impl::find(std::span<const std::uint16_t> raw) {
       // A new track does not start on a person walking by behind the user.
       const bool jump = jumped(palm);
       found = palm_accepted(palm) && !jump &&
-              (continuing || (palm.radius_m <= params.max_new_palm_radius_m &&
+              (continuing || (palm.radius_m <= params.max_new_palm_radius_m && palm.ridge_m <= params.max_palm_ridge_m &&
                               (palm.z <= params.max_acquire_depth_m ||
                                (palm.z <= params.max_track_depth_m && reaches_back(seed, near_raw))) &&
                               !is_joint(seed, near_raw)));

@@ -82,6 +82,25 @@ HandObservation at(const Eigen::Vector3d& p) {
   return h;
 }
 
+// Tuning seed 86: the hand is up from the first frame, fingers together, with the upper arm
+// level at the hand's depth; its end (4.5 cm in radius, a palm-sized circle) took the track from
+// frame 0 for 45 frames. A palm's widest place is short, a tube's runs along it
+// (max_palm_ridge_m): no tracked point may be on the arm now. With max_palm_ridge_m raised to
+// 1 m (no ridge test) the elbow is taken again, so this can fail.
+TEST(RandomScene, AnElbowAtTheHandsDepthDoesNotStartATrack) {
+  const auto captured_early = [](const HandFinderParams& params) {
+    int captured = 0;
+    score_clip(random_scenario(86), params, [&](const GroundTruth& truth, const HandObservation& hand) {
+      if (truth.frame < 45 && hand.tracked && (hand.position_m.cast<double>() - truth.palm).norm() > kCaptureDistanceM) ++captured;
+    });
+    return captured;
+  };
+  EXPECT_EQ(captured_early({}), 0);
+  HandFinderParams no_ridge_test;
+  no_ridge_test.max_palm_ridge_m = 1.0;
+  EXPECT_GT(captured_early(no_ridge_test), 3);
+}
+
 TEST(ClipScore, CapturedIsFarFromTheHandOrAnyPointWhenNoHandIsRaised) {
   ClipScore score;
   std::size_t run = 0;

@@ -71,6 +71,12 @@ struct HandFinderParams {
   /// the front of a box, a monitor or a chair back holds more); a followed hand keeps
   /// max_palm_radius_m.
   double max_new_palm_radius_m = 0.052;
+  /// A palm is a compact blob: the place where its region stays nearly as wide as the inscribed
+  /// circle (>= 85% of its radius) reaches at most this far from the circle's centre (a whole palm,
+  /// fingers beside it included: 1-2 cm, at most ~8 cm seen in the tuning range). A limb is a tube
+  /// of constant width: the upper arm (4.5 cm in radius) holds a palm-sized circle all along it,
+  /// and an elbow or a shoulder at the hand's depth took the track (chosen on seeds 1-100).
+  double max_palm_ridge_m = 0.09;
 };
 
 struct HandObservation {

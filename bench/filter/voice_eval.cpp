@@ -18,6 +18,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <stdexcept>
 #include <limits>
 #include <map>
 #include <optional>
@@ -246,10 +247,13 @@ std::vector<SpeakerRun> run_speaker(const VoiceConfig& config, const fixture::Sp
 
 /// Thresholds applied after decoding (the spotter ran with none).
 struct Gate {
-  double min_log_ratio;
-  double min_margin;
-  bool keeps(const VoiceDetection& d) const {
-    return std::isnan(d.verification_score) || (d.verification_score >= min_log_ratio && d.command_margin >= min_margin);
+  VoiceConfig thresholds;  // the verify_* thresholds applied (verification_accepts, as the spotter does)
+  bool keeps(const VoiceDetection& d) const { return std::isnan(d.verification_score) || verification_accepts(thresholds, d); }
+  Gate with(double min_log_ratio, double min_margin) const {
+    Gate g = *this;
+    g.thresholds.verify_min_log_ratio = min_log_ratio;
+    g.thresholds.verify_min_margin = min_margin;
+    return g;
   }
 };
 
@@ -333,11 +337,14 @@ std::vector<SpeakerRun> run_no_commands(const VoiceConfig& config, const std::st
 
 int speakers_main(VoiceConfig config, const std::string& set, unsigned seed_offset, int threads, double no_command_s,
                   const std::string& cache, std::optional<std::pair<double, double>> sweep_ratio, bool check,
-                  const std::vector<std::string>& only_conditions, const std::vector<std::string>& only_contexts) {
-  const Gate gate{config.verify_min_log_ratio.value_or(-std::numeric_limits<double>::infinity()), config.verify_min_margin};
+                  const std::vector<std::string>& only_conditions, const std::vector<std::string>& only_contexts,
+                  const std::string& dump) {
+  const Gate gate{config};
   // Decode with no gate: the thresholds are applied when scoring (a sweep needs one decoding only).
   if (config.verify_min_log_ratio) config.verify_min_log_ratio = -std::numeric_limits<double>::infinity();
   config.verify_min_margin = 0.0;
+  config.verify_min_phrase_margin = 0.0;
+  config.verify_min_level_db.reset();
   std::vector<std::vector<std::int16_t>> librivox;
   for (const auto& clip : fixture::librivox_clips()) librivox.push_back(read_wav_file(clip).samples);
   // Jobs: every speaker (base voice, pitch-shifted, tempo-changed) of the set, then the corpora
@@ -400,6 +407,30 @@ int speakers_main(VoiceConfig config, const std::string& set, unsigned seed_offs
   std::vector<SpeakerRun> runs;
   for (auto& r : results) runs.insert(runs.end(), r.begin(), r.end());
 
+  if (!dump.empty()) {
+    // Every run and every detection with its features, to choose gates offline (one decoding).
+    std::FILE* f = std::fopen(dump.c_str(), "w");
+    if (f == nullptr) throw std::runtime_error("cannot write --dump " + dump);
+    for (std::size_t r = 0; r < runs.size(); ++r) {
+      const auto& run = runs[r];
+      std::fprintf(f, "R\t%zu\t%s\t%s\t%s\t%s\t%zu\t%.3f\n", r, run.family.c_str(), run.variant.c_str(), run.condition.c_str(),
+                   run.context.c_str(), run.placed.size(), run.audio_s);
+      for (const auto& d : run.found) {
+        int utterance = -1;
+        bool right = false;
+        for (std::size_t u = 0; u < run.placed.size() && utterance < 0; ++u)
+          if (d.time_s >= run.placed[u].begin_s && d.time_s <= run.placed[u].end_s + kLatencyS) {
+            utterance = static_cast<int>(u);
+            right = std::find_if(config.phrases.begin(), config.phrases.end(), [&](const VoicePhrase& p) {
+                      return p.phrase == run.placed[u].phrase;
+                    })->command == d.command;
+          }
+        std::fprintf(f, "D\t%zu\t%d\t%d\t%s\t%.3f\t%.3f\t%.3f\t%.3f\t%.3f\t%.3f\n", r, utterance, right ? 1 : 0, d.phrase.c_str(),
+                     d.time_s, d.verification_score, d.command_margin, d.phrase_score, d.phrase_margin, d.level_db);
+      }
+    }
+    std::fclose(f);
+  }
   const auto totals = [&](const Gate& g, auto&& key) {
     std::map<std::string, SpeakerTally> by;
     for (const auto& r : runs)
@@ -412,7 +443,7 @@ int speakers_main(VoiceConfig config, const std::string& set, unsigned seed_offs
     std::printf("%9s %7s %14s %14s %12s %8s %8s\n", "min_ratio", "margin", "20 dB alone", "20 dB all", "found all", "wrong", "fa/h");
     for (double ratio = sweep_ratio->first; ratio <= sweep_ratio->second + 1e-9; ratio += 2)
       for (double margin : {0.0, 1.0, 2.0, 3.0, 4.0, 6.0, 8.0}) {
-        const Gate g{ratio, margin};
+        const Gate g = gate.with(ratio, margin);
         SpeakerTally a20, all20, all, none;
         for (const auto& r : runs) {
           const auto t = score(r, g, config);
@@ -430,7 +461,7 @@ int speakers_main(VoiceConfig config, const std::string& set, unsigned seed_offs
   std::printf("voices: %s set (seeds +%u), phrases \"%s\" / \"%s\", second pass: min log ratio %g, min margin %g\n", set.c_str(), seed_base,
               std::find_if(config.phrases.begin(), config.phrases.end(), [](const VoicePhrase& p) { return p.command == VoiceCommand::Start; })->phrase.c_str(),
               std::find_if(config.phrases.begin(), config.phrases.end(), [](const VoicePhrase& p) { return p.command == VoiceCommand::Stop; })->phrase.c_str(),
-              gate.min_log_ratio, gate.min_margin);
+              gate.thresholds.verify_min_log_ratio.value_or(-std::numeric_limits<double>::infinity()), gate.thresholds.verify_min_margin);
   const auto table = [&](const std::string& title, auto&& key) {
     std::printf("\n| %s | commands | found | rate | WRONG | false alarms |\n|---|---|---|---|---|---|\n", title.c_str());
     for (const auto& [k, t] : totals(gate, key))
@@ -516,6 +547,8 @@ int main(int argc, char** argv) try {
       ->check(CLI::Range(0.0, 36000.0));
   app.add_option("--cache", cache, "--speakers: folder for the synthesised audio");
   app.add_option("--sweep", sweep_ratio, "--speakers: sweep min log ratio FROM TO (step 2) x margins instead of the table")->expected(2);
+  std::string dump;
+  app.add_option("--dump", dump, "--speakers: write every run and detection with its second-pass features (tab-separated) to this file");
   app.add_flag("--check", check, "--speakers: exit 1 when the acceptance targets are missed");
   if (const int rc = tachi::common::parse(app, argc, argv); rc >= 0) return rc;
   if (!speakers.empty()) {
@@ -527,7 +560,7 @@ int main(int argc, char** argv) try {
     if (phone_loop) c.phone_loop_probability = *phone_loop;
     std::optional<std::pair<double, double>> sweep_range;
     if (sweep_ratio.size() == 2) sweep_range = std::pair{sweep_ratio[0], sweep_ratio[1]};
-    return speakers_main(c, speakers, seed_offset, threads, no_command_s, cache, sweep_range, check, only_conditions, only_contexts);
+    return speakers_main(c, speakers, seed_offset, threads, no_command_s, cache, sweep_range, check, only_conditions, only_contexts, dump);
   }
   if (threshold) for (auto& p : commands.phrases) p.threshold = *threshold;
   if (phone_loop) commands.phone_loop_probability = *phone_loop;

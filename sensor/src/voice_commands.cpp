@@ -65,6 +65,11 @@ std::optional<std::string> validate(const VoiceConfig& config) {
     return "verify_min_log_ratio must be a number (or null for no second pass)";
   if (!std::isfinite(config.verify_min_margin) || config.verify_min_margin < 0.0)
     return "verify_min_margin must be a number >= 0 (e.g. 2)";
+  if (config.verify_min_phrase_log_ratio && std::isnan(*config.verify_min_phrase_log_ratio))
+    return "verify_min_phrase_log_ratio must be a number (or null)";
+  if (!std::isfinite(config.verify_min_phrase_margin) || config.verify_min_phrase_margin < 0.0)
+    return "verify_min_phrase_margin must be a number >= 0 (e.g. 2)";
+  if (config.verify_min_level_db && std::isnan(*config.verify_min_level_db)) return "verify_min_level_db must be a number (or null)";
   return std::nullopt;
 }
 
@@ -84,7 +89,8 @@ VoiceConfig parse_voice_config(const std::string& json_text) {
   VoiceConfig c;
   for (const auto& item : root.items())
     if (item.key() != "model_dir" && item.key() != "dictionary" && item.key() != "phrases" && item.key() != "phone_loop_probability" &&
-        item.key() != "verify_min_log_ratio" && item.key() != "verify_min_margin")
+        item.key() != "verify_min_log_ratio" && item.key() != "verify_min_margin" && item.key() != "verify_min_phrase_log_ratio" &&
+        item.key() != "verify_min_phrase_margin" && item.key() != "verify_min_level_db")
       fail("unknown key " + item.key());
   try {
     if (root.contains("model_dir")) c.model_dir = root.at("model_dir").get<std::string>();
@@ -100,6 +106,18 @@ VoiceConfig parse_voice_config(const std::string& json_text) {
         fail("verify_min_log_ratio must be a number (e.g. -20) or null (no second pass)");
     }
     if (root.contains("verify_min_margin")) c.verify_min_margin = root.at("verify_min_margin").get<double>();
+    for (const auto& [key, target] : {std::pair{"verify_min_phrase_log_ratio", &c.verify_min_phrase_log_ratio},
+                                      std::pair{"verify_min_level_db", &c.verify_min_level_db}}) {
+      if (!root.contains(key)) continue;
+      const auto& v = root.at(key);
+      if (v.is_null())
+        target->reset();
+      else if (v.is_number())
+        *target = v.get<double>();
+      else
+        fail(std::string(key) + " must be a number or null");
+    }
+    if (root.contains("verify_min_phrase_margin")) c.verify_min_phrase_margin = root.at("verify_min_phrase_margin").get<double>();
     if (root.contains("phrases")) {
       c.phrases.clear();
       for (const auto& p : root.at("phrases")) {

@@ -7,6 +7,8 @@
 #include <feat.h>
 
 #include <algorithm>
+#include <array>
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -55,6 +57,12 @@ struct KeywordSpotter::Impl {
     double log_ratio = -std::numeric_limits<double>::infinity();
     /// log_ratio minus the best log ratio of a phrase of another command (+infinity when none fits).
     double margin = std::numeric_limits<double>::infinity();
+    /// The ratio over the phrase's own frames (the words around it left out: a phrase inside a
+    /// sentence), and its margin over another command.
+    double phrase_log_ratio = -std::numeric_limits<double>::infinity();
+    double phrase_margin = std::numeric_limits<double>::infinity();
+    /// The phrase's level above the background's floor, dB (level_above_floor_db).
+    double level_db = std::numeric_limits<double>::quiet_NaN();
   };
   Verdict verify(long begin, long end, long before);
 
@@ -82,7 +90,6 @@ constexpr long kVerifyWideBeforeSamples = 8 * kVoiceSampleRate / 10;
 constexpr const char* kKeywordSearch = "commands";
 const std::string kPhoneLoopSearch = "verify-phone-loop";
 std::string grammar_search(std::size_t phrase) { return "verify-phrase-" + std::to_string(phrase); }
-
 /// One word (or filler, or phone) of a decoder's best path.
 struct PathSegment {
   std::string word;
@@ -103,6 +110,34 @@ std::vector<PathSegment> best_path(ps_decoder_t* decoder) {
 }
 /// Silence and noise words: "<sil>", "<s>", "</s>", "[NOISE]", "[SPEECH]".
 bool is_filler(const std::string& word) { return word.empty() || word.front() == '<' || word.front() == '['; }
+
+/// How far the phrase's audio [p0, p1) (samples from stream start) stands above the background: its
+/// mean power over the 20th percentile of the 10 ms frame powers of the rest of the kept audio, in dB.
+/// A low quantile of frame energies estimates the noise floor even while speech fills much of the
+/// audio (quantile-based noise estimation: Stahl, Fischer & Bippus, ICASSP 2000).
+double level_above_floor_db(const std::vector<std::int16_t>& audio, long audio_start, long p0, long p1) {
+  constexpr long kFrame = kVoiceSampleRate / 100;
+  std::vector<double> background;
+  double phrase_power = 0.0;
+  long phrase_samples = 0;
+  for (long at = audio_start; at + kFrame <= audio_start + static_cast<long>(audio.size()); at += kFrame) {
+    double power = 0.0;
+    for (long i = at; i < at + kFrame; ++i) {
+      const double v = audio[static_cast<std::size_t>(i - audio_start)];
+      power += v * v;
+    }
+    if (at + kFrame > p0 && at < p1) {
+      phrase_power += power;
+      phrase_samples += kFrame;
+    } else {
+      background.push_back(power / kFrame);
+    }
+  }
+  if (phrase_samples == 0 || background.empty()) return std::numeric_limits<double>::quiet_NaN();
+  const auto q = background.begin() + static_cast<std::ptrdiff_t>(background.size() / 5);
+  std::nth_element(background.begin(), q, background.end());
+  return 10.0 * std::log10((phrase_power / static_cast<double>(phrase_samples) + 1.0) / (*q + 1.0));
+}
 
 // pocketsphinx reads keyword lists from a file only.
 std::string write_kws_file(const std::string& text) {
@@ -149,17 +184,38 @@ KeywordSpotter::Impl::Verdict KeywordSpotter::Impl::verify(long begin, long end,
     return best_path(verifier);
   };
   double loop_score = 0.0;
-  for (const auto& seg : decode(kPhoneLoopSearch.c_str())) loop_score += seg.acoustic;
+  auto loop_path = decode(kPhoneLoopSearch.c_str());
+  // The decoder numbers frames on from earlier utterances: frames relative to the window's start.
+  const int loop_base = loop_path.empty() ? 0 : loop_path.front().first_frame;
+  for (const auto& seg : loop_path) loop_score += seg.acoustic;
+  // The phone loop's score over frames [first, last] of the window, each segment pro-rated.
+  const auto loop_over = [&](int first, int last) {
+    double sum = 0.0;
+    for (const auto& seg : loop_path) {
+      const int a = std::max(first, seg.first_frame - loop_base), b = std::min(last, seg.last_frame - loop_base);
+      if (b >= a) sum += seg.acoustic * (b - a + 1) / (seg.last_frame - seg.first_frame + 1);
+    }
+    return sum;
+  };
   std::vector<double> log_ratio(config.phrases.size(), -std::numeric_limits<double>::infinity());
+  std::vector<double> phrase_only(config.phrases.size(), -std::numeric_limits<double>::infinity());
+  std::vector<std::pair<int, int>> phrase_span(config.phrases.size(), {-1, -1});
   for (std::size_t i = 0; i < config.phrases.size(); ++i) {
-    double phrase_score = 0.0;
+    double phrase_score = 0.0, words_score = 0.0;
     int phrase_frames = 0;
-    for (const auto& seg : decode(grammar_search(i).c_str())) {
+    const auto path = decode(grammar_search(i).c_str());
+    const int base = path.empty() ? 0 : path.front().first_frame;
+    for (const auto& seg : path) {
       phrase_score += seg.acoustic;
-      if (!is_filler(seg.word)) phrase_frames += seg.last_frame - seg.first_frame + 1;
+      if (is_filler(seg.word)) continue;
+      phrase_frames += seg.last_frame - seg.first_frame + 1;
+      words_score += seg.acoustic;
+      if (phrase_span[i].first < 0) phrase_span[i].first = seg.first_frame - base;
+      phrase_span[i].second = seg.last_frame - base;
     }
     if (phrase_frames == 0) continue;  // the phrase cannot be aligned to this audio
     log_ratio[i] = (phrase_score - loop_score) / phrase_frames;
+    phrase_only[i] = (words_score - loop_over(phrase_span[i].first, phrase_span[i].second)) / phrase_frames;
   }
   // A phrase that cannot be aligned may be longer than the one the search hit and begin before the
   // window ("stop cutting" hit on flite rms's "begin cutting": "be" lay before it): judged again over
@@ -168,10 +224,21 @@ KeywordSpotter::Impl::Verdict KeywordSpotter::Impl::verify(long begin, long end,
     return verify(begin, end, kVerifyWideBeforeSamples);
   const auto best = static_cast<std::size_t>(std::max_element(log_ratio.begin(), log_ratio.end()) - log_ratio.begin());
   if (!std::isfinite(log_ratio[best])) return verdict;
-  verdict = {config.phrases[best], log_ratio[best], std::numeric_limits<double>::infinity()};
+  verdict.phrase = config.phrases[best];
+  verdict.log_ratio = log_ratio[best];
   for (std::size_t i = 0; i < config.phrases.size(); ++i)
     if (config.phrases[i].command != config.phrases[best].command && std::isfinite(log_ratio[i]))
       verdict.margin = std::min(verdict.margin, log_ratio[best] - log_ratio[i]);
+  // The phrase said inside other words: the ratio over the phrase's own frames only, the phone loop's
+  // score pro-rated over the same frames, so that the words around it count for neither.
+  verdict.phrase_log_ratio = phrase_only[best];
+  for (std::size_t i = 0; i < config.phrases.size(); ++i)
+    if (config.phrases[i].command != config.phrases[best].command && std::isfinite(phrase_only[i]))
+      verdict.phrase_margin = std::min(verdict.phrase_margin, phrase_only[best] - phrase_only[i]);
+  if (phrase_span[best].first >= 0) {
+    const long p0 = from + phrase_span[best].first * kSamplesPerFrame, p1 = from + (phrase_span[best].second + 1) * kSamplesPerFrame;
+    verdict.level_db = level_above_floor_db(audio, audio_start, p0, p1);
+  }
   return verdict;
 }
 
@@ -314,9 +381,21 @@ void KeywordSpotter::Impl::verify_pending(long ended_by, std::vector<VoiceDetect
     VoiceDetection d{static_cast<double>(samples) / kVoiceSampleRate, verdict.phrase->command, verdict.phrase->phrase};
     d.verification_score = verdict.log_ratio;
     d.command_margin = verdict.margin;
-    if (d.command_margin < config.verify_min_margin) continue;  // too close to another command: a miss, never a wrong command
-    if (d.verification_score >= *config.verify_min_log_ratio) accepted.push_back(d);
+    d.phrase_score = verdict.phrase_log_ratio;
+    d.phrase_margin = verdict.phrase_margin;
+    d.level_db = verdict.level_db;
+    if (verification_accepts(config, d)) accepted.push_back(d);
   }
+}
+
+bool verification_accepts(const VoiceConfig& config, const VoiceDetection& d) {
+  if (!config.verify_min_log_ratio) return true;
+  // Too close to another command: a miss, never a wrong command (NaN margins compare false: refused).
+  if (!(d.command_margin >= config.verify_min_margin)) return false;
+  if (config.verify_min_phrase_margin > 0.0 && !(d.phrase_margin >= config.verify_min_phrase_margin)) return false;
+  if (config.verify_min_level_db && !(d.level_db >= *config.verify_min_level_db)) return false;
+  return d.verification_score >= *config.verify_min_log_ratio ||
+         (config.verify_min_phrase_log_ratio && d.phrase_score >= *config.verify_min_phrase_log_ratio);
 }
 
 std::vector<VoiceDetection> spot_commands(const VoiceConfig& config, std::span<const std::int16_t> samples) {

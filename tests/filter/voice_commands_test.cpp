@@ -96,6 +96,30 @@ TEST(VoiceCommands, TheShippedConfigFileMatchesTheDefaults) {
   EXPECT_EQ(file.phone_loop_probability, defaults.phone_loop_probability);
   EXPECT_EQ(file.verify_min_log_ratio, defaults.verify_min_log_ratio);
   EXPECT_EQ(file.verify_min_margin, defaults.verify_min_margin);
+  EXPECT_EQ(file.verify_min_phrase_log_ratio, defaults.verify_min_phrase_log_ratio);
+  EXPECT_EQ(file.verify_min_phrase_margin, defaults.verify_min_phrase_margin);
+  EXPECT_EQ(file.verify_min_level_db, defaults.verify_min_level_db);
+}
+
+TEST(VoiceCommands, ThePhraseRatioMarginAndLevelKeysParseAndAreValidated) {
+  const VoiceConfig c = parse_voice_config(R"({"verify_min_phrase_log_ratio": -3, "verify_min_phrase_margin": 1.5, "verify_min_level_db": 7})");
+  EXPECT_EQ(c.verify_min_phrase_log_ratio, -3.0);
+  EXPECT_EQ(c.verify_min_phrase_margin, 1.5);
+  EXPECT_EQ(c.verify_min_level_db, 7.0);
+  // null turns a check off.
+  EXPECT_FALSE(parse_voice_config(R"({"verify_min_phrase_log_ratio": null})").verify_min_phrase_log_ratio.has_value());
+  EXPECT_FALSE(parse_voice_config(R"({"verify_min_level_db": null})").verify_min_level_db.has_value());
+  const auto error_of = [](const std::string& json) {
+    try {
+      parse_voice_config(json);
+    } catch (const std::invalid_argument& e) {
+      return std::string(e.what());
+    }
+    return std::string("accepted");
+  };
+  EXPECT_NE(error_of(R"({"verify_min_level_db": "loud"})").find("verify_min_level_db"), std::string::npos);
+  EXPECT_NE(error_of(R"({"verify_min_phrase_log_ratio": [1]})").find("verify_min_phrase_log_ratio"), std::string::npos);
+  EXPECT_NE(error_of(R"({"verify_min_phrase_margin": -1})").find("verify_min_phrase_margin"), std::string::npos);
 }
 
 TEST(VoiceCommands, TheSecondPassMarginIsValidated) {

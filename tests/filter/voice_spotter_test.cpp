@@ -183,6 +183,47 @@ TEST(VoiceSpotter, ABritishVoiceSaysTheDefaultCommandsRightAndTheOldStartPhraseI
   EXPECT_LT(before.front().time_s, 3.0);
 }
 
+TEST(VoiceSpotter, TheSecondPassDecisionNeedsTheLevelTheMarginsAndOneOfTheTwoRatios) {
+  VoiceConfig c;
+  c.verify_min_log_ratio = -20.0;
+  c.verify_min_margin = 4.0;
+  c.verify_min_phrase_log_ratio = -5.0;
+  c.verify_min_phrase_margin = 2.0;
+  c.verify_min_level_db = 8.0;
+  VoiceDetection d;
+  d.verification_score = -10.0;  // said alone: the whole window passes
+  d.command_margin = 6.0;
+  d.phrase_score = -30.0;
+  d.phrase_margin = 3.0;
+  d.level_db = 15.0;
+  EXPECT_TRUE(verification_accepts(c, d));
+  VoiceDetection in_sentence = d;  // words around it: only the phrase's own frames pass
+  in_sentence.verification_score = -40.0;
+  in_sentence.phrase_score = -2.0;
+  EXPECT_TRUE(verification_accepts(c, in_sentence));
+  in_sentence.phrase_score = -6.0;
+  EXPECT_FALSE(verification_accepts(c, in_sentence));
+  VoiceDetection quiet = d;  // no louder than the babble around it
+  quiet.level_db = 3.0;
+  EXPECT_FALSE(verification_accepts(c, quiet));
+  quiet.level_db = std::nan("");
+  EXPECT_FALSE(verification_accepts(c, quiet));
+  VoiceDetection close = d;  // either margin too small: dropped, never the wrong command
+  close.command_margin = 3.0;
+  EXPECT_FALSE(verification_accepts(c, close));
+  close = d;
+  close.phrase_margin = 1.0;
+  EXPECT_FALSE(verification_accepts(c, close));
+  // Without the phrase ratio and the level check, as before: the whole window and its margin decide.
+  VoiceConfig before;
+  before.verify_min_log_ratio = -20.0;
+  before.verify_min_margin = 4.0;
+  EXPECT_TRUE(verification_accepts(before, quiet));
+  EXPECT_FALSE(verification_accepts(before, in_sentence));
+  before.verify_min_log_ratio.reset();  // one pass: every hit
+  EXPECT_TRUE(verification_accepts(before, close));
+}
+
 TEST(VoiceSpotter, UnknownWordsAndMissingModelsAreClearErrors) {
   VoiceConfig c;
   set_phrase(c, VoiceCommand::Start, "start qzxqzx");

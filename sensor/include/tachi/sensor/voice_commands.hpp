@@ -55,6 +55,17 @@ struct VoiceConfig {
   /// starts or stops a cut the user did not ask for (issue 22).
   /// 4: chosen on tachi-voice-eval --speakers tune --sweep (docs/voice.md).
   double verify_min_margin = 4.0;
+  /// Second pass, for a phrase said inside a sentence: a hit whose whole-window ratio misses
+  /// verify_min_log_ratio (the words around the phrase are not silence) is still accepted when the
+  /// ratio over the phrase's own frames reaches this. Nothing: only the whole-window ratio counts.
+  std::optional<double> verify_min_phrase_log_ratio;
+  /// Second pass: the phrase-frames ratio must beat every other command's by at least this too, so
+  /// that words around a phrase cannot tip one command over another.
+  double verify_min_phrase_margin = 0.0;
+  /// Second pass: the phrase's level above the background's floor (dB; voice_spotter.cpp). Babble of
+  /// several talkers has no floor below its own level, so a keyword hit in it stands ~0-6 dB above;
+  /// a command said to the Kinect stands well above the room. Nothing: no level check.
+  std::optional<double> verify_min_level_db;
 };
 
 /// Lower-cases and collapses whitespace: " Start   Cutting " -> "start cutting".

@@ -26,7 +26,18 @@ struct VoiceDetection {
   /// The second pass's score minus that of the best phrase of another command (VoiceConfig::
   /// verify_min_margin); +infinity when no other command's phrase fits, NaN without a second pass.
   double command_margin = std::numeric_limits<double>::quiet_NaN();
+  /// The second pass's score with words allowed around the phrase (a phrase inside a sentence), and its
+  /// margin over another command; NaN without a second pass.
+  double phrase_score = std::numeric_limits<double>::quiet_NaN();
+  double phrase_margin = std::numeric_limits<double>::quiet_NaN();
+  /// The phrase's level above the background's floor (dB); NaN without a second pass.
+  double level_db = std::numeric_limits<double>::quiet_NaN();
 };
+
+/// The second pass's decision on one scored hit (VoiceConfig's verify_* thresholds): a command when
+/// its level is high enough, it beats every other command by the margins, and either its whole-window
+/// ratio or its phrase-frames ratio reaches its threshold. The spotter and tachi-voice-eval use this.
+bool verification_accepts(const VoiceConfig& config, const VoiceDetection& scored);
 
 class KeywordSpotter {
  public:

@@ -81,6 +81,7 @@ struct SimNode::Impl {
     const auto t0 = Clock::now();
     journal.emplace(live.journal, journal_fingerprint(options));
     ReplayedSamples applied{replay(journal->recovered(), session)};
+    for (const auto& record : journal->recovered()) replayed_samples += record.kind == JournalRecord::Kind::Hand ? 1 : 0;
     (void)session.take_cut_reports();      // the previous run reported them
     (void)session.take_topology_change();  // published whole below
     spdlog::info("tachi-sim: replayed {} journal records ({} steps, {} cut particles) from {} in {:.0f} ms",
@@ -128,7 +129,6 @@ struct SimNode::Impl {
     for (const auto& report : session.take_cut_reports()) {
       cut_writer.write(cut_msg(live.cloth_id, session.cloth().topology_version, report, cut_line, session_id));
       ++messages_out;
-      ++cuts;
       spdlog::info("tachi-sim: stroke {} cut {} particles over {:.3f} m; {} pieces, {} falling", report.stroke_id,
                    report.stroke.particles_duplicated, report.stroke.cut_length_m, report.pieces, report.fallen_pieces);
       heartbeat.set_metric("pieces", static_cast<double>(report.pieces));
@@ -233,15 +233,19 @@ struct SimNode::Impl {
         if (pending_latency_ns > 0) latency.add_since(pending_latency_ns, published_ns);
         pending_latency_ns = 0;
       }
-      heartbeat.set_metric("cuts", static_cast<double>(cuts));
+      heartbeat.set_metric("cuts", static_cast<double>(session.cuts()));  // strokes that cut, the open one included
       heartbeat.set_metric("cut_length_m", cut_length_m);
       heartbeat.set_metric("steps", static_cast<double>(session.steps()));
-      heartbeat.update(schedule.overruns() > 0 ? tachi_msg_NODE_DEGRADED : tachi_msg_NODE_RUNNING, samples_in,
-                       messages_out, "steps " + std::to_string(session.steps()));
+      // Degraded says why: the solver fell behind real time.
+      heartbeat.update(schedule.overruns() > 0 ? tachi_msg_NODE_DEGRADED : tachi_msg_NODE_RUNNING, samples_in, messages_out,
+                       (schedule.overruns() > 0 ? std::to_string(schedule.overruns()) + " steps overran their real-time slot; "
+                                                : std::string()) +
+                           "steps " + std::to_string(session.steps()));
     }
     if (live.max_steps && session.steps() >= static_cast<std::uint64_t>(*live.max_steps)) return false;
     if (live.duration_s > 0 && Clock::now() - start > std::chrono::duration<double>(live.duration_s)) return false;
-    if (live.exit_when_idle_s > 0 && samples_in > 0 &&
+    // A simulator restarted late in a run has had its hand samples (the replayed journal): idle counts too.
+    if (live.exit_when_idle_s > 0 && samples_in + replayed_samples > 0 &&
         Clock::now() - last_hand > std::chrono::duration<double>(live.exit_when_idle_s))
       return false;
     return true;
@@ -265,17 +269,22 @@ struct SimNode::Impl {
     for (const auto& report : session.take_cut_reports())
       cut_writer.write(cut_msg(live.cloth_id, session.cloth().topology_version, report, cut_line, session_id));
     publish_state();
-    // Let late readers (viewer, tests) receive the final topology and cuts before the process goes.
-    topology_writer.wait_for_acks(std::chrono::seconds(1));
-    delta_writer.wait_for_acks(std::chrono::seconds(1));
-    cut_writer.wait_for_acks(std::chrono::seconds(1));
+    // Let late readers (viewer, tests) receive the final topology and cuts before the process goes: one
+    // deadline for the three. Stopped by a signal (the whole run stopping, or the launcher's death) the
+    // readers are going too and their acks may never come: then only a glimpse, so that the process is
+    // gone within a second (docs/reliability.md, Signals).
+    const auto acks_due = Clock::now() + (common::stop_requested() ? std::chrono::milliseconds(100) : std::chrono::milliseconds(1000));
+    const auto left = [&] { return std::max<Clock::duration>(acks_due - Clock::now(), Clock::duration::zero()); };
+    topology_writer.wait_for_acks(left());
+    delta_writer.wait_for_acks(left());
+    cut_writer.wait_for_acks(left());
 
     Summary summary = summarize(session.cloth());
     summary.steps = static_cast<int>(session.steps());
     add_cut_summary(summary, session.cloth(), session.cutter());
     add_session_summary(summary, session);
     add_step_times(summary, step_ms);
-    summary.extra["hand_samples"] = samples_in;
+    summary.extra["hand_samples"] = samples_in + replayed_samples;  // the run's, across restarts
     summary.extra["hand_samples_rejected"] = rejected;
     summary.extra["step_overruns"] = schedule.overruns();
     summary.extra["grabs_refused"] = grabs_refused;
@@ -295,7 +304,8 @@ struct SimNode::Impl {
   const SessionOptions options;
   Session session;
   std::optional<Journal> journal;
-  ReplayedSamples replayed;
+  std::uint64_t replayed_samples = 0;  // hand samples a previous run of this journal applied (set by replay_journal)
+  ReplayedSamples replayed;            // initialised by replay_journal(): declared after what it sets
   bus::Reader<tachi_msg_StrokeSample> strokes;
   bus::Writer<tachi_msg_ClothTopology> topology_writer;
   bus::Writer<tachi_msg_ClothState> state_writer;
@@ -315,7 +325,7 @@ struct SimNode::Impl {
   std::optional<bus::Writer<tachi_msg_SceneObject>> object_writer;
   const Clock::time_point start;
   Clock::time_point last_hand;
-  std::uint64_t samples_in = 0, messages_out = 1, cuts = 0, grabs_refused = 0;
+  std::uint64_t samples_in = 0, messages_out = 1, grabs_refused = 0;
   std::uint64_t topology_updates = 0;
   std::size_t topology_bytes = 0;
   double cut_length_m = 0.0;

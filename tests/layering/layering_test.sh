@@ -11,11 +11,9 @@ stages=(sim filter sensor viewer launcher)
 # Known exceptions, each with its reason; the check fails when one is no longer needed, so the list only shrinks.
 #   sim/src/object.cpp reads a fakenect recording to build the object under the cloth (tachi_sim_object, kept out
 #   of tachi_sim); the way out is the recording reader in common/.
-#   viewer/live.cpp names the simulator's blade with sim::Blade; the way out is a Blade enum in idl/tachi.idl.
 allowed_includes=(
   "sim/src/object.cpp:tachi/sensor/depth_model.hpp"
   "sim/src/object.cpp:tachi/sensor/fakenect_recording.hpp"
-  "viewer/live.cpp:tachi/sim/blade.hpp"
 )
 #   launcher/main.cpp is the `tachi` tool's subcommand table (run, record, play, echo, ...), not a stage's main;
 #   sensor/eval_main.cpp is the accuracy evaluation tool.

@@ -2,7 +2,7 @@
 
 #include "src/bus_adapter.hpp"
 #include "tachi/bus/heartbeat.hpp"
-#include "tachi/sim/blade.hpp"
+#include "tachi/bus/blade.hpp"
 #include "tachi/viewer/controls.hpp"
 #include "tachi/viewer/frame_stats.hpp"
 #include "tachi/viewer/mesh_file.hpp"
@@ -195,9 +195,7 @@ std::optional<std::string> blade_of(const tachi_msg_NodeStatus& status) {
   for (std::uint32_t i = 0; i < status.metrics._length; ++i) {
     const auto& metric = status.metrics._buffer[i];
     if (std::string_view(metric.name) != "blade") continue;
-    for (const sim::Blade blade : {sim::Blade::Razor, sim::Blade::Scalpel, sim::Blade::Utility, sim::Blade::Kitchen,
-                                   sim::Blade::Hunting, sim::Blade::Worn})
-      if (metric.value == static_cast<double>(blade)) return std::string(sim::to_string(blade));
+    if (const auto name = bus::blade_name(metric.value)) return std::string(*name);
   }
   return std::nullopt;
 }

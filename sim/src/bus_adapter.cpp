@@ -4,6 +4,18 @@
 #include <cmath>
 
 namespace tachi::sim {
+
+tachi_msg_Blade to_msg(Blade blade) {
+  switch (blade) {
+    case Blade::Razor: return tachi_msg_BLADE_RAZOR;
+    case Blade::Scalpel: return tachi_msg_BLADE_SCALPEL;
+    case Blade::Utility: return tachi_msg_BLADE_UTILITY;
+    case Blade::Kitchen: return tachi_msg_BLADE_KITCHEN;
+    case Blade::Hunting: return tachi_msg_BLADE_HUNTING;
+    case Blade::Worn: return tachi_msg_BLADE_WORN;
+  }
+  return tachi_msg_BLADE_SCALPEL;  // unreachable: every Blade is listed
+}
 namespace {
 template <class Seq, class T>
 void point_at(Seq& seq, std::vector<T>& data) {

@@ -4,6 +4,7 @@
 #pragma once
 
 #include "tachi/bus/topics.hpp"
+#include "tachi/sim/blade.hpp"
 #include "tachi/sim/cloth.hpp"
 #include "tachi/sim/cutting.hpp"
 
@@ -25,6 +26,9 @@ struct StrokeInput {
   bool holding = false;
   bool grabbing = false;  ///< GATE_GRABBING: the hand holds the cloth
 };
+
+/// The blade as tachi.idl names it (the value of tachi-sim's heartbeat metric "blade").
+tachi_msg_Blade to_msg(Blade blade);
 
 /// Rejects samples a filter should never send but a faulty peer might: non-finite coordinates or a
 /// hand absurdly far from the cloth (> 100 m). Returns nothing for those.

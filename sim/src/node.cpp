@@ -72,7 +72,7 @@ struct SimNode::Impl {
       object_writer.emplace(dds, bus::topics::scene_object);
       object_writer->write(object.fill(live.cloth_id, session.object()->points(), session_id));
     }
-    heartbeat.set_metric("blade", static_cast<double>(shared.blade));  // index of Blade: the viewer's HUD names it
+    heartbeat.set_metric("blade", static_cast<double>(to_msg(shared.blade)));  // tachi.idl's Blade: the viewer's HUD names it
   }
 
   /// No lost cuts: replay what a previous run of this journal applied, then append to it.

@@ -1,6 +1,5 @@
 #include "tachi/sim/object.hpp"
 
-#include "tachi/filter/workspace.hpp"
 #include "tachi/sensor/depth_model.hpp"
 #include "tachi/sensor/fakenect_recording.hpp"
 
@@ -72,7 +71,8 @@ std::vector<Eigen::Vector3f> load_ply_points(const std::filesystem::path& file) 
   return points;
 }
 
-std::vector<Eigen::Vector3f> scene_from_recording(const std::filesystem::path& dir, int frames, int stride) {
+std::vector<Eigen::Vector3f> scene_from_recording(const std::filesystem::path& dir, const common::WorkspaceMapping& mapping,
+                                                  int frames, int stride) {
   std::vector<sensor::IndexEntry> depth;
   try {
     for (const auto& e : sensor::read_index(dir)) {
@@ -87,7 +87,6 @@ std::vector<Eigen::Vector3f> scene_from_recording(const std::filesystem::path& d
   for (std::size_t f = 0; f < depth.size(); ++f) sensor::read_depth_file(dir / depth[f].file, raw[f]);
   // The first frames show the scene without the hand (recordings/README.md): the per-pixel median
   // over them is the static scene, robust to a frame's noise.
-  const filter::WorkspaceMapping mapping = filter::default_mapping();
   std::vector<Eigen::Vector3f> points;
   std::vector<std::uint16_t> values;
   for (int v = 0; v < sensor::kDepthHeight; v += stride) {
@@ -138,7 +137,7 @@ std::shared_ptr<const PointCloudCollider> load_object(const ObjectOptions& o) {
     for (const Eigen::Vector3f& p : load_ply_points(o.file)) points.push_back(pose * p);
   }
   if (!o.recording.empty()) {
-    const auto scene = scene_from_recording(o.recording);
+    const auto scene = scene_from_recording(o.recording, o.workspace);
     points.insert(points.end(), scene.begin(), scene.end());
   }
   if (points.empty()) return nullptr;

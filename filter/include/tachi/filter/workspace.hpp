@@ -1,32 +1,13 @@
-// Workspace mapping: where the user's hand is on the virtual cloth.
-// A similarity transform world = scale * (R * camera + t) from the sensor's camera frame
-// (x right, y down, z forward, metres) to the cloth's world frame (cloth in z = 0, x right, y up,
-// centred at the origin). The default is a mirror for a user facing the sensor (docs/filter.md).
+// The filter's workspace mapping is the shared one (tachi/common/workspace.hpp): the simulator places a
+// recording's scene with the same type.
 #pragma once
 
-#include <Eigen/Core>
-
-#include <optional>
-#include <string>
+#include "tachi/common/workspace.hpp"
 
 namespace tachi::filter {
 
-struct WorkspaceMapping {
-  Eigen::Matrix3f rotation = Eigen::Matrix3f::Identity();  ///< proper rotation (orthonormal, det +1)
-  Eigen::Vector3f translation_m = Eigen::Vector3f::Zero();
-  float scale = 1.0F;  ///< world metres per (rotated, translated) camera metre
-
-  Eigen::Vector3f to_world(const Eigen::Vector3f& camera) const;
-  Eigen::Vector3f to_camera(const Eigen::Vector3f& world) const;
-};
-
-/// The mirror mapping: the user faces the sensor, so their right is the camera's -x and their up is
-/// the camera's -y; a 180-degree turn about z maps both onto world +x and +y, and a hand
-/// `plane_distance_m` from the sensor lands on the cloth plane z = 0 (the user's side is world +z).
-WorkspaceMapping default_mapping(float plane_distance_m = 1.0F);
-
-/// Why a mapping is unusable, or nothing when it is valid (rotation orthonormal with det +1 within 1e-3,
-/// scale finite and > 0, translation finite).
-std::optional<std::string> validate(const WorkspaceMapping& mapping);
+using common::default_mapping;
+using common::validate;
+using common::WorkspaceMapping;
 
 }  // namespace tachi::filter

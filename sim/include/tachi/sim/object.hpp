@@ -6,6 +6,7 @@
 // assimp and the sensor library.
 #pragma once
 
+#include "tachi/common/workspace.hpp"
 #include "tachi/sim/collision.hpp"
 
 #include <CLI/CLI.hpp>
@@ -38,16 +39,19 @@ struct ObjectPose {
 
 /// The static scene of a fakenect recording in the world frame: per pixel the median of the first
 /// `frames` depth frames (pixels without a reading in most of them are dropped), every `stride`-th
-/// pixel back-projected with the recording's depth model and mapped with the filter's default
-/// camera-to-world mapping. Throws std::runtime_error naming the recording on a bad one.
-[[nodiscard]] std::vector<Eigen::Vector3f> scene_from_recording(const std::filesystem::path& dir, int frames = 5,
-                                                               int stride = 4);
+/// pixel back-projected with the recording's depth model and mapped to the world with `workspace`: the
+/// filter's mapping, so the scene lands where the recorded hand does. Throws std::runtime_error naming the
+/// recording on a bad one.
+[[nodiscard]] std::vector<Eigen::Vector3f> scene_from_recording(const std::filesystem::path& dir,
+                                                               const common::WorkspaceMapping& workspace,
+                                                               int frames = 5, int stride = 4);
 
 /// What --object, --object-pose, --object-from-recording ask for.
 struct ObjectOptions {
   std::filesystem::path file;
   ObjectPose pose;
   std::filesystem::path recording;
+  common::WorkspaceMapping workspace = common::default_mapping();  ///< camera -> world for the recording (the filter's)
   float influence_m = 0.03F;     ///< repulsion reaches this far from an object point
   float stiffness = 300.0F;      ///< repulsive acceleration at zero distance, m/s^2
 };

@@ -1,10 +1,10 @@
-#include "tachi/filter/workspace.hpp"
+#include "tachi/common/workspace.hpp"
 
 #include <Eigen/LU>
 
 #include <cmath>
 
-namespace tachi::filter {
+namespace tachi::common {
 
 Eigen::Vector3f WorkspaceMapping::to_world(const Eigen::Vector3f& camera) const {
   return scale * (rotation * camera + translation_m);
@@ -33,4 +33,4 @@ std::optional<std::string> validate(const WorkspaceMapping& mapping) {
   return std::nullopt;
 }
 
-}  // namespace tachi::filter
+}  // namespace tachi::common

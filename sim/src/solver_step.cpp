@@ -41,6 +41,11 @@ int default_solver_threads() {
 
 Solver::Solver(SolverParams params) : params_(std::move(params)) {}
 
+Solver::Solver(const Cloth& cloth, SolverParams params) : Solver(std::move(params)) {
+  refresh_caches(cloth);
+  if (tether_order_stale_) order_tethers();
+}
+
 void Solver::step(Cloth& cloth, const Colliders& colliders) {
   refresh_caches(cloth);
   continue_repairs(cloth);

@@ -205,11 +205,11 @@ int run(const RunConfig& config, const RunPaths& paths) {
           if (spec.node == "viewer" && !recording) viewer_closed = true;
           break;
         case ExitMeaning::Usage:
-        case ExitMeaning::NoDevice: {
-          const bool usage = meaning == ExitMeaning::Usage;
+        case ExitMeaning::NoDevice:
+        case ExitMeaning::DiskFull: {
           spdlog::error("{} cannot run ({}); its log {} ends:\n{}", spec.program, describe_exit(*status), c.child->log().string(),
                         c.child->last_log_lines(10));
-          exit_code = usage ? kRunUsage : kRunNoDevice;
+          exit_code = meaning == ExitMeaning::Usage ? kRunUsage : meaning == ExitMeaning::NoDevice ? kRunNoDevice : kRunDiskFull;
           ended = spec.program + " " + describe_exit(*status);
           failed = true;
           break;

@@ -25,8 +25,9 @@ ExitMeaning classify_exit(int status, bool finite) {
   if (WIFEXITED(status)) {
     const int code = WEXITSTATUS(status);
     if (code == 0 && finite) return ExitMeaning::Done;
-    if (code == 2) return ExitMeaning::Usage;
-    if (code == 3) return ExitMeaning::NoDevice;
+    if (code == common::kExitUsage) return ExitMeaning::Usage;
+    if (code == common::kExitNoDevice) return ExitMeaning::NoDevice;
+    if (code == common::kExitDiskFull) return ExitMeaning::DiskFull;
   }
   return ExitMeaning::Died;
 }

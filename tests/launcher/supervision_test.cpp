@@ -39,6 +39,7 @@ TEST(ExitMeaning, FiniteChildrenFinishOthersDie) {
   EXPECT_EQ(classify_exit(killed(SIGKILL), true), ExitMeaning::Died);
   EXPECT_EQ(classify_exit(exited(2), false), ExitMeaning::Usage);
   EXPECT_EQ(classify_exit(exited(3), true), ExitMeaning::NoDevice);
+  EXPECT_EQ(classify_exit(exited(tachi::common::kExitDiskFull), false), ExitMeaning::DiskFull);  // restarting cannot free space
   EXPECT_EQ(describe_exit(killed(SIGKILL)), "killed by SIGKILL");
   EXPECT_EQ(describe_exit(exited(4)), "exit code 4");
 }

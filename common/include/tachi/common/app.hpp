@@ -1,7 +1,9 @@
 // Conventions every tachi executable shares, so that `main` stays a dozen lines:
 // one way to parse flags (CLI11), one way to log (spdlog), one way to stop (SIGINT/SIGTERM),
-// and one table of exit codes (documented in docs/cli.md).
+// and one table of exit codes (exit_codes.hpp, documented in docs/cli.md).
 #pragma once
+
+#include "tachi/common/exit_codes.hpp"
 
 #include <CLI/CLI.hpp>
 
@@ -11,14 +13,6 @@
 #include <string>
 
 namespace tachi::common {
-
-/// Process exit codes shared by every executable.
-enum ExitCode : int {
-  kExitOk = 0,
-  kExitFailure = 1,  ///< runtime error: bad input data, lost peer, I/O failure
-  kExitUsage = 2,    ///< bad flags: one line names the flag and the allowed range
-  kExitNoDevice = 3, ///< no Kinect found (live mode only)
-};
 
 /// Flags every process that joins the DDS bus understands.
 struct BusOptions {

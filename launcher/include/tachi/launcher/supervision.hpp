@@ -4,6 +4,8 @@
 // no device) stop the run at once.
 #pragma once
 
+#include "tachi/common/exit_codes.hpp"
+
 #include <chrono>
 #include <deque>
 #include <string>
@@ -17,6 +19,7 @@ enum RunExit : int {
   kRunUsage = 2,         ///< bad flag or config; or a child rejected its flags
   kRunNoDevice = 3,      ///< no Kinect / no capture device (a child exited 3)
   kRunChildGaveUp = 4,   ///< a child kept dying (max deaths within the window)
+  kRunDiskFull = common::kExitDiskFull,  ///< a child ran out of disk space (a child exited 5)
 };
 
 class RestartPolicy {
@@ -44,6 +47,7 @@ enum class ExitMeaning {
   Died,      ///< crashed, was killed, or a long-running child ended by itself: restart
   Usage,     ///< exit 2: its flags are wrong; restarting cannot help
   NoDevice,  ///< exit 3: no Kinect / capture device
+  DiskFull,  ///< exit 5: no space left for its outputs; a restart would only fail again
 };
 /// `status` as waitpid() reports it.
 [[nodiscard]] ExitMeaning classify_exit(int status, bool finite);

@@ -442,6 +442,7 @@ Summary run_offline(const OfflineOptions& options) {
   // The stroke is cut while stepping, each sample at its own time (issue 4), through the session's
   // blade (it cuts only once its contact force reaches the blade's sharpness force).
   StrokeFile stroke;
+  std::size_t stroke_outliers = 0;
   if (!options.stroke_file.empty()) {
     std::ifstream in{options.stroke_file};
     if (!in) throw std::runtime_error("cannot read " + options.stroke_file.string());
@@ -450,6 +451,9 @@ Summary run_offline(const OfflineOptions& options) {
     if (stroke.skipped_rows > stroke.problems.size())
       spdlog::warn("{}: {} rows skipped in all", options.stroke_file.string(), stroke.skipped_rows);
     if (!stroke.error.empty()) throw std::runtime_error(options.stroke_file.string() + ": " + stroke.error);
+    stroke_outliers = drop_impossible_samples(stroke.samples);
+    if (stroke_outliers > 0)
+      spdlog::warn("{}: {} samples faster than a hand (> 10 m/s) are outliers, not cut along", options.stroke_file.string(), stroke_outliers);
   }
   std::size_t next_sample = 0;
 
@@ -476,6 +480,7 @@ Summary run_offline(const OfflineOptions& options) {
   summary.extra["stroke_samples"] = stroke.samples.size();
   summary.extra["stroke_samples_applied"] = next_sample;
   summary.extra["stroke_rows_skipped"] = stroke.skipped_rows;
+  summary.extra["stroke_outliers"] = stroke_outliers;
   add_step_times(summary, step_ms);
   if (!options.export_dir.empty()) export_run(summary, session.cloth(), options.export_dir, &session.cutter());
   return summary;

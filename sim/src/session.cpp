@@ -24,6 +24,7 @@ BladeContactParams blade_params(const SessionOptions& options) {
 StrokeOptions cutter_options(const SessionOptions& options) {
   StrokeOptions s = options.stroke;
   s.drag.gain_mps_per_n = 0.0F;
+  if (s.grid_hysteresis_cells <= 0.0) s.grid_hysteresis_cells = kGridHysteresisCells;
   return s;
 }
 

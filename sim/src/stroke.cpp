@@ -36,6 +36,24 @@ bool stroke_sample_due(double t_s, long long step, double dt_s) {
   return t_s < (static_cast<double>(step) + 0.5) * dt_s;
 }
 
+std::size_t drop_impossible_samples(std::vector<StrokeSample>& samples, const common::OutlierParams& params,
+                                    double nominal_dt_s) {
+  common::HandSpeedLimit limit{params, nominal_dt_s};
+  std::size_t dropped = 0;
+  std::vector<StrokeSample> kept;
+  kept.reserve(samples.size());
+  for (const StrokeSample& s : samples) {
+    const auto stamp_ns = static_cast<std::int64_t>(std::llround(s.t * 1e9));
+    if (limit.check(s.position, stamp_ns) == common::HandSpeedLimit::Verdict::Outlier) {
+      ++dropped;
+      continue;
+    }
+    kept.push_back(s);
+  }
+  samples = std::move(kept);
+  return dropped;
+}
+
 StrokeFile parse_stroke_csv(std::istream& in) {
   StrokeFile out;
   common::CsvReader csv(in);
@@ -263,6 +281,17 @@ GridCoord StrokeCutter::boundary_point(const Eigen::Vector2d& uv) const {
   return {static_cast<int>(std::lround(u)), static_cast<int>(std::lround(v))};
 }
 
+GridCoord StrokeCutter::grid_point(const Eigen::Vector2d& uv) const {
+  GridCoord g = boundary_point(uv);
+  if (!previous_) return g;
+  const GridCoord last = previous_->grid;
+  const double keep = 0.5 + options_.grid_hysteresis_cells;
+  const Eigen::Vector2d on = clamp_uv(uv);
+  if (std::abs(on.x() - last.u) <= keep) g.u = last.u;
+  if (std::abs(on.y() - last.v) <= keep) g.v = last.v;
+  return g;
+}
+
 Eigen::Vector2d StrokeCutter::clamp_uv(const Eigen::Vector2d& uv) const {
   return {std::clamp(uv.x(), 0.0, static_cast<double>(cloth_->columns - 1)),
           std::clamp(uv.y(), 0.0, static_cast<double>(cloth_->rows - 1))};
@@ -380,7 +409,9 @@ TopologyChange StrokeCutter::add_sample(const StrokeSample& sample) {
   if (!sample.position.allFinite()) return change;
   if (!open_) change.merge(begin_stroke());
   const ClothPoint at = locator_.locate(*cloth_, sample.position);
-  const Point point{at.uv, at.grid, sample.position, at.inside};
+  // Grid mode rounds (u, v) with hysteresis (grid_point); the nearest particle's own grid point flipped
+  // between two rows on a stroke between them.
+  const Point point{at.uv, follows_path() ? at.grid : grid_point(at.uv), sample.position, at.inside};
   if (follows_path() && line_ && previous_ && previous_->inside && point.inside) {
     // The nearest particle can be on another layer of a folded or swinging cloth: the point then jumps
     // across the cloth and back on the next sample, and a cut that followed it would cut out a sliver

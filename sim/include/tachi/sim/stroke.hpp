@@ -15,6 +15,7 @@
 //  * the blade's force drags the neighbourhood of each particle as it is cut (seed 001, blade.hpp).
 #pragma once
 
+#include "tachi/common/hand_speed.hpp"
 #include "tachi/sim/blade.hpp"
 #include "tachi/sim/cloth.hpp"
 #include "tachi/sim/cut_line.hpp"
@@ -58,6 +59,14 @@ inline constexpr double kMaxStrokeCoordinate_m = 100.0;
 /// then met the cloth one step apart (the worn blade's cut: 3 or 21 pieces). Half-way between steps no
 /// such clock ticks.
 [[nodiscard]] bool stroke_sample_due(double t_s, long long step, double dt_s);
+
+/// Removes the samples a hand cannot have made: faster than `params.max_hand_speed_mps` (10 m/s) from the
+/// last accepted sample, with the filter's rule and threshold (common/hand_speed.hpp), so a stroke CSV
+/// (tachi-sim --stroke) is held to what live samples are. Such a sample is never cut along (a row 2 m off
+/// the cloth in 1/60 s would otherwise cut a straight chord out to it and back). Rows with the same time
+/// count `nominal_dt_s` apart. Returns how many were removed.
+std::size_t drop_impossible_samples(std::vector<StrokeSample>& samples, const common::OutlierParams& params = {},
+                                    double nominal_dt_s = 1.0 / 60.0);
 
 /// Parses `t,x,y,z` CSV (header required; blank lines ignored; bad rows skipped and counted).
 [[nodiscard]] StrokeFile parse_stroke_csv(std::istream& in);
@@ -123,8 +132,17 @@ struct StrokeOptions {
   double exact_max_jump_ratio = 2.0;
   double exact_max_jump_cells = 3.0;
   double max_lag_cells = 2.0;     ///< simplification: longest chord before it joins the cut
+  /// Grid mode: a sample's grid point is its (u, v) rounded, but it keeps the previous sample's row (column)
+  /// until it is more than 0.5 + this many cells from it: a stroke along the middle between two rows (y = 0
+  /// on an even grid) otherwise flipped between them on a 1e-6 m wobble, and its cut with them. 0 here (seed
+  /// 000's rounding, what the library's tests pin down); the session (tachi-sim) uses kGridHysteresisCells.
+  double grid_hysteresis_cells = 0.0;
   double inside_margin_cells = 0.5;
 };
+
+/// The grid mode's hysteresis in tachi-sim (Session), cells: a quarter cell, not tuned (the filed stroke lies
+/// exactly between two rows; any margin keeps it on one).
+inline constexpr double kGridHysteresisCells = 0.25;
 
 /// What a stroke did so far.
 struct StrokeReport {
@@ -177,6 +195,8 @@ class StrokeCutter {
   [[nodiscard]] double at_least(double cells, double metres) const;
   void add_line_to_report(const std::vector<GridCoord>& line);
   [[nodiscard]] GridCoord boundary_point(const Eigen::Vector2d& uv) const;
+  /// Grid mode: uv rounded to a grid point, with hysteresis against the previous sample's.
+  [[nodiscard]] GridCoord grid_point(const Eigen::Vector2d& uv) const;
   [[nodiscard]] Eigen::Vector2d clamp_uv(const Eigen::Vector2d& uv) const;
   [[nodiscard]] bool follows_path() const { return options_.mode != CutMode::Grid; }
 

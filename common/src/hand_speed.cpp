@@ -1,6 +1,6 @@
-#include "tachi/filter/stroke_outliers.hpp"
+#include "tachi/common/hand_speed.hpp"
 
-namespace tachi::filter {
+namespace tachi::common {
 
 bool HandSpeedLimit::reachable(const std::pair<Eigen::Vector3f, std::int64_t>& from, const Eigen::Vector3f& to,
                                std::int64_t stamp_ns) const {
@@ -29,4 +29,4 @@ HandSpeedLimit::Verdict HandSpeedLimit::check(const Eigen::Vector3f& world_m, st
   return Verdict::Outlier;
 }
 
-}  // namespace tachi::filter
+}  // namespace tachi::common

@@ -1,0 +1,65 @@
+// Cuts that do not flip (docs/cutting.md, "Cuts that do not flip"): random hand-like strokes through the
+// offline driver (blade contact, stroke cutter, solver), every blade and every cut mode.
+//  * a stroke moved by 1e-6 m gives the same pieces and a cut length within 1 %;
+//  * a stroke gone over forward, back and forward again gives the same pieces as once.
+// The full 500 strokes: bench/sim/cut_stability (seeds 1000..; these use 5000..).
+#include "tachi/sim/cut_stability.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <string>
+#include <unistd.h>
+
+namespace {
+
+using namespace tachi::sim;
+
+constexpr Blade kBlades[] = {Blade::Razor, Blade::Scalpel, Blade::Utility, Blade::Kitchen, Blade::Hunting, Blade::Worn};
+constexpr CutMode kModes[] = {CutMode::Exact, CutMode::Grid, CutMode::Delete};
+constexpr int kStrokes = 10;
+constexpr std::uint64_t kFirstSeed = 5000;
+constexpr int kGrid = 32;
+
+std::filesystem::path scratch(const char* name) {
+  return std::filesystem::temp_directory_path() / (std::string{name} + "_" + std::to_string(::getpid()) + ".csv");
+}
+
+// DISABLED: still missed (docs/cutting.md, "Cuts that do not flip": the worn blade's drag bifurcates).
+TEST(CutStability, DISABLED_AStrokeMovedByAHairCutsTheSame) {
+  const auto file = scratch("cut_stability_hair");
+  for (int k = 0; k < kStrokes; ++k) {
+    const std::uint64_t seed = kFirstSeed + static_cast<std::uint64_t>(k);
+    const auto stroke = random_stroke(seed);
+    const auto moved = perturbed(stroke, 1e-6, seed * 7919U);
+    for (const Blade blade : kBlades) {
+      for (const CutMode mode : kModes) {
+        SCOPED_TRACE("seed " + std::to_string(seed) + ", " + std::string{to_string(blade)} + ", " + std::string{to_string(mode)});
+        const CutOutcome a = cut_outcome(stroke, blade, mode, kGrid, file);
+        const CutOutcome b = cut_outcome(moved, blade, mode, kGrid, file);
+        EXPECT_EQ(a.pieces, b.pieces);
+        EXPECT_LE(std::abs(a.cut_length_m - b.cut_length_m), 0.01 * std::max(a.cut_length_m, b.cut_length_m) + 1e-6);
+      }
+    }
+  }
+  std::filesystem::remove(file);
+}
+
+// DISABLED: still missed (docs/cutting.md, "Cuts that do not flip": no re-cut rule yet).
+TEST(CutStability, DISABLED_GoingOverACutAgainChangesNothing) {
+  const auto file = scratch("cut_stability_recut");
+  for (int k = 0; k < kStrokes; ++k) {
+    const std::uint64_t seed = kFirstSeed + static_cast<std::uint64_t>(k);
+    const auto stroke = random_stroke(seed);
+    for (const CutMode mode : kModes) {
+      SCOPED_TRACE("seed " + std::to_string(seed) + ", " + std::string{to_string(mode)});
+      const CutOutcome once = cut_outcome(stroke, Blade::Razor, mode, kGrid, file);
+      const CutOutcome again = cut_outcome(there_back_and_there(stroke), Blade::Razor, mode, kGrid, file);
+      EXPECT_EQ(once.pieces, again.pieces);
+    }
+  }
+  std::filesystem::remove(file);
+}
+
+}  // namespace

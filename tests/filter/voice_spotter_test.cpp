@@ -218,6 +218,8 @@ TEST(VoiceSpotter, TheSecondPassDecisionNeedsTheLevelTheMarginsAndOneOfTheTwoRat
   VoiceConfig before;
   before.verify_min_log_ratio = -20.0;
   before.verify_min_margin = 4.0;
+  before.verify_min_phrase_margin = 0.0;
+  before.verify_min_level_db.reset();
   EXPECT_TRUE(verification_accepts(before, quiet));
   EXPECT_FALSE(verification_accepts(before, in_sentence));
   before.verify_min_log_ratio.reset();  // one pass: every hit

@@ -29,6 +29,10 @@ void ClothSolver::step(Cloth& cloth, const Colliders& colliders) {
   std::visit([&](auto& solver) { solver.step(cloth, colliders); }, solver_);
 }
 
+void ClothSolver::prepare(const Cloth& cloth) {
+  if (auto* pbd = std::get_if<Solver>(&solver_)) pbd->prepare(cloth);
+}
+
 float ClothSolver::dt() const {
   return std::visit([](const auto& solver) { return solver.params().dt; }, solver_);
 }

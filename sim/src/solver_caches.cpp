@@ -69,7 +69,7 @@ void Solver::full_build(const Cloth& cloth, std::vector<std::uint32_t> pins) {
   reserve_touched(flood_open_, particle_room);
   reserve_touched(flood_settled_, particle_room);
   reserve_touched(flood_met_, particle_room);
-  reserve_touched(flood_parent_, particle_room);
+  flood_sets_.reserve(particle_room);
   reserve_touched(work_, particle_room);
   reserve_touched(old_work_, particle_room);
   reserve_touched(slot_, cloth.spring_a.capacity());

@@ -41,7 +41,9 @@ int default_solver_threads() {
 
 Solver::Solver(SolverParams params) : params_(std::move(params)) {}
 
-Solver::Solver(const Cloth& cloth, SolverParams params) : Solver(std::move(params)) {
+Solver::Solver(const Cloth& cloth, SolverParams params) : Solver(std::move(params)) { prepare(cloth); }
+
+void Solver::prepare(const Cloth& cloth) {
   refresh_caches(cloth);
   if (tether_order_stale_) order_tethers();
 }

@@ -1,7 +1,7 @@
 // After a cut: the open particles that the cut separated from a pin group lose that group's tether at once
 // (release_cut_off): the touched open particles are flooded through live springs, collecting the pin groups
 // whose settled particles each component meets; a large cut-off piece is labelled instead by union-find over
-// the spring arrays (Tarjan 1975; release_cut_off_by_components, the solver's own union-find).
+// the spring arrays (Tarjan 1975; release_cut_off_by_components, with the project's one UnionFind, union_find.hpp).
 #include "tachi/sim/solver.hpp"
 
 #include "solver_common.hpp"
@@ -134,13 +134,8 @@ void Solver::release_cut_off_by_components(const Cloth& cloth) {
       settled_bits[i] |= settled(open[i], dist[i]) ? bit : std::uint8_t{0};
     }
   }
-  auto& parent = flood_parent_;
-  parent.resize(n);
-  std::iota(parent.begin(), parent.end(), 0U);
-  const auto find = [&](std::uint32_t i) {
-    while (parent[i] != i) i = parent[i] = parent[parent[i]];
-    return i;
-  };
+  auto& sets = flood_sets_;
+  sets.reset(n);
   // What each component meets: its own particles' settled groups and those of the settled particles next to
   // it. A spring from an open particle to one that is not gives the open one its neighbour's bits now (in a
   // copy: flood_settled_ is read as it was), and they are folded into the roots once the components are known.
@@ -153,9 +148,7 @@ void Solver::release_cut_off_by_components(const Cloth& cloth) {
     const bool a_open = flood_open_[a] != 0;
     const bool b_open = flood_open_[b] != 0;
     if (a_open && b_open) {
-      const std::uint32_t ra = find(a);
-      const std::uint32_t rb = find(b);
-      if (ra != rb) parent[std::max(ra, rb)] = std::min(ra, rb);
+      sets.unite(a, b);
     } else if (a_open) {
       met[a] |= flood_settled_[b];
     } else if (b_open) {
@@ -163,11 +156,12 @@ void Solver::release_cut_off_by_components(const Cloth& cloth) {
     }
   }
   for (std::uint32_t i = 0; i < n; ++i) {
-    if (flood_open_[i] != 0 && parent[i] != i) met[find(i)] |= met[i];
+    if (flood_open_[i] == 0) continue;
+    if (const std::uint32_t root = sets.find(i); root != i) met[root] |= met[i];
   }
   for (std::uint32_t i = 0; i < n; ++i) {
     if (flood_open_[i] == 0) continue;
-    const std::uint32_t missing = all & ~met[find(i)] & flood_open_[i];
+    const std::uint32_t missing = all & ~met[sets.find(i)] & flood_open_[i];
     for (std::size_t s = 0; s < pin_groups_.size(); ++s) {
       if ((missing & (1U << s)) != 0) release(pin_groups_[s], i);
     }

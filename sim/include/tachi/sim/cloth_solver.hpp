@@ -30,6 +30,9 @@ class ClothSolver {
   explicit ClothSolver(const SolverParams& pbd = {}) : solver_(Solver{pbd}) {}
 
   void step(Cloth& cloth, const Colliders& colliders = {});
+  /// Builds the position-based solver's caches now (Solver::prepare), so the first step is an ordinary
+  /// one; Provot's solver keeps none.
+  void prepare(const Cloth& cloth);
   [[nodiscard]] float dt() const;
   [[nodiscard]] SolverKind kind() const { return solver_.index() == 0 ? SolverKind::Pbd : SolverKind::Provot; }
 

@@ -19,6 +19,7 @@
 
 #include "tachi/sim/cloth.hpp"
 #include "tachi/sim/collision.hpp"
+#include "tachi/sim/union_find.hpp"
 
 #include <Eigen/Core>
 
@@ -76,6 +77,9 @@ class Solver {
   /// took 190-440 ms, 15-35 times an ordinary one): the first step is then an ordinary one. Construct it after
   /// the cloth's room for cuts is reserved (StrokeCutter, Cloth::reserve): the build sizes its arrays to it.
   Solver(const Cloth& cloth, SolverParams params);
+  /// What that constructor does, for a solver made before the cloth's room for cuts was reserved (a Session
+  /// builds its cutter after its solver): builds the caches for `cloth` now.
+  void prepare(const Cloth& cloth);
 
   /// Advances the cloth by params().dt.
   void step(Cloth& cloth, const Colliders& colliders = {});
@@ -289,7 +293,7 @@ class Solver {
   std::vector<std::uint8_t> flood_open_;
   std::vector<std::uint8_t> flood_settled_;
   std::vector<std::uint8_t> flood_met_;
-  std::vector<std::uint32_t> flood_parent_;
+  UnionFind<std::uint32_t> flood_sets_;
   std::vector<std::uint8_t> touched_mark_;  ///< per particle: touched by the update's springs (cleared after it)
   // Positions with the inverse mass in w, during a step; element 0 is the fixed padding particle.
   std::vector<Eigen::Vector4f> work_;

@@ -1,6 +1,7 @@
 // Disjoint sets over 0 .. n-1 (union-find with path halving; Tarjan 1975, path halving after Tarjan and
 // van Leeuwen 1984): the one used for a cloth's pieces (pieces.cpp) and for the groups of a particle's
-// triangle fan that stay connected across uncut edges (cutting.cpp, exact_cut.cpp). The storage is kept
+// triangle fan that stay connected across uncut edges (cutting.cpp, exact_cut.cpp), and for the open
+// particles' components when a cut-off piece loses its tethers (tether_release.cpp). The storage is kept
 // between uses (reset), so a cut that splits fans allocates nothing once it has grown.
 #pragma once
 
@@ -23,6 +24,15 @@ class UnionFind {
     std::iota(parent_.begin(), parent_.end(), Index{0});
   }
   [[nodiscard]] std::size_t size() const { return parent_.size(); }
+  /// Room for n elements, its pages touched now, so a reset to n later neither allocates nor faults (the
+  /// solver sizes it to the cloth's room for cuts before the first timed step).
+  void reserve(std::size_t n) {
+    if (n <= parent_.capacity()) return;
+    const std::size_t size = parent_.size();
+    parent_.reserve(n);
+    parent_.resize(n);
+    parent_.resize(size);
+  }
 
   /// The representative of i's set: its smallest member is not promised, only that it is the same for
   /// every member until the next unite.

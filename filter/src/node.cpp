@@ -86,6 +86,9 @@ struct FilterNode::Impl {
       spdlog::info("voice command {} (\"{}\")", kNames[static_cast<int>(command)], c->phrase);
       if (const auto why = filter.on_voice(command)) spdlog::warn("{}", *why);
       journal_append({FilterJournalRecord::Kind::Voice, 0, {}, {}, command});
+      // A command changes the gate: monitors (and tests) see it applied at once, not at the next beat.
+      heartbeat.set_metric("voice_commands", static_cast<double>(++voice_commands));
+      heartbeat.publish_at_next_update();
     }
   }
 
@@ -138,6 +141,8 @@ struct FilterNode::Impl {
         guard.positions(newest.positions._buffer, newest.positions._length, kMaxClothRange_m)) {
       filter.on_cloth_state({newest.positions._buffer, newest.positions._length});
       catch_up.cloth_seen();
+      heartbeat.set_metric("cloth_states", static_cast<double>(++cloth_states));
+      if (cloth_states == 1) heartbeat.publish_at_next_update();  // the distance gate has a cloth from now on
     }
   }
 
@@ -159,6 +164,8 @@ struct FilterNode::Impl {
   const std::string journal_path;
   bus::Reader<tachi_msg_RawHandSample> hands;
   bus::Reader<tachi_msg_VoiceCommand> voice;
+  std::uint64_t voice_commands = 0;  ///< applied (the heartbeat's "voice_commands")
+  std::uint64_t cloth_states = 0;    ///< accepted (the heartbeat's "cloth_states")
   bus::Reader<tachi_msg_ClothState> cloth;
   bus::Writer<tachi_msg_StrokeSample> strokes;
   bus::WaitSet waitset;

@@ -1,4 +1,5 @@
 // tachi-filter on the bus: raw hands, voice commands and cloth states in, one stroke sample per hand out.
+#include "node_status.hpp"
 #include "process.hpp"
 #include "synthetic_hands.hpp"
 #include "tachi/bus/topics.hpp"
@@ -27,12 +28,14 @@ tachi_msg_RawHandSample to_raw(const tachi::filter::HandSample& h) {
 struct Bus {
   explicit Bus(unsigned domain)
       : dds(domain), hands(dds, tachi::bus::topics::raw_hand), voice(dds, tachi::bus::topics::voice_command),
-        cloth(dds, tachi::bus::topics::cloth_state), strokes(dds, tachi::bus::topics::stroke) {}
+        cloth(dds, tachi::bus::topics::cloth_state), strokes(dds, tachi::bus::topics::stroke),
+        status(dds, tachi::bus::topics::node_status) {}
   tachi::bus::Participant dds;
   tachi::bus::Writer<tachi_msg_RawHandSample> hands;
   tachi::bus::Writer<tachi_msg_VoiceCommand> voice;
   tachi::bus::Writer<tachi_msg_ClothState> cloth;
   tachi::bus::Reader<tachi_msg_StrokeSample> strokes;
+  tachi::bus::Reader<tachi_msg_NodeStatus> status;
 
   bool connected() {
     return hands.wait_for_readers(1, 10s) && voice.wait_for_readers(1, 10s) && cloth.wait_for_readers(1, 10s) &&
@@ -88,7 +91,8 @@ TEST(FilterBus, VoiceCommandsAndClothStateDriveTheGate) {
   state.positions._maximum = 3;
   state.positions._release = false;
   bus.cloth.write(state);
-  std::this_thread::sleep_for(200ms);
+  // The filter has the cloth (its heartbeat counts the states it accepted).
+  ASSERT_TRUE(tachi::test::wait_for_metric(bus.status, "tachi-filter", "cloth_states", 1, 10s)) << filter.err();
 
   tachi::filter::HandSample h;
   h.tracked = true;
@@ -101,12 +105,14 @@ TEST(FilterBus, VoiceCommandsAndClothStateDriveTheGate) {
       std::this_thread::sleep_for(5ms);
     }
   };
+  int said = 0;
   const auto say = [&](tachi_msg_VoiceCommandKind kind) {
     tachi_msg_VoiceCommand c{};
     c.command = kind;
     std::snprintf(c.phrase, sizeof c.phrase, "%s", kind == tachi_msg_VOICE_START ? "start cutting" : "stop cutting");
     bus.voice.write(c);
-    std::this_thread::sleep_for(200ms);  // the filter applies it before the next hand sample
+    // Applied before the next hand sample is sent (the filter's heartbeat counts the commands it applied).
+    ASSERT_TRUE(tachi::test::wait_for_metric(bus.status, "tachi-filter", "voice_commands", ++said, 10s)) << filter.err();
   };
   send(5);
   say(tachi_msg_VOICE_START);

@@ -1,6 +1,7 @@
 // Grabbing by hand through the processes (issue 12): tachi-filter and tachi-sim on one DDS domain; the
 // test plays the sensor (raw hand samples in the camera frame) and the voice (commands on the bus).
 // Voice "grab", the hand moves, voice "release": the cloth moved with the hand, and let go.
+#include "node_status.hpp"
 #include "process.hpp"
 #include "scratch_dir.hpp"
 #include "tachi/bus/topics.hpp"
@@ -20,12 +21,14 @@ constexpr unsigned kDomain = 200;  // 200-219 belong to tests/handson (docs/test
 
 struct Bus {
   Bus() : dds(kDomain), hands(dds, tachi::bus::topics::raw_hand), voice(dds, tachi::bus::topics::voice_command),
-          states(dds, tachi::bus::topics::cloth_state), strokes(dds, tachi::bus::topics::stroke) {}
+          states(dds, tachi::bus::topics::cloth_state), strokes(dds, tachi::bus::topics::stroke),
+          status(dds, tachi::bus::topics::node_status) {}
   tachi::bus::Participant dds;
   tachi::bus::Writer<tachi_msg_RawHandSample> hands;
   tachi::bus::Writer<tachi_msg_VoiceCommand> voice;
   tachi::bus::Reader<tachi_msg_ClothState> states;
   tachi::bus::Reader<tachi_msg_StrokeSample> strokes;
+  tachi::bus::Reader<tachi_msg_NodeStatus> status;
 };
 
 struct State {
@@ -65,13 +68,15 @@ TEST(GrabPipeline, VoiceGrabTheHandMovesVoiceReleaseTheClothMovedWithTheHand) {
     std::this_thread::sleep_for(33ms);
     drain();
   };
+  int said = 0;
   auto say = [&](tachi_msg_VoiceCommandKind kind, const char* phrase) {
     tachi_msg_VoiceCommand c{};
     c.source_id = 1;
     c.command = kind;
     std::snprintf(c.phrase, sizeof c.phrase, "%s", phrase);
     bus.voice.write(c);
-    std::this_thread::sleep_for(100ms);
+    // Applied before the next hand sample (the filter's heartbeat counts the commands it applied).
+    ASSERT_TRUE(tachi::test::wait_for_metric(bus.status, "tachi-filter", "voice_commands", ++said, 10s)) << filter.err();
   };
 
   for (int i = 0; i < 30; ++i) hand_at(p0);
@@ -128,7 +133,8 @@ TEST(ObjectTopic, TheSimulatorPublishesItsObjectForLateViewers) {
   tachi::bus::Participant dds{kObjectDomain};
   tachi::bus::Reader<tachi_msg_ClothState> states{dds, tachi::bus::topics::cloth_state};
   ASSERT_TRUE(states.wait_for_writers(1, 20s)) << sim.err();
-  std::this_thread::sleep_for(300ms);
+  // The simulator is stepping (a state came), so it published the object before this reader joins.
+  ASSERT_TRUE(states.wait_for_data(10s)) << sim.err();
   // A viewer that joins after the publication still gets it (transient-local).
   tachi::bus::Reader<tachi_msg_SceneObject> objects{dds, tachi::bus::topics::scene_object};
   ASSERT_TRUE(objects.wait_for_data(10s)) << sim.err();

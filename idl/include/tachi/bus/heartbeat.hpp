@@ -29,6 +29,8 @@ class Heartbeat {
   /// Counts one rejected input under `reason` (metric "rejected.<reason>") and in the total.
   void count_rejected(std::string_view reason, std::uint64_t n = 1);
   [[nodiscard]] std::uint64_t rejected() const noexcept { return status_.rejected; }
+  /// The next update() publishes whatever the period: for an event a monitor should see at once.
+  void publish_at_next_update() noexcept { last_ = {}; }
 
  private:
   void publish();

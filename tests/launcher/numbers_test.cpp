@@ -1,6 +1,7 @@
 // `tachi run`'s figures count what their names say, and a mistake in its flags is named before any
 // node starts. Through the user's path: the real launcher and nodes on the bundled recordings.
 // Domain ids 210-219.
+#include "files.hpp"
 #include "process.hpp"
 #include "scratch_dir.hpp"
 
@@ -19,6 +20,8 @@
 
 using namespace std::chrono_literals;
 using tachi::test::ChildProcess;
+using tachi::test::read_json;
+using tachi::test::read_text;
 namespace fs = std::filesystem;
 
 namespace {
@@ -32,18 +35,6 @@ std::vector<std::string> run_args(const std::string& recording, unsigned domain,
                                 "--out",         out.string(), "--headless", "--settle",  "1.5"};
   args.insert(args.end(), extra.begin(), extra.end());
   return args;
-}
-
-nlohmann::json read_json(const fs::path& path) {
-  std::ifstream in(path);
-  return in ? nlohmann::json::parse(in, nullptr, false) : nlohmann::json();
-}
-
-std::string read_text(const fs::path& path) {
-  std::ifstream in(path);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
 }
 
 std::string logs(const fs::path& out) {

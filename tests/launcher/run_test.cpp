@@ -2,6 +2,7 @@
 // leaves its outputs; `tachi topics|echo|status` look at a running pipeline. Domain ids 120-149
 // belong to tests/launcher (docs/testing.md).
 #include "bus_wait.hpp"
+#include "files.hpp"
 #include "process.hpp"
 #include "scratch_dir.hpp"
 #include "tachi/bus/run_partition.hpp"
@@ -18,6 +19,8 @@
 
 using namespace std::chrono_literals;
 using tachi::test::ChildProcess;
+using tachi::test::read_json;
+using tachi::test::read_text;
 namespace fs = std::filesystem;
 
 namespace {
@@ -32,18 +35,6 @@ std::vector<std::string> run_args(const std::string& recording, unsigned domain,
                                 "--set", "sim.cut-mode=grid"};
   args.insert(args.end(), extra.begin(), extra.end());
   return args;
-}
-
-nlohmann::json read_json(const fs::path& path) {
-  std::ifstream in(path);
-  return in ? nlohmann::json::parse(in, nullptr, false) : nlohmann::json();
-}
-
-std::string read_text(const fs::path& path) {
-  std::ifstream in(path);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
 }
 
 std::size_t count_lines(const fs::path& path) {

@@ -108,7 +108,7 @@ int run_random(const std::string& range, unsigned jobs, bool json, bool report_o
     std::printf("phantom frames: %zu (in %zu clips)\n", s.phantoms, s.phantom_clips);
     std::printf("captured frames: %zu (in %zu clips); longest captured run %zu; clips with a run > 3: %zu\n", s.captured,
                 s.captured_clips, s.longest_captured_run, s.long_capture_clips);
-    std::printf("%s\n", s.passed ? "PASS (issue 22's acceptance rates)" : "FAIL (issue 22's acceptance rates):");
+    std::printf("%s\n", s.passed ? "PASS (the acceptance rates)" : "FAIL (the acceptance rates):");
     for (const auto& f : s.failures) std::printf("  %s\n", f.c_str());
   }
   return s.passed || report_only ? 0 : 1;
@@ -130,7 +130,7 @@ int main(int argc, char** argv) try {
   app.add_option("truth", truth_file, "ground truth CSV (frame,...,x,y,z,...,visible)")->check(CLI::ExistingFile);
   auto* random = app.add_option("--random", range,
                                 "Render the randomized clips of seeds FIRST..LAST (tachi-synth --random), run the hand finder over "
-                                "each in memory and print the distribution; exit 1 if issue 22's acceptance rates are missed");
+                                "each in memory and print the distribution; exit 1 if the acceptance rates are missed");
   app.add_option("--jobs", jobs, "With --random: clips scored in parallel (default 1: the machine is shared)")->check(CLI::Range(1, 64));
   auto* frames_opt = app.add_option("--frames", frames_seed, "List one randomized clip frame by frame (CSV: truth and what was tracked)");
   app.add_flag("--report-only", report_only, "With --random: exit 0 even when a rate is missed");

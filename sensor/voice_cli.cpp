@@ -19,7 +19,7 @@ int parse_voice_flags(int argc, char** argv, VoiceFlags& flags) {
   raw->excludes(device)->excludes(kinect);
   device->excludes(kinect);
   app.add_option("--config", config_file, "Voice config JSON (see config/voice.json)")->check(CLI::ExistingFile);
-  app.add_option("--start-phrase", start_phrase, "Phrase that starts cutting (default \"begin cutting\"; \"start cutting\" was the default before issue 22)");
+  app.add_option("--start-phrase", start_phrase, "Phrase that starts cutting (default \"begin cutting\"; \"start cutting\" was the default before: British voices drop its R and are heard as \"stop\")");
   app.add_option("--stop-phrase", stop_phrase, "Phrase that stops cutting (default \"stop cutting\")");
   app.add_option("--grab-phrase", grab_phrase, "Phrase that makes the hand grab the cloth (none by default; e.g. \"grab cloth\")");
   app.add_option("--release-phrase", release_phrase, "Phrase that lets the grabbed cloth go (none by default; e.g. \"release cloth\")");

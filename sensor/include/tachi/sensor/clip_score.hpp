@@ -42,7 +42,7 @@ using FrameListener = std::function<void(const GroundTruth&, const HandObservati
 /// Renders every frame of `spec` and runs a fresh HandFinder over them.
 ClipScore score_clip(const ScenarioSpec& spec, const HandFinderParams& params = {}, const FrameListener& on_frame = {});
 
-/// The acceptance rates of issue 22.
+/// The acceptance rates for tracking on unseen scenes (docs/sensor.md).
 struct Acceptance {
   double clip_rms_m = 0.01;          ///< a clip is good when its RMS is at most this ...
   double min_good_clips = 0.97;      ///< ... and this share of clips must be good

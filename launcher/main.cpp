@@ -144,7 +144,7 @@ int cmd_run(const CLI::App& run, const RunFlags& f, const fs::path& bin_dir) {
   if (!f.record) {
     std::error_code ignored;
     fs::remove(fs::path(config.out) / "run.mcap", ignored);  // a previous run's recording must not pass for this run's
-    const int rc = launcher::run(config, {bin_dir, fs::path(TACHI_SCRIPTS_DIR) / "plot_run.py"});
+    const int rc = launcher::run(config, {bin_dir, launcher::plot_script(bin_dir)});
     add_to_summary(config.out, {{"run_id", run_id}});
     return rc;
   }
@@ -158,7 +158,7 @@ int cmd_run(const CLI::App& run, const RunFlags& f, const fs::path& bin_dir) {
   record_options.file = out / "run.mcap";
   record_options.foxglove = f.foxglove;
   launcher::BackgroundRecorder recorder{dds, record_options};
-  const int rc = launcher::run(config, {bin_dir, fs::path(TACHI_SCRIPTS_DIR) / "plot_run.py"});
+  const int rc = launcher::run(config, {bin_dir, launcher::plot_script(bin_dir)});
   const auto recorded = recorder.stop();
   spdlog::info("recorded {} messages ({} lost) into {}", recorded.total, recorded.lost, (out / "run.mcap").string());
   add_to_summary(out, {{"run_id", run_id},

@@ -1,5 +1,8 @@
 #!/usr/bin/env python3
-"""Plots of one `tachi run` (called by the launcher after the run; usage: plot_run.py OUT_DIR).
+"""Plots of one `tachi run` (usage: plot_run.py [--after-sigusr1] OUT_DIR).
+
+The launcher starts it with the run, with --after-sigusr1: it imports matplotlib (~1 s) while the run
+goes and draws once the launcher, having written summary.json, sends it SIGUSR1.
 
 latency.png: left, each stage's delay from the capture of the depth frame to that stage's output, p50
 and p99 as the stage itself measured it (summary.json `<stage>_p50_ms`, `<stage>_p99_ms`: the same figures,
@@ -13,9 +16,14 @@ smoothed hand (the filter's strokes) and the simulator's cut line, over the clot
 import csv
 import json
 import os
+import signal
 import sys
 
-import matplotlib
+if "--after-sigusr1" in sys.argv[1:]:
+    # Held, not fatal, from here on (the launcher also starts it with SIGUSR1 blocked).
+    signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGUSR1})
+
+import matplotlib  # noqa: E402
 
 matplotlib.use("Agg")  # no display needed
 import matplotlib.pyplot as plt  # noqa: E402
@@ -100,6 +108,12 @@ def main(out_dir):
 
 
 if __name__ == "__main__":
-    if len(sys.argv) != 2:
-        sys.exit("usage: plot_run.py OUT_DIR")
-    main(sys.argv[1])
+    args = sys.argv[1:]
+    after_signal = args[:1] == ["--after-sigusr1"]
+    if after_signal:
+        args = args[1:]
+    if len(args) != 1:
+        sys.exit("usage: plot_run.py [--after-sigusr1] OUT_DIR")
+    if after_signal:
+        signal.sigwait({signal.SIGUSR1})
+    main(args[0])

@@ -71,6 +71,10 @@ void Child::start() {
     dfl.sa_handler = SIG_DFL;
     ::sigaction(SIGINT, &dfl, nullptr);
     ::sigaction(SIGTERM, &dfl, nullptr);
+    sigset_t go;
+    ::sigemptyset(&go);
+    ::sigaddset(&go, SIGUSR1);
+    ::sigprocmask(spec_.waits_for_sigusr1 ? SIG_BLOCK : SIG_UNBLOCK, &go, nullptr);  // the mask survives exec
     ::execv(argv[0], argv.data());
     ::_exit(127);
   }

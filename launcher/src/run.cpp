@@ -108,26 +108,38 @@ nlohmann::json make_summary(const RunConfig& config, const StatusBoard& board, c
   return s;
 }
 
-void draw_plots(const RunPaths& paths, const fs::path& out) {
+// The plotter starts with the run and imports matplotlib meanwhile (~1 s a run would otherwise end
+// later); it draws once sent SIGUSR1, after the summary is written (scripts/plot_run.py --after-sigusr1).
+std::unique_ptr<Child> start_plotter(const RunPaths& paths, const fs::path& out) {
   if (!fs::exists(paths.plot_script)) {
     spdlog::warn("no plots: {} not found", paths.plot_script.string());
-    return;
+    return nullptr;
   }
-  Child plot({"plot", "python3", {paths.plot_script.string(), out.string()}, true}, "/usr/bin/python3", out / "plot.log");
-  plot.start();
+  ChildSpec spec{"plot", "python3", {paths.plot_script.string(), "--after-sigusr1", out.string()}, true};
+  spec.waits_for_sigusr1 = true;
+  auto plotter = std::make_unique<Child>(std::move(spec), "/usr/bin/python3", out / "plot.log");
+  plotter->start();
+  return plotter;
+}
+
+void draw_plots(Child* plotter) {
+  if (!plotter) return;
+  plotter->signal(SIGUSR1);
   const auto deadline = Clock::now() + 60s;
   while (Clock::now() < deadline) {
-    if (const auto status = plot.poll()) {
+    if (const auto status = plotter->poll()) {
       if (classify_exit(*status, true) != ExitMeaning::Done)
-        spdlog::warn("plots failed ({}):\n{}", describe_exit(*status), plot.last_log_lines(5));
+        spdlog::warn("plots failed ({}):\n{}", describe_exit(*status), plotter->last_log_lines(5));
       return;
     }
-    std::this_thread::sleep_for(50ms);
+    std::this_thread::sleep_for(20ms);
   }
   spdlog::warn("plots took over 60 s; given up");
 }
 
 }  // namespace
+
+fs::path plot_script(const fs::path& bin_dir) { return bin_dir.parent_path() / "share" / "tachi" / "plot_run.py"; }
 
 int run(const RunConfig& config, const RunPaths& paths) {
   const fs::path out(config.out);
@@ -145,8 +157,9 @@ int run(const RunConfig& config, const RunPaths& paths) {
   for (auto& spec : plan(config)) {
     const fs::path program = paths.bin_dir / spec.program;
     const fs::path log = out / (spec.node + ".log");
-    children.push_back({std::make_unique<Child>(std::move(spec), program, log), RestartPolicy{}, {}, false, 0});
+    children.push_back({std::make_unique<Child>(std::move(spec), program, log), RestartPolicy{}, {}, false, 0, {}});
   }
+  const auto plotter = start_plotter(paths, out);
   const bool recording = !config.recording.empty();
   spdlog::info("run on DDS domain {}: {} ({}); outputs in {}", config.domain, to_json(config)["nodes"].get<std::string>(),
                recording ? "recording " + config.recording : "live", out.string());
@@ -260,9 +273,10 @@ int run(const RunConfig& config, const RunPaths& paths) {
         all_finite_done = all_finite_done && c.done;
       }
       if (any_finite && all_finite_done) {
-        // Non-finite nodes (the filter) get a moment to pass the last samples on before they stop.
+        // Non-finite nodes (the filter) get a moment to pass the last samples on before they stop,
+        // unless this run's simulator, their reader, has finished: it stops only once idle.
         if (!finite_done_at) finite_done_at = now;
-        if (now - *finite_done_at > 500ms) {
+        if (now - *finite_done_at >= (config.has("sim") ? 0ms : 500ms)) {
           ended = "recording played, cloth settled";
           break;
         }
@@ -313,7 +327,7 @@ int run(const RunConfig& config, const RunPaths& paths) {
     f << summary.dump(2) << '\n';
     if (!f) throw std::runtime_error("cannot write " + (out / "summary.json").string());
   }
-  draw_plots(paths, out);
+  draw_plots(plotter.get());
   // stdout: the headline figures (summary.json has them all), then where the outputs are.
   nlohmann::json headline = nlohmann::json::object();
   for (const char* key : {"frames", "tracked_frames", "strokes", "cuts", "pieces", "fallen_pieces", "cut_length_m",

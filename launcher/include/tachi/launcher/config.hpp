@@ -56,6 +56,9 @@ struct ChildSpec {
   /// Ends by itself when its work is done (a played recording, a settled cloth): exit 0 is then
   /// success, not a death to restart. Other children run until the launcher stops them.
   bool finite = false;
+  /// Starts with SIGUSR1 blocked: it prepares while the run goes and works once sent SIGUSR1 (the
+  /// plotter imports matplotlib, ~1 s, during the run instead of after it).
+  bool waits_for_sigusr1 = false;
 };
 
 /// Sim export folder inside the run's output folder (the launcher collects from it).

@@ -9,6 +9,7 @@
 // With --verify-sweep the second pass (keyword verification) is run with no threshold and the
 // detections are scored again at each threshold of a grid: one decoding for the whole sweep.
 // Prints counts per group; docs/benchmarks.md ("Filter and voice") records a run.
+#include "paths.hpp"
 #include "tachi/sensor/voice_spotter.hpp"
 #include "tachi/common/app.hpp"
 #include "voice_fixture.hpp"
@@ -522,12 +523,12 @@ int main(int argc, char** argv) try {
   app.add_option("threshold", threshold, "kws threshold for both default phrases, e.g. 1e-30 (default: the config's)")
       ->check(CLI::Range(1e-100, 1.0));
   std::string speakers;
-  std::string config_file = std::string(TACHI_SOURCE_DIR) + "/config/voice.json";
+  std::string config_file = tachi::test::source_dir() + "/config/voice.json";
   std::string start_phrase, stop_phrase;
   std::optional<double> margin;
   int threads = 1;
   double no_command_s = 600;
-  std::string cache = TACHI_VOICE_CACHE;
+  std::string cache = tachi::test::binary_dir() + "/voice-cache";
   std::vector<double> sweep_ratio;
   bool check = false;
   std::vector<std::string> only_conditions, only_contexts;

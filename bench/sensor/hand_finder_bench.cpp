@@ -12,6 +12,7 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "paths.hpp"
 #include "tachi/common/app.hpp"
 #include "tachi/sensor/depth_source.hpp"
 #include "tachi/sensor/hand_csv.hpp"
@@ -86,7 +87,7 @@ int main(int argc, char** argv) {
   CLI::App app{"tachi-sensor-bench: hand extraction speed and accuracy on the bundled recordings, against a "
                "nearest-blob baseline (docs/benchmarks.md)"};
   app.name("tachi-sensor-bench");
-  std::string recordings = TACHI_RECORDINGS_DIR;
+  std::string recordings = tachi::test::recordings_dir();
   int repeat = 5;
   std::string per_frame_word;
   app.add_option("recordings", recordings, "Folder holding the push, jitter, straight_cut, curve and top_edge recordings")

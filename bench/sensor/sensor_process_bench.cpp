@@ -16,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "paths.hpp"
 #include "tachi/sensor/depth_source.hpp"
 #include "tachi/sensor/hand_finder.hpp"
 
@@ -58,7 +59,7 @@ int main(int argc, char** argv) {
     return argc < 2 ? 2 : 0;
   }
   const std::string exe = argv[1];
-  const std::filesystem::path dir = argc > 2 ? argv[2] : TACHI_RECORDINGS_DIR;
+  const std::filesystem::path dir = argc > 2 ? argv[2] : tachi::test::recordings_dir();
   const int passes = argc > 3 ? std::max(1, std::atoi(argv[3])) : 5;
   std::vector<std::string> names;
   for (const auto& entry : std::filesystem::directory_iterator(dir))

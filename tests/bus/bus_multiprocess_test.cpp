@@ -1,5 +1,6 @@
 // The bus across processes: two real executables exchange keyed samples and 200 KB cloth
 // states at 60 Hz with none lost, and a late-joining process receives the last topology.
+#include "paths.hpp"
 #include "process.hpp"
 
 #include <gtest/gtest.h>
@@ -11,7 +12,7 @@ using tachi::test::ChildProcess;
 
 namespace {
 // Domain ids 20-29 belong to this file (docs/testing.md).
-const std::string kPeer = TACHI_BUS_PEER;
+const std::string kPeer = tachi::test::executable("bus_peer");
 
 std::vector<std::string> peer(const std::string& role, unsigned domain, std::vector<std::string> extra = {}) {
   std::vector<std::string> argv{kPeer, role, "--domain", std::to_string(domain)};

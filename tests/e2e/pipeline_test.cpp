@@ -1,6 +1,7 @@
 // The whole pipeline as separate processes on one DDS domain: tachi-sensor plays a bundled
 // recording, tachi-filter smooths and gates it, tachi-sim cuts the cloth, tachi-viewer draws it
 // headless. Checks what comes out: the cut in the simulator's summary and the viewer's image.
+#include "paths.hpp"
 #include "process.hpp"
 #include "scratch_dir.hpp"
 
@@ -16,8 +17,8 @@ using tachi::test::ChildProcess;
 
 namespace {
 // Domain ids 90-99 belong to this file (docs/testing.md).
-const std::string kBin = TACHI_BIN_DIR;
-const std::string kRecordings = TACHI_RECORDINGS_DIR;
+const std::string kBin = tachi::test::bin_dir();
+const std::string kRecordings = tachi::test::recordings_dir();
 
 struct Pipeline {
   tachi::test::ScratchDir scratch{"e2e"};

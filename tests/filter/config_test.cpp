@@ -1,3 +1,4 @@
+#include "paths.hpp"
 #include "tachi/filter/config.hpp"
 
 #include <gtest/gtest.h>
@@ -41,7 +42,7 @@ TEST(FilterConfig, RoundTripsThroughJson) {
 }
 
 TEST(FilterConfig, TheShippedConfigFileParsesToTheBuiltInDefaults) {
-  const FilterConfig file = load_filter_config(TACHI_SOURCE_DIR "/config/filter.json");
+  const FilterConfig file = load_filter_config(tachi::test::source_dir() + "/config/filter.json");
   EXPECT_EQ(to_json(file), to_json(FilterConfig{}));
 }
 

@@ -1,4 +1,5 @@
 // tachi-filter on the bus: raw hands, voice commands and cloth states in, one stroke sample per hand out.
+#include "paths.hpp"
 #include "node_status.hpp"
 #include "process.hpp"
 #include "synthetic_hands.hpp"
@@ -55,7 +56,7 @@ struct Bus {
 TEST(FilterBus, PushRecordingBecomesOneStrokeOnTheBus) {
   constexpr unsigned kDomain = 72;
   Bus bus{kDomain};
-  tachi::test::ChildProcess filter{{TACHI_FILTER_EXE, "--domain", std::to_string(kDomain)}};
+  tachi::test::ChildProcess filter{{tachi::test::executable("tachi-filter"), "--domain", std::to_string(kDomain)}};
   ASSERT_TRUE(bus.connected()) << "tachi-filter did not join the bus";
   const auto hands = tachi::filter::testing::push_and_back(4);
   for (const auto& h : hands) {
@@ -80,7 +81,7 @@ TEST(FilterBus, PushRecordingBecomesOneStrokeOnTheBus) {
 TEST(FilterBus, VoiceCommandsAndClothStateDriveTheGate) {
   constexpr unsigned kDomain = 73;
   Bus bus{kDomain};
-  tachi::test::ChildProcess filter{{TACHI_FILTER_EXE, "--domain", std::to_string(kDomain), "--gate", "voice"}};
+  tachi::test::ChildProcess filter{{tachi::test::executable("tachi-filter"), "--domain", std::to_string(kDomain), "--gate", "voice"}};
   ASSERT_TRUE(bus.connected()) << "tachi-filter did not join the bus";
 
   // A cloth state with one particle bulging to world z = 0.2: a hand at world z = 0.25 is 5 cm from it.

@@ -1,4 +1,5 @@
 // Runs the real tachi-filter executable offline on a synthetic recording and checks what it writes.
+#include "paths.hpp"
 #include "process.hpp"
 #include "scratch_dir.hpp"
 #include "synthetic_hands.hpp"
@@ -24,7 +25,7 @@ struct ProcessResult {
 
 /// Runs tachi-filter with whitespace-separated `args` (the tests' paths have no spaces).
 ProcessResult run(const std::string& args) {
-  std::vector<std::string> argv{TACHI_FILTER_EXE};
+  std::vector<std::string> argv{tachi::test::executable("tachi-filter")};
   std::istringstream words(args);
   for (std::string word; words >> word;) argv.push_back(word);
   const auto r = tachi::test::run(argv, std::chrono::seconds(60));

@@ -1,5 +1,6 @@
 // Threshold gating on the sensor's synthetic recordings, end to end through the real executables:
 // tachi-sensor (depth frames -> hand CSV) then tachi-filter --offline (-> strokes).
+#include "paths.hpp"
 #include "process.hpp"
 #include "scratch_dir.hpp"
 
@@ -77,13 +78,13 @@ class RecordingGate : public ::testing::Test {
 
   /// Plays a recording through the sensor and the filter; returns (ground truth, filter output).
   std::pair<Table, Table> run(const std::string& scenario, const std::vector<std::string>& filter_flags = {}) {
-    const fs::path recording = fs::path(TACHI_RECORDINGS_DIR) / scenario;
+    const fs::path recording = fs::path(tachi::test::recordings_dir()) / scenario;
     EXPECT_TRUE(fs::exists(recording / "INDEX.txt")) << recording;
-    auto r = tachi::test::run({TACHI_SENSOR_EXE, "--recording", recording.string(), "--rate", "max", "--no-dds", "--csv",
+    auto r = tachi::test::run({tachi::test::executable("tachi-sensor"), "--recording", recording.string(), "--rate", "max", "--no-dds", "--csv",
                                (dir_ / "hands.csv").string()},
                               120s);
     EXPECT_EQ(r.exit_code, 0) << r.err;
-    std::vector<std::string> filter{TACHI_FILTER_EXE, "--offline", "--hands", (dir_ / "hands.csv").string(), "--out",
+    std::vector<std::string> filter{tachi::test::executable("tachi-filter"), "--offline", "--hands", (dir_ / "hands.csv").string(), "--out",
                                     (dir_ / "strokes.csv").string()};
     filter.insert(filter.end(), filter_flags.begin(), filter_flags.end());
     r = tachi::test::run(filter, 60s);

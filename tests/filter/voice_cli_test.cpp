@@ -1,4 +1,5 @@
 // Runs the real tachi-voice executable: file mode output, missing devices, bad input, DDS publication.
+#include "paths.hpp"
 #include "process.hpp"
 #include "scratch_dir.hpp"
 #include "tachi/bus/topics.hpp"
@@ -54,7 +55,7 @@ class VoiceCli : public ::testing::Test {
 };
 
 TEST_F(VoiceCli, WavModePrintsOneLinePerCommand) {
-  const auto r = tachi::test::run({TACHI_VOICE_EXE, "--wav", (dir_ / "commands.wav").string(), "--no-dds"}, 60s);
+  const auto r = tachi::test::run({tachi::test::executable("tachi-voice"), "--wav", (dir_ / "commands.wav").string(), "--no-dds"}, 60s);
   ASSERT_EQ(r.exit_code, 0) << r.err;
   std::istringstream lines(r.out);
   std::string line;
@@ -70,7 +71,7 @@ TEST_F(VoiceCli, WavModePrintsOneLinePerCommand) {
 }
 
 TEST_F(VoiceCli, OtherPhrasesAreConfigurableFromTheCommandLine) {
-  const auto r = tachi::test::run({TACHI_VOICE_EXE, "--raw", tachi::sensor::testing::kTestData + "/goforward.raw",
+  const auto r = tachi::test::run({tachi::test::executable("tachi-voice"), "--raw", tachi::sensor::testing::kTestData + "/goforward.raw",
                                    "--start-phrase", "go forward", "--stop-phrase", "ten meters", "--no-dds"},
                                   60s);
   ASSERT_EQ(r.exit_code, 0) << r.err;
@@ -82,10 +83,10 @@ TEST_F(VoiceCli, OtherPhrasesAreConfigurableFromTheCommandLine) {
 }
 
 TEST_F(VoiceCli, MissingDevicesExitWithTheNoDeviceCode) {
-  auto r = tachi::test::run({TACHI_VOICE_EXE, "--device", "tachi_no_such_device", "--no-dds"}, 30s);
+  auto r = tachi::test::run({tachi::test::executable("tachi-voice"), "--device", "tachi_no_such_device", "--no-dds"}, 30s);
   EXPECT_EQ(r.exit_code, 3);
   EXPECT_NE(r.err.find("tachi_no_such_device"), std::string::npos) << r.err;
-  r = tachi::test::run({TACHI_VOICE_EXE, "--kinect-mic", "--kinect-index", "15", "--no-dds"}, 30s);
+  r = tachi::test::run({tachi::test::executable("tachi-voice"), "--kinect-mic", "--kinect-index", "15", "--no-dds"}, 30s);
   EXPECT_EQ(r.exit_code, 3);
   EXPECT_NE(r.err.find("no Kinect found"), std::string::npos) << r.err;
 }
@@ -95,24 +96,24 @@ TEST_F(VoiceCli, BadInputIsAClearErrorNotACrash) {
     std::ofstream junk(dir_ / "junk.wav");
     junk << "this is not audio";
   }
-  auto r = tachi::test::run({TACHI_VOICE_EXE, "--wav", (dir_ / "junk.wav").string(), "--no-dds"}, 30s);
+  auto r = tachi::test::run({tachi::test::executable("tachi-voice"), "--wav", (dir_ / "junk.wav").string(), "--no-dds"}, 30s);
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.err.find("RIFF"), std::string::npos) << r.err;
-  r = tachi::test::run({TACHI_VOICE_EXE, "--no-dds"}, 30s);
+  r = tachi::test::run({tachi::test::executable("tachi-voice"), "--no-dds"}, 30s);
   EXPECT_EQ(r.exit_code, 2);
-  r = tachi::test::run({TACHI_VOICE_EXE, "--wav", (dir_ / "commands.wav").string(), "--stop-phrase", "stop qzxqzx",
+  r = tachi::test::run({tachi::test::executable("tachi-voice"), "--wav", (dir_ / "commands.wav").string(), "--stop-phrase", "stop qzxqzx",
                         "--no-dds"},
                        30s);
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.err.find("qzxqzx"), std::string::npos) << r.err;
-  r = tachi::test::run({TACHI_VOICE_EXE, "--wav", (dir_ / "commands.wav").string(), "--device", "x"}, 30s);
+  r = tachi::test::run({tachi::test::executable("tachi-voice"), "--wav", (dir_ / "commands.wav").string(), "--device", "x"}, 30s);
   EXPECT_EQ(r.exit_code, 2);
 }
 
 TEST_F(VoiceCli, PublishesCommandsOnTheBus) {
   tachi::bus::Participant dds{kDomain};
   tachi::bus::Reader<tachi_msg_VoiceCommand> reader{dds, tachi::bus::topics::voice_command};
-  const auto r = tachi::test::run({TACHI_VOICE_EXE, "--wav", (dir_ / "commands.wav").string(), "--domain",
+  const auto r = tachi::test::run({tachi::test::executable("tachi-voice"), "--wav", (dir_ / "commands.wav").string(), "--domain",
                                    std::to_string(kDomain), "--wait-readers", "10"},
                                   60s);
   ASSERT_EQ(r.exit_code, 0) << r.err;
@@ -133,9 +134,9 @@ TEST_F(VoiceCli, DrivesTheFilterGateOverTheBus) {
   tachi::bus::Participant dds{kChainDomain};
   tachi::bus::Writer<tachi_msg_RawHandSample> hands{dds, tachi::bus::topics::raw_hand};
   tachi::bus::Reader<tachi_msg_StrokeSample> strokes{dds, tachi::bus::topics::stroke};
-  tachi::test::ChildProcess filter{{TACHI_FILTER_EXE, "--domain", std::to_string(kChainDomain), "--gate", "voice"}};
+  tachi::test::ChildProcess filter{{tachi::test::executable("tachi-filter"), "--domain", std::to_string(kChainDomain), "--gate", "voice"}};
   ASSERT_TRUE(hands.wait_for_readers(1, 10s) && strokes.wait_for_writers(1, 10s)) << "tachi-filter did not join";
-  tachi::test::ChildProcess voice{{TACHI_VOICE_EXE, "--wav", (dir_ / "commands.wav").string(), "--domain",
+  tachi::test::ChildProcess voice{{tachi::test::executable("tachi-voice"), "--wav", (dir_ / "commands.wav").string(), "--domain",
                                    std::to_string(kChainDomain), "--wait-readers", "10"}};
   // Hand samples 100 cm from the sensor until tachi-voice has processed the whole file.
   std::vector<tachi_msg_StrokeSample> got;

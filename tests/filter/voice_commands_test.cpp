@@ -1,3 +1,4 @@
+#include "paths.hpp"
 #include "tachi/sensor/voice_commands.hpp"
 
 #include <gtest/gtest.h>
@@ -88,7 +89,7 @@ TEST(VoiceCommands, ConfigParsesAndRejectsBadValuesByName) {
 }
 
 TEST(VoiceCommands, TheShippedConfigFileMatchesTheDefaults) {
-  const VoiceConfig file = load_voice_config(TACHI_SOURCE_DIR "/config/voice.json");
+  const VoiceConfig file = load_voice_config(tachi::test::source_dir() + "/config/voice.json");
   const VoiceConfig defaults;
   EXPECT_EQ(file.model_dir, defaults.model_dir);
   EXPECT_EQ(file.dictionary, defaults.dictionary);

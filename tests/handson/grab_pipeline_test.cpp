@@ -1,6 +1,7 @@
 // Grabbing by hand through the processes (issue 12): tachi-filter and tachi-sim on one DDS domain; the
 // test plays the sensor (raw hand samples in the camera frame) and the voice (commands on the bus).
 // Voice "grab", the hand moves, voice "release": the cloth moved with the hand, and let go.
+#include "paths.hpp"
 #include "node_status.hpp"
 #include "process.hpp"
 #include "scratch_dir.hpp"
@@ -38,9 +39,9 @@ struct State {
 
 TEST(GrabPipeline, VoiceGrabTheHandMovesVoiceReleaseTheClothMovedWithTheHand) {
   Bus bus;
-  tachi::test::ChildProcess sim({TACHI_SIM_EXE, "--grid", "16", "--pin", "top-edge", "--domain", std::to_string(kDomain),
+  tachi::test::ChildProcess sim({tachi::test::executable("tachi-sim"), "--grid", "16", "--pin", "top-edge", "--domain", std::to_string(kDomain),
                                  "--duration", "30"});
-  tachi::test::ChildProcess filter({TACHI_FILTER_EXE, "--domain", std::to_string(kDomain), "--gate", "threshold"});
+  tachi::test::ChildProcess filter({tachi::test::executable("tachi-filter"), "--domain", std::to_string(kDomain), "--gate", "threshold"});
   ASSERT_TRUE(bus.hands.wait_for_readers(1, 20s)) << filter.err();
   ASSERT_TRUE(bus.voice.wait_for_readers(1, 20s)) << filter.err();
   ASSERT_TRUE(bus.states.wait_for_writers(1, 20s)) << sim.err();
@@ -128,7 +129,7 @@ TEST(ObjectTopic, TheSimulatorPublishesItsObjectForLateViewers) {
     ply << "ply\nformat ascii 1.0\nelement vertex 10\nproperty float x\nproperty float y\nproperty float z\nend_header\n";
     for (int i = 0; i < 10; ++i) ply << 0.1 * i << " 0 0\n";
   }
-  tachi::test::ChildProcess sim({TACHI_SIM_EXE, "--grid", "8", "--domain", std::to_string(kObjectDomain), "--duration", "20",
+  tachi::test::ChildProcess sim({tachi::test::executable("tachi-sim"), "--grid", "8", "--domain", std::to_string(kObjectDomain), "--duration", "20",
                                  "--object", (dir / "line.ply").string(), "--object-pose", "0,-0.7,0.2"});
   tachi::bus::Participant dds{kObjectDomain};
   tachi::bus::Reader<tachi_msg_ClothState> states{dds, tachi::bus::topics::cloth_state};

@@ -1,6 +1,7 @@
 // tachi-sim's issue-12 flags as a user reaches them: --solver, --material and its quantities, --blade-force,
 // --object / --object-pose, --object-from-recording (a fakenect recording written here with the sensor
 // library), each bad value a usage error naming its flag.
+#include "paths.hpp"
 #include "process.hpp"
 #include "scratch_dir.hpp"
 #include "table_ply.hpp"
@@ -17,7 +18,7 @@ namespace {
 using namespace std::chrono_literals;
 
 tachi::test::RunResult sim(std::vector<std::string> args) {
-  args.insert(args.begin(), TACHI_SIM_EXE);
+  args.insert(args.begin(), tachi::test::executable("tachi-sim"));
   return tachi::test::run(args, 60s);
 }
 

@@ -1,6 +1,7 @@
 // Issue 12: "The viewer draws the object's points." tachi-sim live with a PLY table under the cloth and
 // a headless tachi-viewer on the same domain (202): the viewer's snapshot shows the table's dots in
 // the object colour, where a run without an object shows none. Domain ids 202-203 belong to this file.
+#include "paths.hpp"
 #include "process.hpp"
 #include "scratch_dir.hpp"
 #include "table_ply.hpp"
@@ -30,10 +31,10 @@ int object_pixels(const std::string& png) {
 int object_pixels_of_run(const tachi::test::ScratchDir& dir, unsigned domain, std::vector<std::string> object_args) {
   const std::string d = std::to_string(domain);
   const std::string png = (dir / ("view" + d + ".png")).string();
-  std::vector<std::string> sim{TACHI_SIM_EXE, "--grid", "16", "--pin", "top-edge", "--domain", d, "--duration", "4"};
+  std::vector<std::string> sim{tachi::test::executable("tachi-sim"), "--grid", "16", "--pin", "top-edge", "--domain", d, "--duration", "4"};
   sim.insert(sim.end(), object_args.begin(), object_args.end());
   ChildProcess simulator(sim);
-  ChildProcess viewer({TACHI_VIEWER_EXE, "--headless", "--domain", d, "--snapshot", png, "--size", "320", "--exit-when-idle", "1"});
+  ChildProcess viewer({tachi::test::executable("tachi-viewer"), "--headless", "--domain", d, "--snapshot", png, "--size", "320", "--exit-when-idle", "1"});
   EXPECT_EQ(simulator.wait(30s), 0) << simulator.err();
   EXPECT_EQ(viewer.wait(30s), 0) << viewer.err();
   return object_pixels(png);

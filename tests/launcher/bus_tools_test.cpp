@@ -1,5 +1,6 @@
 // `tachi hz|bw|topics --verbose|echo --field` on real publishers (domains 143-144; tests/launcher
 // owns 120-149, docs/testing.md).
+#include "paths.hpp"
 #include "process.hpp"
 #include "scratch_dir.hpp"
 
@@ -14,8 +15,8 @@ using namespace std::chrono_literals;
 using tachi::test::ChildProcess;
 
 namespace {
-const std::string kBin = TACHI_BIN_DIR;
-const std::string kRecordings = TACHI_RECORDINGS_DIR;
+const std::string kBin = tachi::test::bin_dir();
+const std::string kRecordings = tachi::test::recordings_dir();
 
 // The figures of the last report of `tachi hz` / `tachi bw`.
 double last_number_after(const std::string& text, const std::string& label) {

@@ -1,6 +1,7 @@
 // Two `tachi run`s on one DDS domain would mix their samples (issue 23: the second run's hand cut the
 // first run's cloth): the second is refused, naming the live pipeline's nodes, hosts and pids; and a
 // run's nodes read only their run's DDS partition, so a sensor outside the run never reaches them. Domain 145 (tests/launcher owns 120-149, docs/testing.md).
+#include "paths.hpp"
 #include "process.hpp"
 #include "scratch_dir.hpp"
 
@@ -17,8 +18,8 @@ using namespace std::chrono_literals;
 namespace fs = std::filesystem;
 
 namespace {
-const std::string kBin = TACHI_BIN_DIR;
-const std::string kRecordings = TACHI_RECORDINGS_DIR;
+const std::string kBin = tachi::test::bin_dir();
+const std::string kRecordings = tachi::test::recordings_dir();
 
 std::vector<std::string> run_args(const fs::path& out, const std::string& domain) {
   return {kBin + "/tachi", "run", "--recording", kRecordings + "/straight_cut", "--grid", "32", "--domain", domain, "--out",

@@ -1,6 +1,7 @@
 // `tachi run`'s figures count what their names say, and a mistake in its flags is named before any
 // node starts. Through the user's path: the real launcher and nodes on the bundled recordings.
 // Domain ids 210-219.
+#include "paths.hpp"
 #include "files.hpp"
 #include "process.hpp"
 #include "scratch_dir.hpp"
@@ -25,9 +26,9 @@ using tachi::test::read_text;
 namespace fs = std::filesystem;
 
 namespace {
-const std::string kBin = TACHI_BIN_DIR;
-const std::string kRecordings = TACHI_RECORDINGS_DIR;
-const std::string kSource = TACHI_SOURCE_DIR;
+const std::string kBin = tachi::test::bin_dir();
+const std::string kRecordings = tachi::test::recordings_dir();
+const std::string kSource = tachi::test::source_dir();
 
 std::vector<std::string> run_args(const std::string& recording, unsigned domain, const fs::path& out,
                                   std::vector<std::string> extra = {}) {

@@ -2,6 +2,7 @@
 // a recorded run's hand samples played into a fresh filter and simulator cut the cloth the same way,
 // and Foxglove's own MCAP reader (@mcap/core from npm, run by node) reads the file the project wrote.
 // Domain ids 140-145 (tests/launcher owns 120-149; docs/testing.md).
+#include "paths.hpp"
 #include "process.hpp"
 #include "scratch_dir.hpp"
 
@@ -18,9 +19,9 @@ namespace fs = std::filesystem;
 using nlohmann::json;
 
 namespace {
-const std::string kBin = TACHI_BIN_DIR;
-const std::string kRecordings = TACHI_RECORDINGS_DIR;
-const fs::path kNpmDir = fs::path(TACHI_BINARY_DIR) / "npm_mcap";
+const std::string kBin = tachi::test::bin_dir();
+const std::string kRecordings = tachi::test::recordings_dir();
+const fs::path kNpmDir = fs::path(tachi::test::binary_dir()) / "npm_mcap";
 
 json read_json(const fs::path& path) {
   std::ifstream in(path);
@@ -115,12 +116,12 @@ TEST_F(RecordedRun, FoxglovesOwnMcapReaderReadsEveryChannelSchemaAndMessage) {
   ASSERT_EQ(result_->exit_code, 0) << result_->err;
   if (!fs::exists(kNpmDir / "node_modules" / "@mcap" / "core")) {
     fs::create_directories(kNpmDir);
-    const auto npm = tachi::test::run({"/usr/bin/env", "npm", "install", "--prefix", kNpmDir.string(), "--no-audit", "--no-fund",
+    const auto npm = tachi::test::run({"/usr/bin/env", "npm", "install", "--prefix", kNpmDir.string(), "--no-audit", "--no-fund", "--prefer-offline",
                                        "@mcap/core", "@foxglove/schemas", "ajv"},
                                       300s);
     if (npm.exit_code != 0) GTEST_SKIP() << "npm install @mcap/core failed (offline?): " << npm.err;
   }
-  const auto node = tachi::test::run({"/usr/bin/env", "node", std::string(TACHI_SOURCE_DIR) + "/tests/launcher/mcap_check.cjs",
+  const auto node = tachi::test::run({"/usr/bin/env", "node", tachi::test::source_dir() + "/tests/launcher/mcap_check.cjs",
                                       (out() / "run.mcap").string()},
                                      120s, {{"NODE_PATH", (kNpmDir / "node_modules").string()}});
   ASSERT_EQ(node.exit_code, 0) << node.err;
@@ -173,7 +174,7 @@ TEST(TachiRecord, RefusesAnUnknownTopicAndNamesTheSubcommandsItKnows) {
 TEST_F(RecordedRun, TheFoxgloveChannelsValidateAgainstFoxglovesPublishedSchemas) {
   ASSERT_EQ(result_->exit_code, 0) << result_->err;
   if (!fs::exists(kNpmDir / "node_modules" / "@foxglove" / "schemas")) GTEST_SKIP() << "npm packages missing (previous test)";
-  const auto node = tachi::test::run({"/usr/bin/env", "node", std::string(TACHI_SOURCE_DIR) + "/tests/launcher/mcap_check.cjs",
+  const auto node = tachi::test::run({"/usr/bin/env", "node", tachi::test::source_dir() + "/tests/launcher/mcap_check.cjs",
                                       (out() / "run.mcap").string()},
                                      120s, {{"NODE_PATH", (kNpmDir / "node_modules").string()}});
   ASSERT_EQ(node.exit_code, 0) << node.err;

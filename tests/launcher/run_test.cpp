@@ -1,10 +1,12 @@
 // `tachi run` as a user runs it: the launcher starts the real executables, supervises them and
 // leaves its outputs; `tachi topics|echo|status` look at a running pipeline. Domain ids 120-149
 // belong to tests/launcher (docs/testing.md).
+#include "paths.hpp"
 #include "bus_wait.hpp"
 #include "files.hpp"
 #include "process.hpp"
 #include "scratch_dir.hpp"
+#include "test_pki.hpp"
 #include "tachi/bus/run_partition.hpp"
 
 #include <gtest/gtest.h>
@@ -24,8 +26,8 @@ using tachi::test::read_text;
 namespace fs = std::filesystem;
 
 namespace {
-const std::string kBin = TACHI_BIN_DIR;
-const std::string kRecordings = TACHI_RECORDINGS_DIR;
+const std::string kBin = tachi::test::bin_dir();
+const std::string kRecordings = tachi::test::recordings_dir();
 
 std::vector<std::string> run_args(const std::string& recording, unsigned domain, const fs::path& out,
                                   std::vector<std::string> extra = {}) {
@@ -302,9 +304,7 @@ TEST(TachiRun, LiveWithoutAKinectStopsTheRunWithExitCode3) {
 
 TEST(TachiRun, SecureRunAuthenticatesEveryNodeAndTheLauncher) {
   tachi::test::ScratchDir out("tachi_run_secure");
-  const auto pki = out / "pki";
-  ASSERT_EQ(tachi::test::run({"/bin/bash", std::string(TACHI_SOURCE_DIR) + "/scripts/make_test_pki.sh", pki.string()}, 60s).exit_code, 0);
-  const auto r = tachi::test::run(run_args("straight_cut", 130, out.path() / "run", {"--secure", pki.string()}), 120s);
+  const auto r = tachi::test::run(run_args("straight_cut", 130, out.path() / "run", {"--secure", tachi::test::test_pki("ours")}), 120s);
   ASSERT_EQ(r.exit_code, 0) << r.err << logs(out.path() / "run");
   const auto s = read_json(out / "run" / "summary.json");
   EXPECT_EQ(s["frames"], depth_frames("straight_cut")) << "the launcher (identity monitor) read the sensor's heartbeats";

@@ -1,6 +1,7 @@
 // Validation at the bus boundary through the real executables (docs/reliability.md): a faulty or
 // hostile peer's samples are refused and counted by reason in the node's heartbeat, and a flood at
 // ten times the sensor's rate leaves the filter's memory bounded.
+#include "paths.hpp"
 #include "process.hpp"
 #include "tachi/bus/topics.hpp"
 
@@ -19,7 +20,7 @@ using tachi::test::ChildProcess;
 
 namespace {
 // Domain ids 185-189 belong to this file (docs/testing.md).
-const std::string kBin = TACHI_BIN_DIR;
+const std::string kBin = tachi::test::bin_dir();
 
 // The newest "rejected.*" metrics `node` published, waiting until `reason` shows up (or 10 s pass).
 std::map<std::string, double> rejections(bus::Reader<tachi_msg_NodeStatus>& status, const std::string& node,

@@ -2,6 +2,7 @@
 // an unreadable or empty DDS config is an error naming the file, never Cyclone's network defaults;
 // a non-finite flag value is refused naming the flag; every long-running process stops within 1 s
 // of SIGINT/SIGTERM whatever it is doing.
+#include "paths.hpp"
 #include "node_status.hpp"
 #include "process.hpp"
 #include "scratch_dir.hpp"
@@ -17,8 +18,8 @@ using tachi::test::ChildProcess;
 
 namespace {
 // Domain ids 180-189 belong to this file (docs/testing.md).
-const std::string kBin = TACHI_BIN_DIR;
-const std::string kRecordings = TACHI_RECORDINGS_DIR;
+const std::string kBin = tachi::test::bin_dir();
+const std::string kRecordings = tachi::test::recordings_dir();
 
 void write(const std::filesystem::path& file, const std::string& text) { std::ofstream(file, std::ios::binary) << text; }
 

@@ -1,5 +1,5 @@
 // No lost cuts under the launcher (docs/reliability.md): `tachi run` on the recorded straight
-// cut, once undisturbed and then once per node with that node SIGKILLed mid-stroke. The launcher
+// cut, once undisturbed and once per node with that node SIGKILLed mid-stroke (five runs at once). The launcher
 // restarts it and the restarted node picks up where the killed one stopped: the sensor after the
 // last frame it published (--resume), the filter from its journal under the same session, the
 // simulator from its journal, the viewer from the transient-local topology. Each run must complete
@@ -7,6 +7,7 @@
 // same exit (within a cell: two live runs differ by a frame in where the gate opens on the swaying
 // cloth). The kill waits for the hand to be cutting, and the test checks that cutting went on after
 // it. Domain ids 195-199 belong to this file.
+#include "paths.hpp"
 #include "bus_wait.hpp"
 #include "process.hpp"
 #include "same_cut.hpp"
@@ -19,6 +20,7 @@
 #include <nlohmann/json.hpp>
 
 #include <csignal>
+#include <future>
 #include <fstream>
 #include <map>
 #include <regex>
@@ -29,8 +31,8 @@ using tachi::test::entry_and_exit_columns;
 namespace fs = std::filesystem;
 
 namespace {
-const std::string kBin = TACHI_BIN_DIR;
-const std::string kRecordings = TACHI_RECORDINGS_DIR;
+const std::string kBin = tachi::test::bin_dir();
+const std::string kRecordings = tachi::test::recordings_dir();
 
 struct RunResult {
   int exit_code = -1;
@@ -56,8 +58,8 @@ std::optional<pid_t> started_pid(ChildProcess& launcher, const std::string& prog
 
 RunResult run(unsigned domain, const std::string& victim) {
   tachi::test::ScratchDir out("tachi_kill_" + (victim.empty() ? std::string("none") : victim));
-  // The test watches the run's strokes (in the run's partition) to kill on an event, not after a guess.
-  tachi::bus::read_every_run();
+  // The test watches the run's strokes (in the run's partition; read_every_run() was called) to kill
+  // on an event, not after a guess.
   tachi::bus::Participant dds{domain};
   tachi::bus::Reader<tachi_msg_StrokeSample> strokes{dds, tachi::bus::topics::stroke};
   ChildProcess launcher({kBin + "/tachi", "run", "--recording", kRecordings + "/straight_cut", "--grid", "32", "--domain",
@@ -99,7 +101,17 @@ RunResult run(unsigned domain, const std::string& victim) {
 }  // namespace
 
 TEST(NoLostCutsUnderTheLauncher, EachNodeKilledMidStrokeInTurnLeavesTheUndisturbedCut) {
-  const RunResult undisturbed = run(195, "");
+  // The five runs go at once, each on its own domain: a run mostly waits on the recording's real time
+  // (the five take ~11 s together, ~55 s one after another), and each waits on its own events.
+  tachi::bus::read_every_run();
+  const std::vector<std::string> victims{"sensor", "filter", "sim", "viewer"};
+  auto undisturbed_run = std::async(std::launch::async, run, 195u, std::string());
+  std::vector<std::future<RunResult>> killed_runs;
+  for (unsigned i = 0; i < victims.size(); ++i) killed_runs.push_back(std::async(std::launch::async, run, 196u + i, victims[i]));
+  const RunResult undisturbed = undisturbed_run.get();
+  std::vector<RunResult> killed_results;
+  for (auto& f : killed_runs) killed_results.push_back(f.get());
+
   ASSERT_EQ(undisturbed.exit_code, 0) << undisturbed.log;
   ASSERT_TRUE(undisturbed.summary.is_object()) << undisturbed.log;
   const auto [entry, exit] = entry_and_exit_columns(undisturbed.summary["cut_line"]);
@@ -108,10 +120,10 @@ TEST(NoLostCutsUnderTheLauncher, EachNodeKilledMidStrokeInTurnLeavesTheUndisturb
               undisturbed.summary["strokes"].get<int>(), undisturbed.summary["pieces"].get<int>(),
               undisturbed.summary["cut_particles"].get<int>(), entry, exit, undisturbed.summary["cut_length_m"].get<double>());
 
-  unsigned domain = 196;
-  for (const std::string victim : {"sensor", "filter", "sim", "viewer"}) {
+  for (std::size_t i = 0; i < victims.size(); ++i) {
+    const std::string& victim = victims[i];
+    const RunResult& killed = killed_results[i];
     SCOPED_TRACE("tachi-" + victim + " killed");
-    const RunResult killed = run(domain++, victim);
     ASSERT_EQ(killed.exit_code, 0) << killed.log;
     ASSERT_TRUE(killed.summary.is_object()) << killed.log;
     // The kill landed inside the stroke: the hand was cutting before it and went on cutting after it.

@@ -4,6 +4,7 @@
 // missed (transient-local history), and ends with the same cut: the same pieces, the same cut line
 // from edge to edge. Then the same with the filter killed: the stroke is ended cleanly and the
 // restarted filter's strokes are new strokes, never the old one's continuation.
+#include "paths.hpp"
 #include "bus_wait.hpp"
 #include "process.hpp"
 #include "same_cut.hpp"
@@ -24,8 +25,8 @@ using tachi::test::entry_and_exit_columns;
 
 namespace {
 // Domain ids 190-194 belong to this file (docs/testing.md).
-const std::string kBin = TACHI_BIN_DIR;
-const std::string kRecordings = TACHI_RECORDINGS_DIR;
+const std::string kBin = tachi::test::bin_dir();
+const std::string kRecordings = tachi::test::recordings_dir();
 
 std::vector<std::string> sim_args(unsigned domain, const std::filesystem::path& journal, const std::filesystem::path& out) {
   // Grid cuts: their summary lists the cut line cell by cell, which the comparison below reads.

@@ -2,8 +2,10 @@
 // talk; a participant with no credentials, or with a certificate from another CA, reads nothing and
 // injects nothing; an identity whose grant lacks a topic cannot write it; the secure pipeline cuts.
 // Every check runs while authorised traffic flows, so "nothing arrived" means "refused", not "idle".
+#include "paths.hpp"
 #include "process.hpp"
 #include "scratch_dir.hpp"
+#include "test_pki.hpp"
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -16,28 +18,14 @@ using tachi::test::ChildProcess;
 
 namespace {
 // Domain ids 170-179 belong to this file (docs/testing.md).
-const std::string kBin = TACHI_BIN_DIR;
-const std::string kPeer = TACHI_BUS_PEER;
-const std::string kMakePki = TACHI_SOURCE_DIR "/scripts/make_test_pki.sh";
-const std::string kRecordings = TACHI_RECORDINGS_DIR;
+const std::string kBin = tachi::test::bin_dir();
+const std::string kPeer = tachi::test::executable("bus_peer");
+const std::string kRecordings = tachi::test::recordings_dir();
 
-// Two PKIs per test process: ours, and another one whose CAs ours does not trust.
-class Pki {
- public:
-  static const std::string& ours() { return dir(0); }
-  static const std::string& foreign() { return dir(1); }
-
- private:
-  static const std::string& dir(int which) {
-    static tachi::test::ScratchDir scratch{"pki"};
-    static const std::string dirs[2] = {make(scratch / "ours"), make(scratch / "foreign")};
-    return dirs[which];
-  }
-  static std::string make(const std::filesystem::path& dir) {
-    const auto r = tachi::test::run({"/bin/bash", kMakePki, dir.string()}, 60s);
-    if (r.exit_code != 0) throw std::runtime_error("make_test_pki.sh failed: " + r.err);
-    return dir.string();
-  }
+// Two PKIs, made once per ctest run (the TestPki fixture): ours, and another one whose CAs ours does not trust.
+struct Pki {
+  static std::string ours() { return tachi::test::test_pki("ours"); }
+  static std::string foreign() { return tachi::test::test_pki("foreign"); }
 };
 
 std::vector<std::string> peer(const std::string& role, unsigned domain, const std::string& pki, const std::string& identity,

@@ -6,6 +6,7 @@
 #include <cstdlib>
 #include <map>
 
+#include "paths.hpp"
 #include "tachi/bus/bus.hpp"
 #include "tachi/bus/topics.hpp"
 #include "tachi/sensor/hand_csv.hpp"
@@ -24,7 +25,7 @@ TEST(SensorProcess, PublishesOneRawHandSamplePerDepthFrameAndExitsAtTheEnd) {
   bus::Participant dds{kDomain};
   bus::Reader<tachi_msg_RawHandSample> reader{dds, bus::topics::raw_hand};
 
-  tachi::test::ChildProcess sensor({TACHI_SENSOR_EXE, "--recording", recording.string(), "--rate", "3", "--domain",
+  tachi::test::ChildProcess sensor({tachi::test::executable("tachi-sensor"), "--recording", recording.string(), "--rate", "3", "--domain",
                                     std::to_string(kDomain), "--wait-readers", "1", "--sensor-id", "9", "--csv", csv.string(),
                                     "--log-level", "warn"});
   std::map<std::uint64_t, tachi_msg_RawHandSample> received;

@@ -1,3 +1,4 @@
+#include "paths.hpp"
 #include "tachi/sensor/synthetic.hpp"
 
 #include <gtest/gtest.h>
@@ -88,7 +89,7 @@ TEST(ScenarioSpec, BundledSpecsLoad) {
   const auto names = test::scenario_names();
   EXPECT_GE(names.size(), 11u);
   for (const auto& name : names) {
-    const auto spec = load_scenario(std::filesystem::path(TACHI_SCENARIO_DIR) / (name + ".json"));
+    const auto spec = load_scenario(std::filesystem::path(tachi::test::source_dir() + "/recordings/scenarios") / (name + ".json"));
     EXPECT_EQ(spec.name, name);
     EXPECT_GE(spec.path.size(), 2u);
   }

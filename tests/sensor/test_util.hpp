@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "paths.hpp"
 #include "scratch_dir.hpp"
 #include "tachi/sensor/depth_frame.hpp"
 
@@ -36,18 +37,16 @@ inline std::vector<std::uint16_t> ramp_frame(std::uint16_t offset) {
   return raw;
 }
 
-inline std::string recordings_dir() { return TACHI_RECORDINGS_DIR; }
+inline std::string recordings_dir() { return tachi::test::recordings_dir(); }
 
-#ifdef TACHI_SCENARIO_DIR
 /// Every bundled scenario (a spec in recordings/scenarios, rendered at build time), sorted, so a
 /// new spec is tested without being listed again here.
 inline std::vector<std::string> scenario_names() {
   std::vector<std::string> names;
-  for (const auto& entry : std::filesystem::directory_iterator(TACHI_SCENARIO_DIR))
+  for (const auto& entry : std::filesystem::directory_iterator(tachi::test::source_dir() + "/recordings/scenarios"))
     if (entry.path().extension() == ".json") names.push_back(entry.path().stem().string());
   std::sort(names.begin(), names.end());
   return names;
 }
-#endif
 
 }  // namespace tachi::sensor::test

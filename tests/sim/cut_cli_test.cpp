@@ -1,4 +1,5 @@
 // Multi-process: runs the real tachi-sim --offline with a --stroke and checks what it writes.
+#include "paths.hpp"
 #include "process.hpp"
 
 #include <gtest/gtest.h>
@@ -37,7 +38,7 @@ class CutCli : public ::testing::Test {
   }
 
   tachi::test::RunResult sim(const std::vector<std::string>& args) {
-    std::vector<std::string> argv{TACHI_SIM_EXE};
+    std::vector<std::string> argv{tachi::test::executable("tachi-sim")};
     argv.insert(argv.end(), args.begin(), args.end());
     return tachi::test::run(argv, 60s);
   }

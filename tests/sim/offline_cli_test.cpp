@@ -1,4 +1,5 @@
 // tachi-sim --offline as a process: the files it writes and the one-line errors for bad flags.
+#include "paths.hpp"
 #include "process.hpp"
 
 #include <gtest/gtest.h>
@@ -17,7 +18,7 @@ using namespace std::chrono_literals;
 TEST(SimOfflineCli, WritesObjAndSummaryWithTheContractKeys) {
   const auto dir = std::filesystem::temp_directory_path() / "tachi_sim_offline_cli_test";
   std::filesystem::remove_all(dir);
-  const auto r = tachi::test::run({TACHI_SIM_EXE, "--offline", "--grid", "24", "--pin", "corners", "--steps", "60",
+  const auto r = tachi::test::run({tachi::test::executable("tachi-sim"), "--offline", "--grid", "24", "--pin", "corners", "--steps", "60",
                                    "--export", dir.string()},
                                   30s);
   ASSERT_EQ(r.exit_code, 0) << r.err;
@@ -43,7 +44,7 @@ TEST(SimOfflineCli, BadFlagsGiveOneErrorNamingTheFlag) {
       {{"--substeps", "0"}, "--substeps"},
   };
   for (const auto& [args, flag] : cases) {
-    std::vector<std::string> argv{TACHI_SIM_EXE, "--offline"};
+    std::vector<std::string> argv{tachi::test::executable("tachi-sim"), "--offline"};
     argv.insert(argv.end(), args.begin(), args.end());
     const auto r = tachi::test::run(argv, 10s);
     EXPECT_EQ(r.exit_code, 2) << flag;

@@ -3,6 +3,7 @@
 // them: every cut mode must leave what grid mode leaves, one slit (issue 11: exact mode cut the recorded
 // hand's stroke into 3-10 pieces, because the hand wobbles at the end of its stroke and the nearest
 // particle sometimes lies on another layer of the moving cloth).
+#include "paths.hpp"
 #include "tachi/sim/offline.hpp"
 #include "tachi/sim/pieces.hpp"
 #include "tachi/sim/session.hpp"
@@ -82,15 +83,15 @@ std::size_t pieces_after(const std::vector<FilteredSample>& rows, CutMode mode, 
 
 TEST(RecordingCut, TheStraightCutRecordingLeavesOneSlitInExactModeAsInGridMode) {
   const tachi::test::ScratchDir scratch{"sim_recording_cut"};
-  const fs::path recording = fs::path(TACHI_RECORDINGS_DIR) / "straight_cut";
+  const fs::path recording = fs::path(tachi::test::recordings_dir()) / "straight_cut";
   ASSERT_TRUE(fs::exists(recording / "INDEX.txt")) << recording;
   const fs::path hands = scratch / "hands.csv";
   const fs::path strokes = scratch / "strokes.csv";
-  auto r = tachi::test::run({TACHI_SENSOR_EXE, "--recording", recording.string(), "--rate", "max", "--no-dds", "--csv",
+  auto r = tachi::test::run({tachi::test::executable("tachi-sensor"), "--recording", recording.string(), "--rate", "max", "--no-dds", "--csv",
                              hands.string(), "--log-level", "warn"},
                             60s);
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  r = tachi::test::run({TACHI_FILTER_EXE, "--offline", "--hands", hands.string(), "--out", strokes.string()}, 60s);
+  r = tachi::test::run({tachi::test::executable("tachi-filter"), "--offline", "--hands", hands.string(), "--out", strokes.string()}, 60s);
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const auto rows = read_filtered(strokes);
   ASSERT_GT(rows.size(), 100U);

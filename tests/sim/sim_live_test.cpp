@@ -1,4 +1,5 @@
 // tachi-sim in live mode as a process: strokes in over DDS, topology, cut events and a summary out.
+#include "paths.hpp"
 #include "process.hpp"
 #include "scratch_dir.hpp"
 #include "tachi/bus/topics.hpp"
@@ -37,7 +38,7 @@ tachi_msg_StrokeSample sample(std::uint32_t stroke, std::uint64_t frame, float x
 TEST(SimLive, CutsOffTheLowerPieceFromStrokesOverDdsAndReportsIt) {
   const tachi::test::ScratchDir scratch{"sim_live"};
   const auto out = scratch / "out";
-  tachi::test::ChildProcess sim({TACHI_SIM_EXE, "--cut-mode", "exact", "--grid", "16", "--pin", "top-edge", "--domain", std::to_string(kDomain),
+  tachi::test::ChildProcess sim({tachi::test::executable("tachi-sim"), "--cut-mode", "exact", "--grid", "16", "--pin", "top-edge", "--domain", std::to_string(kDomain),
                                  "--exit-when-idle", "1.5", "--export", out.string()});
   bus::Participant dds{kDomain};
   bus::Writer<tachi_msg_StrokeSample> strokes{dds, bus::topics::stroke};
@@ -111,7 +112,7 @@ TEST(SimLive, CutsOffTheLowerPieceFromStrokesOverDdsAndReportsIt) {
 }
 
 TEST(SimLive, StopsCleanlyOnSigint) {
-  tachi::test::ChildProcess sim({TACHI_SIM_EXE, "--grid", "8", "--domain", std::to_string(kDomain + 1)});
+  tachi::test::ChildProcess sim({tachi::test::executable("tachi-sim"), "--grid", "8", "--domain", std::to_string(kDomain + 1)});
   // In its loop: it publishes the cloth.
   tachi::bus::Participant dds{kDomain + 1};
   tachi::bus::Reader<tachi_msg_ClothState> states{dds, tachi::bus::topics::cloth_state};
@@ -121,7 +122,7 @@ TEST(SimLive, StopsCleanlyOnSigint) {
 }
 
 TEST(SimLive, RejectsAStrokeFileOutsideOfflineMode) {
-  const auto result = tachi::test::run({TACHI_SIM_EXE, "--stroke", "/dev/null"}, 10s);
+  const auto result = tachi::test::run({tachi::test::executable("tachi-sim"), "--stroke", "/dev/null"}, 10s);
   EXPECT_EQ(result.exit_code, 2) << result.err;
   EXPECT_NE(result.err.find("--stroke"), std::string::npos) << result.err;
 }

@@ -2,6 +2,7 @@
 // sample) goes through the real tachi-sim --offline --stroke: the row is an outlier (the filter's 10 m/s
 // rule, common/hand_speed.hpp), counted in the summary, and the cut is the clean slit the same stroke
 // without it makes.
+#include "paths.hpp"
 #include "process.hpp"
 
 #include <gtest/gtest.h>
@@ -53,7 +54,7 @@ class StrokeOutlierCli : public ::testing::Test {
 
   Outcome cut(const fs::path& stroke, const std::string& mode) const {
     const fs::path out = dir_ / ("out_" + mode);
-    const auto r = tachi::test::run({TACHI_SIM_EXE, "--offline", "--cut-mode", mode, "--grid", "32", "--pin", "top-edge",
+    const auto r = tachi::test::run({tachi::test::executable("tachi-sim"), "--offline", "--cut-mode", mode, "--grid", "32", "--pin", "top-edge",
                                      "--stroke", stroke.string(), "--blade", "razor", "--steps", "150", "--export",
                                      out.string()},
                                     60s);

@@ -2,12 +2,13 @@
 // the default view to find things in its images (the renderer's own projection and background).
 #pragma once
 
+#include "paths.hpp"
 #include "tachi/viewer/render.hpp"
 
 #include <string>
 
-inline const std::string kViewer = TACHI_VIEWER_EXE;
-inline const std::string kSim = TACHI_SIM_EXE;
+inline const std::string kViewer = tachi::test::executable("tachi-viewer");
+inline const std::string kSim = tachi::test::executable("tachi-sim");
 
 /// Where world (x, y, 0) lands in the viewer's default view drawn at size x size.
 inline cv::Point2f pixel_of(float x, float y, int size) {

@@ -128,11 +128,11 @@ int cmd_run(const CLI::App& run, const RunFlags& f, const fs::path& bin_dir) {
   }
   tachi::common::install_stop_handlers();
   // The run id names the DDS partition of every node of this run (bus/run_partition.hpp), passed down in
-  // the environment. A whole pipeline gets a fresh one; one split over launchers (--nodes) shares the
-  // default partition unless each is given the same --run-id; DDS Security grants name no partitions
-  // (scripts/make_test_pki.sh), so a secure run stays in the default one too.
+  // the environment. A whole pipeline gets a fresh one, secure or not (the grants allow every partition,
+  // scripts/make_test_pki.sh); one split over launchers (--nodes) shares the default partition unless each
+  // is given the same --run-id.
   std::string run_id = f.run_id;
-  if (run_id.empty() && !run.count("--nodes") && config.secure.empty())
+  if (run_id.empty() && !run.count("--nodes"))
     run_id = fmt::format("{:016x}", tachi::bus::new_session_id());
   if (!run_id.empty()) ::setenv(tachi::bus::kRunIdEnv, run_id.c_str(), 1);
   else ::unsetenv(tachi::bus::kRunIdEnv);
@@ -287,7 +287,7 @@ int main(int argc, char** argv) try {
   run->add_option("--nodes", f.nodes, "Start only these nodes, e.g. sensor,filter (the other host runs sim,viewer)");
   run->add_option("--settle", f.settle_s, "With a recording: end this many seconds after the last hand sample")
       ->check(CLI::Range(0.1, 60.0));
-  run->add_option("--run-id", f.run_id, "DDS partition of this run's nodes (default: a fresh one; none with --nodes or --secure)");
+  run->add_option("--run-id", f.run_id, "DDS partition of this run's nodes (default: a fresh one; none with --nodes)");
   run->add_option("--set", f.sets, "NODE.FLAG=VALUE passed to one node, e.g. sim.material=denim (repeatable)");
   auto* record_flag = run->add_flag("--record", f.record, "Record the run's whole bus into <out>/run.mcap (as `tachi record`)");
   run->add_flag("--foxglove", f.foxglove, "With --record: add the Foxglove channels (as `tachi record --foxglove`)")->needs(record_flag);

@@ -67,6 +67,10 @@ topics_xml() (  # space-separated topic names -> <topic> elements
 # A day back, so a clock a little behind the signing host still accepts the grants.
 now=$(date -u -d "-1 day" +%Y-%m-%dT%H:%M:%S)
 until=$(date -u -d "+$days days" +%Y-%m-%dT%H:%M:%S)
+# Every partition: a run's nodes use "tachi.run.<id>" (bus/run_partition.hpp), the bus tools "*" to read
+# every run, and a rule without <partitions> would allow only the default one.
+partitions_xml="
+            <partitions><partition>*</partition></partitions>"
 grants=""
 for node in "${nodes[@]}"; do
   openssl ecparam -name prime256v1 -genkey -noout -out "$node.key.pem"
@@ -80,7 +84,7 @@ for node in "${nodes[@]}"; do
           <subscribe>
             <topics>
 $(topics_xml "${reads[$node]}")
-            </topics>
+            </topics>$partitions_xml
           </subscribe>"
   grants+="
     <grant name=\"$node\">
@@ -91,7 +95,7 @@ $(topics_xml "${reads[$node]}")
         <publish>
           <topics>
 $(topics_xml "${publishes[$node]} tachi/node/status")
-          </topics>
+          </topics>$partitions_xml
         </publish>$subscribe
       </allow_rule>
       <default>DENY</default>

@@ -308,6 +308,7 @@ TEST(TachiRun, SecureRunAuthenticatesEveryNodeAndTheLauncher) {
   ASSERT_EQ(r.exit_code, 0) << r.err << logs(out.path() / "run");
   const auto s = read_json(out / "run" / "summary.json");
   EXPECT_EQ(s["frames"], depth_frames("straight_cut")) << "the launcher (identity monitor) read the sensor's heartbeats";
+  EXPECT_EQ(s["run_id"].get<std::string>().size(), 16u) << "a secure run has its own partition like any other";
   EXPECT_EQ(s["cuts"], 1);
   EXPECT_GT(s["cut_particles"].get<int>(), 5);
   EXPECT_NE(read_text(out / "run" / "sim.log").find("--secure"), std::string::npos);

@@ -54,6 +54,13 @@ std::optional<double> StatusBoard::stage_latency(const std::string& stage, const
   return metric(stage, std::string("state_age_") + percentile + "_ms");
 }
 
+std::optional<double> StatusBoard::strokes() const {
+  // The simulator's count, as summary.json's: the strokes it received, from the filter's hand or from the
+  // viewer's mouse blade (a run without a filter). The filter's own count stands in before the simulator reports.
+  if (const auto sim = metric("sim", "strokes")) return sim;
+  return metric("filter", "strokes");
+}
+
 std::string StatusBoard::line(int restarts) const {
   const auto frames = metric("sensor", "frames");
   const auto tracked = metric("sensor", "tracked_frames");
@@ -61,7 +68,7 @@ std::string StatusBoard::line(int restarts) const {
   if (frames && tracked && *frames > 0) tracked_pct = 100.0 * *tracked / *frames;
   std::string text = "frames " + number(frames) + " @ " + number(metric("sensor", "fps"), "%.1f") + " fps, tracked " +
                      number(tracked_pct) + "%, gate " + gate_text(metric("filter", "gate"), metric("filter", "gate_opened_by")) +
-                     ", strokes " + number(metric("filter", "strokes")) + ", cuts " + number(metric("sim", "cuts")) +
+                     ", strokes " + number(strokes()) + ", cuts " + number(metric("sim", "cuts")) +
                      ", pieces " + number(metric("sim", "pieces")) + ", p50 ms";
   for (const char* stage : kStages) text += std::string(" ") + stage + " " + number(stage_latency(stage, "p50"), "%.1f");
   text += ", restarts " + std::to_string(restarts);
@@ -78,7 +85,7 @@ nlohmann::json StatusBoard::summary() const {
   };
   count("frames", "sensor", "frames");
   count("tracked_frames", "sensor", "tracked_frames");
-  count("strokes", "filter", "strokes");
+  if (const auto n = strokes()) s["strokes"] = std::llround(*n);
   count("cuts", "sim", "cuts");
   count("pieces", "sim", "pieces");
   count("fallen_pieces", "sim", "fallen_pieces");

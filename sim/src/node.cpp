@@ -233,6 +233,7 @@ struct SimNode::Impl {
         if (pending_latency_ns > 0) latency.add_since(pending_latency_ns, published_ns);
         pending_latency_ns = 0;
       }
+      heartbeat.set_metric("strokes", static_cast<double>(session.strokes()));  // received, whatever their source
       heartbeat.set_metric("cuts", static_cast<double>(session.cuts()));  // strokes that cut, the open one included
       heartbeat.set_metric("cut_length_m", cut_length_m);
       heartbeat.set_metric("steps", static_cast<double>(session.steps()));

@@ -28,6 +28,21 @@ TEST(StatusBoard, LineShowsTheRunFromTheHeartbeats) {
             "filter 0.9 sim 1.5 viewer -, restarts 1");
 }
 
+// The simulator's stroke count, as summary.json's: a mouse-blade run has no filter, and its strokes still show.
+TEST(StatusBoard, StrokesAreTheSimulatorsCountWhateverTheirSource) {
+  StatusBoard board;
+  board.update(report("tachi-filter", 2, 1, {{"strokes", 1}}));
+  EXPECT_EQ(board.strokes(), 1) << "the filter's count until the simulator reports";
+  board.update(report("tachi-sim", 3, 1, {{"strokes", 2}, {"cuts", 2}}));
+  EXPECT_EQ(board.strokes(), 2);
+  EXPECT_NE(board.line(0).find("strokes 2, cuts 2"), std::string::npos) << board.line(0);
+  EXPECT_EQ(board.summary()["strokes"], 2);
+
+  StatusBoard mouse_run;  // viewer --mouse -> sim, no filter
+  mouse_run.update(report("tachi-sim", 3, 1, {{"strokes", 3}, {"cuts", 1}}));
+  EXPECT_NE(mouse_run.line(0).find("strokes 3, cuts 1"), std::string::npos) << mouse_run.line(0);
+}
+
 TEST(StatusBoard, SummaryTakesCountsAndPerStageLatency) {
   StatusBoard board;
   board.update(report("tachi-sensor", 1, 1, {{"frames", 90}, {"tracked_frames", 80}, {"latency_p50_ms", 0.5}, {"latency_p99_ms", 2}}));

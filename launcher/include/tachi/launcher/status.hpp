@@ -35,6 +35,8 @@ class StatusBoard {
   [[nodiscard]] std::optional<double> metric(const std::string& node, const std::string& name) const;
   /// A stage's capture -> output delay percentile ("p50", "p99"), ms.
   [[nodiscard]] std::optional<double> stage_latency(const std::string& stage, const char* percentile) const;
+  /// Strokes the simulator received (its heartbeat), else the filter's count: a mouse-blade run has no filter.
+  [[nodiscard]] std::optional<double> strokes() const;
 
   /// One line: frames, fps, tracked %, gate state and source, strokes, cuts, pieces, per-stage
   /// latency p50, restarts. Figures not reported yet show as "-".

@@ -1,22 +1,25 @@
 // tachi-viewer: draws the cloth, the hand mark, the cut and a HUD from the DDS bus, in a window or
 // headless (PNG frames, video); --mesh shows an exported mesh without DDS; --mouse cuts with the mouse.
-#include "live.hpp"
-#include "tachi/common/app.hpp"
+#include "cli.hpp"
+#include "tachi/bus/bus.hpp"
+#include "tachi/common/node.hpp"
+#include "window.hpp"
 
+#include <exception>
 #include <iostream>
 
 int main(int argc, char** argv) try {
-  CLI::App app{"tachi-viewer: shows the cloth, the hand mark (blue idle, green cutting, red outside the cloth), the cut "
-               "and a HUD; --mouse turns the cursor into a blade (seed 001); --mesh views an exported mesh offline"};
-  app.name("tachi-viewer");
   tachi::viewer::ViewerOptions options;
-  std::string log_level = "info";
-  tachi::viewer::add_viewer_flags(app, options);
-  tachi::common::add_log_level_flag(app, log_level);
-  if (const int rc = tachi::common::parse(app, argc, argv); rc >= 0) return rc;
-  tachi::common::set_log_level(log_level);
-  tachi::common::install_stop_handlers();
-  return options.mesh.empty() ? tachi::viewer::run_live(options) : tachi::viewer::run_mesh(options);
+  if (const int rc = tachi::viewer::parse_flags(argc, argv, options); rc >= 0) return rc;
+  const auto window = tachi::viewer::open_window(options);  // none with --headless
+  if (!options.mesh.empty()) {
+    tachi::viewer::MeshView view{options, window.get()};
+    return tachi::common::run_until_signal(view);
+  }
+  const auto& b = options.bus;
+  tachi::bus::Participant dds{b.domain, b.dds_config, {b.secure_dir, tachi::viewer::participant_identity(options)}};
+  tachi::viewer::ViewerNode node{options, dds, window.get()};
+  return tachi::common::run_until_signal(node);
 } catch (const std::exception& e) {
   std::cerr << "tachi-viewer: " << e.what() << '\n';
   return tachi::common::kExitFailure;

@@ -5,6 +5,8 @@
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
+#include <cstdlib>
+#include <stdexcept>
 
 namespace tachi::viewer {
 namespace {
@@ -139,4 +141,15 @@ void Window::on_mouse(int event, int x, int y, int flags, void* self) {
   window.events_.push_back(e);
 }
 
+}  // namespace tachi::viewer
+
+namespace tachi::viewer {
+std::unique_ptr<ViewerWindow> open_window(const ViewerOptions& options) {
+  if (options.headless) return nullptr;
+  if (std::getenv("DISPLAY") == nullptr)
+    throw std::runtime_error(options.mesh.empty()
+                                 ? "no display (DISPLAY is not set); use --headless with --video, --snapshot or --frames-dir"
+                                 : "no display (DISPLAY is not set); use --headless --snapshot");
+  return std::make_unique<Window>("tachi", cv::Size(options.size, options.size));
+}
 }  // namespace tachi::viewer

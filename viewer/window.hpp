@@ -3,45 +3,44 @@
 // the main loop. Rendering stays in the pure renderer: the window only shows images.
 #pragma once
 
+#include "tachi/viewer/node.hpp"
+
 #include <opencv2/core.hpp>
 
+#include <memory>
 #include <optional>
-
 #include <string>
 #include <vector>
 
 namespace tachi::viewer {
 
-struct MouseEvent {
-  enum Kind { Move, LeftDown, LeftUp, RightDown, RightUp, Wheel } kind = Move;
-  cv::Point2f pixel;
-  int wheel = 0;  ///< > 0 away from the user (zoom in)
-  bool shift = false;
-};
-
 /// Width and height of the X screen the window opens on, or nothing without an X display.
 std::optional<cv::Size> screen_size();
 
-class Window {
+/// The window tachi-viewer opens (named "tachi", --size pixels), or none with --headless. Throws when a
+/// window is asked for without an X display.
+std::unique_ptr<ViewerWindow> open_window(const ViewerOptions& options);
+
+class Window final : public ViewerWindow {
  public:
   /// Opens a window of `requested` pixels, shrunk to fit the screen (with room for the title bar).
   Window(std::string name, cv::Size requested);
-  ~Window();
+  ~Window() override;
   Window(const Window&) = delete;
   Window& operator=(const Window&) = delete;
 
   /// The size to render at: the window's current image area (the user may resize it).
-  cv::Size image_size() const;
-  void show(const cv::Mat& image);
+  cv::Size image_size() const override;
+  void show(const cv::Mat& image) override;
   /// Pumps the window's events for up to `wait_ms`; returns the key pressed (cv::waitKeyEx code) or -1.
-  int poll(int wait_ms);
+  int poll(int wait_ms) override;
   /// Mouse events since the last call.
-  std::vector<MouseEvent> take_mouse_events();
+  std::vector<MouseEvent> take_mouse_events() override;
   /// False once the user closed the window.
-  bool open() const;
+  bool open() const override;
   /// Hides the system pointer over the window (seed 001: the blade image drawn at the cursor replaces
   /// it). Applied as soon as the window is mapped.
-  void hide_pointer() { hide_pointer_ = true; }
+  void hide_pointer() override { hide_pointer_ = true; }
 
  private:
   static void on_mouse(int event, int x, int y, int flags, void* self);

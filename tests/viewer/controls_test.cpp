@@ -2,6 +2,8 @@
 #include "tachi/viewer/frame_stats.hpp"
 #include "tachi/viewer/mesh_file.hpp"
 
+#include "square_mesh.hpp"
+
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -10,12 +12,7 @@
 using namespace tachi::viewer;
 
 namespace {
-Mesh square() {
-  Mesh mesh;
-  mesh.positions = {{-0.5f, 0.5f, 0.0f}, {0.5f, 0.5f, 0.0f}, {-0.5f, -0.5f, 0.0f}, {0.5f, -0.5f, 0.0f}};
-  mesh.triangles = {{0, 1, 2}, {1, 3, 2}};
-  return mesh;
-}
+using test::square;
 
 std::filesystem::path write_file(const std::string& name, const std::string& text) {
   const auto path = std::filesystem::temp_directory_path() / (name + "_" + std::to_string(::getpid()) + ".obj");

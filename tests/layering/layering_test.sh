@@ -15,9 +15,8 @@ allowed_includes=(
   "sim/src/object.cpp:tachi/sensor/depth_model.hpp"
   "sim/src/object.cpp:tachi/sensor/fakenect_recording.hpp"
 )
-#   launcher/main.cpp is the `tachi` tool's subcommand table (run, record, play, echo, ...), not a stage's main;
 #   sensor/eval_main.cpp is the accuracy evaluation tool.
-allowed_mains=(launcher/main.cpp sensor/eval_main.cpp)
+allowed_mains=(sensor/eval_main.cpp)
 
 failures=0
 fail() { echo "layering: $*" >&2; failures=$((failures + 1)); }

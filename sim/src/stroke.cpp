@@ -317,6 +317,18 @@ void StrokeCutter::commit(GridCoord g, const Eigen::Vector2d& uv, const Eigen::V
   if (moved) paths_.back().push_back(to.cast<float>());
   const std::optional<Eigen::Vector2d> from = path_end_;
   path_end_ = to;
+  if (!from) {
+    tracks_.emplace_back(1, to.cast<float>());
+    recent_.clear();
+  }
+  // Where the segment runs along a cut already made it does not cut again (recut_parts); the samples up to
+  // here then join the cut's track.
+  const auto parts = from && moved ? recut_parts(*from, to) : std::vector<std::pair<Eigen::Vector2d, Eigen::Vector2d>>{};
+  if (from && moved) {
+    tracks_.back().insert(tracks_.back().end(), recent_.begin(), recent_.end());
+    tracks_.back().push_back(to.cast<float>());
+    recent_.clear();
+  }
   if (follows_path()) {
     if (!from) {
       ++report_.lines;
@@ -327,14 +339,9 @@ void StrokeCutter::commit(GridCoord g, const Eigen::Vector2d& uv, const Eigen::V
     for (StrokeReport* r : {&report_, &total_}) {
       if (!from || r->cut_line.empty() || !(r->cut_line.back() == nearest)) r->cut_line.push_back(nearest);
     }
-    if (!from) {
-      tracks_.emplace_back(1, to.cast<float>());
-      recent_.clear();
-    }
     if (!from || !moved) return;
-    // The cut goes straight from where it ended to this point of the stroke, on the stroke's own path,
-    // except where that runs along a cut already made (recut_parts).
-    for (const auto& [a, b] : recut_parts(*from, to)) {
+    // The cut goes straight from where it ended to this point of the stroke, on the stroke's own path.
+    for (const auto& [a, b] : parts) {
       const TopologyChange cut = options_.mode == CutMode::Exact ? exact_->cut(a, b) : exact_->remove_crossed(a, b);
       cutter_.refresh_copies();
       const std::array<GridCoord, 2> ends{boundary_point(a), boundary_point(b)};
@@ -347,10 +354,14 @@ void StrokeCutter::commit(GridCoord g, const Eigen::Vector2d& uv, const Eigen::V
       total_.cut_length_m += length;
       change.merge(cut);
     }
-    // The samples up to here are now part of the cut's track.
-    tracks_.back().insert(tracks_.back().end(), recent_.begin(), recent_.end());
-    tracks_.back().push_back(to.cast<float>());
-    recent_.clear();
+    return;
+  }
+  if (from && moved && parts.empty()) {
+    // Grid mode, the whole segment along an earlier cut: its staircase, rasterised from other grid points,
+    // would cut a second one beside the first. The line ends here and a new one starts at this point.
+    add_line_to_report(line_->finish());
+    line_.emplace(cloth_->columns, cloth_->rows);
+    static_cast<void>(line_->append(g));
     return;
   }
   const auto added = line_->append(g);
@@ -398,8 +409,8 @@ std::vector<std::pair<Eigen::Vector2d, Eigen::Vector2d>> StrokeCutter::recut_par
   // the same place give samples within kRecutCells of each other, but the simplified paths cut along them
   // each lie up to tolerance_cells off their samples, so the segment is compared with the samples of the
   // cut so far (tracks_), within kRecutCells + tolerance_cells. It is sampled every kRecutStepCells; a run
-  // of samples near the track at least kRecutMinRunCells long, or the whole segment, runs along the cut and
-  // is not cut again. A shorter run is where the segment leaves or crosses a cut, and is cut through (a
+  // of samples near the track at least kRecutMinRunCells long runs along the cut and is not cut again (a
+  // shorter segment is cut: the last step to a stroke's end point must reach it). A shorter run is where the segment leaves or crosses a cut, and is cut through (a
   // crossing must separate). Where a kept part meets a skipped run it starts (ends) on the earlier cut
   // itself, at its nearest point, so the cuts join.
   const Eigen::Vector2d d = to - from;
@@ -417,8 +428,7 @@ std::vector<std::pair<Eigen::Vector2d, Eigen::Vector2d>> StrokeCutter::recut_par
     }
     int j = i;
     while (j + 1 <= n && on_cut[static_cast<std::size_t>(j + 1)]) ++j;
-    const bool whole = i == 0 && j == n;
-    if (whole || (static_cast<double>(j - i) / n) * length >= kRecutMinRunCells) {
+    if ((static_cast<double>(j - i) / n) * length >= kRecutMinRunCells) {
       std::fill(skip.begin() + i, skip.begin() + j + 1, 1);
     }
     i = j + 1;
@@ -510,8 +520,8 @@ TopologyChange StrokeCutter::add_sample(const StrokeSample& sample) {
     const double slack_m = options_.exact_max_jump_cells * std::min(cloth_->spacing_x(), cloth_->spacing_y());
     if (jump_m > options_.exact_max_jump_ratio * hand_m + slack_m) return change;
   }
-  // Exact and delete modes: the samples on the cloth, for recut_parts (thinned to a twentieth of a cell).
-  if (follows_path() && point.inside) {
+  // The samples on the cloth, for recut_parts (thinned to a twentieth of a cell).
+  if (point.inside) {
     const Eigen::Vector2f on = clamp_uv(point.uv).cast<float>();
     if (recent_.empty() || (recent_.back() - on).norm() >= static_cast<float>(kRecutStepCells)) recent_.push_back(on);
   }

@@ -3,7 +3,8 @@
 // flip"). For each stroke (random_stroke(seed)): the stroke and the stroke moved by 1e-6 m must give the
 // same number of pieces and cut lengths within 1 %; and (--recut) the stroke gone over forward, back and
 // forward again must give the same pieces as once.
-// Usage: cut_stability [--strokes N] [--first-seed S] [--grid G] [--recut]
+// Usage: cut_stability [--strokes N] [--first-seed S] [--grid G] [--recut] [--blade B] [--mode M] [--verbose]
+// (--blade, --mode: only that blade or mode; --verbose: each stroke's pieces and cut length, both runs).
 #include "tachi/sim/cut_stability.hpp"
 
 #include <cmath>
@@ -11,6 +12,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <unistd.h>
 
@@ -20,6 +22,9 @@ int main(int argc, char** argv) {
   std::uint64_t first_seed = 1000;
   int grid = 32;
   bool recut = false;
+  bool verbose = false;
+  std::optional<Blade> only_blade;
+  std::optional<CutMode> only_mode;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--strokes" && i + 1 < argc) {
@@ -30,8 +35,15 @@ int main(int argc, char** argv) {
       grid = std::atoi(argv[++i]);
     } else if (a == "--recut") {
       recut = true;
+    } else if (a == "--verbose") {
+      verbose = true;
+    } else if (a == "--blade" && i + 1 < argc && parse_blade(argv[i + 1])) {
+      only_blade = parse_blade(argv[++i]);
+    } else if (a == "--mode" && i + 1 < argc && parse_cut_mode(argv[i + 1])) {
+      only_mode = parse_cut_mode(argv[++i]);
     } else {
-      std::fprintf(stderr, "usage: cut_stability [--strokes N] [--first-seed S] [--grid G] [--recut]\n");
+      std::fprintf(stderr, "usage: cut_stability [--strokes N] [--first-seed S] [--grid G] [--recut] [--blade NAME] "
+                           "[--mode exact|grid|delete] [--verbose]\n");
       return 2;
     }
   }
@@ -44,7 +56,9 @@ int main(int argc, char** argv) {
   std::printf("| blade | mode | pieces differ | length differs > 1 %% | largest length difference |\n|---|---|---|---|---|\n");
   int failures = 0;
   for (const Blade blade : blades) {
+    if (only_blade && *only_blade != blade) continue;
     for (const CutMode mode : modes) {
+      if (only_mode && *only_mode != mode) continue;
       int pieces_differ = 0;
       int length_differs = 0;
       double worst = 0.0;
@@ -58,6 +72,10 @@ int main(int argc, char** argv) {
         if (a.pieces != b.pieces) ++pieces_differ;
         if (!recut && diff > 0.01) ++length_differs;
         worst = std::max(worst, diff);
+        if (verbose && (a.pieces != b.pieces || (!recut && diff > 0.01))) {
+          std::printf("seed %llu: %zu pieces %.4f m / %zu pieces %.4f m\n", static_cast<unsigned long long>(seed),
+                      a.pieces, a.cut_length_m, b.pieces, b.cut_length_m);
+        }
       }
       failures += pieces_differ + length_differs;
       std::printf("| %s | %s | %d | %s | %.2f %% |\n", std::string{to_string(blade)}.c_str(),

@@ -317,6 +317,18 @@ void StrokeCutter::commit(GridCoord g, const Eigen::Vector2d& uv, const Eigen::V
   if (moved) paths_.back().push_back(to.cast<float>());
   const std::optional<Eigen::Vector2d> from = path_end_;
   path_end_ = to;
+  if (!from) {
+    tracks_.emplace_back(1, to.cast<float>());
+    recent_.clear();
+  }
+  // Where the segment runs along a cut already made it does not cut again (recut_parts); the samples up to
+  // here then join the cut's track.
+  const auto parts = from && moved ? recut_parts(*from, to) : std::vector<std::pair<Eigen::Vector2d, Eigen::Vector2d>>{};
+  if (from && moved) {
+    tracks_.back().insert(tracks_.back().end(), recent_.begin(), recent_.end());
+    tracks_.back().push_back(to.cast<float>());
+    recent_.clear();
+  }
   if (follows_path()) {
     if (!from) {
       ++report_.lines;
@@ -329,18 +341,27 @@ void StrokeCutter::commit(GridCoord g, const Eigen::Vector2d& uv, const Eigen::V
     }
     if (!from || !moved) return;
     // The cut goes straight from where it ended to this point of the stroke, on the stroke's own path.
-    const TopologyChange cut =
-        options_.mode == CutMode::Exact ? exact_->cut(*from, to) : exact_->remove_crossed(*from, to);
-    cutter_.refresh_copies();
-    const std::array<GridCoord, 2> ends{boundary_point(*from), boundary_point(to)};
-    apply_blade_drag(*cloth_, cutter_, ends, direction, options_.blade, options_.drag, drag_scratch_);
-    report_.particles_duplicated += cut.duplicated_from.size();
-    total_.particles_duplicated += cut.duplicated_from.size();
-    const auto length = static_cast<float>(
-        std::hypot((to.x() - from->x()) * cloth_->spacing_x(), (to.y() - from->y()) * cloth_->spacing_y()));
-    report_.cut_length_m += length;
-    total_.cut_length_m += length;
-    change.merge(cut);
+    for (const auto& [a, b] : parts) {
+      const TopologyChange cut = options_.mode == CutMode::Exact ? exact_->cut(a, b) : exact_->remove_crossed(a, b);
+      cutter_.refresh_copies();
+      const std::array<GridCoord, 2> ends{boundary_point(a), boundary_point(b)};
+      apply_blade_drag(*cloth_, cutter_, ends, direction, options_.blade, options_.drag, drag_scratch_);
+      report_.particles_duplicated += cut.duplicated_from.size();
+      total_.particles_duplicated += cut.duplicated_from.size();
+      const auto length = static_cast<float>(
+          std::hypot((b.x() - a.x()) * cloth_->spacing_x(), (b.y() - a.y()) * cloth_->spacing_y()));
+      report_.cut_length_m += length;
+      total_.cut_length_m += length;
+      change.merge(cut);
+    }
+    return;
+  }
+  if (from && moved && parts.empty()) {
+    // Grid mode, the whole segment along an earlier cut: its staircase, rasterised from other grid points,
+    // would cut a second one beside the first. The line ends here and a new one starts at this point.
+    add_line_to_report(line_->finish());
+    line_.emplace(cloth_->columns, cloth_->rows);
+    static_cast<void>(line_->append(g));
     return;
   }
   const auto added = line_->append(g);
@@ -350,6 +371,82 @@ void StrokeCutter::commit(GridCoord g, const Eigen::Vector2d& uv, const Eigen::V
   report_.particles_duplicated += cut.duplicated_from.size();
   total_.particles_duplicated += cut.duplicated_from.size();
   change.merge(cut);
+}
+
+double StrokeCutter::distance_to_track(const Eigen::Vector2d& p) const {
+  double best = std::numeric_limits<double>::infinity();
+  for (const auto& track : tracks_) {
+    if (track.size() == 1) best = std::min(best, (track[0].cast<double>() - p).norm());
+    for (std::size_t k = 1; k < track.size(); ++k) {
+      best = std::min(best, closest_points(p, p, track[k - 1].cast<double>(), track[k].cast<double>()).distance);
+    }
+  }
+  return best;
+}
+
+Eigen::Vector2d StrokeCutter::nearest_on_cut(const Eigen::Vector2d& p) const {
+  double best = std::numeric_limits<double>::infinity();
+  Eigen::Vector2d at = p;
+  for (std::size_t i = 0; i < paths_.size(); ++i) {
+    const auto& path = paths_[i];
+    // The current path's last point is the end of the segment being cut (just recorded): leave it out.
+    const std::size_t end = i + 1 == paths_.size() ? path.size() - 1 : path.size();
+    for (std::size_t k = 1; k < end; ++k) {
+      const auto meet = closest_points(p, p, path[k - 1].cast<double>(), path[k].cast<double>());
+      if (meet.distance < best) {
+        best = meet.distance;
+        at = meet.on_second;
+      }
+    }
+  }
+  return at;
+}
+
+std::vector<std::pair<Eigen::Vector2d, Eigen::Vector2d>> StrokeCutter::recut_parts(const Eigen::Vector2d& from,
+                                                                                   const Eigen::Vector2d& to) const {
+  // Going over a cut again must change nothing: cutting a second time a few tenths of a cell beside the
+  // first cut out slivers (exact) or deleted a second row of triangles (delete). Two passes of the hand over
+  // the same place give samples within kRecutCells of each other, but the simplified paths cut along them
+  // each lie up to tolerance_cells off their samples, so the segment is compared with the samples of the
+  // cut so far (tracks_), within kRecutCells + tolerance_cells. It is sampled every kRecutStepCells; a run
+  // of samples near the track at least kRecutMinRunCells long runs along the cut and is not cut again (a
+  // shorter segment is cut: the last step to a stroke's end point must reach it). A shorter run is where the segment leaves or crosses a cut, and is cut through (a
+  // crossing must separate). Where a kept part meets a skipped run it starts (ends) on the earlier cut
+  // itself, at its nearest point, so the cuts join.
+  const Eigen::Vector2d d = to - from;
+  const double length = d.norm();
+  const int n = std::max(1, static_cast<int>(std::ceil(length / kRecutStepCells)));
+  const double near = kRecutCells + options_.tolerance_cells;
+  const auto at = [&](int i) -> Eigen::Vector2d { return from + (static_cast<double>(i) / n) * d; };
+  std::vector<char> on_cut(static_cast<std::size_t>(n) + 1);
+  for (int i = 0; i <= n; ++i) on_cut[static_cast<std::size_t>(i)] = distance_to_track(at(i)) <= near;
+  std::vector<char> skip(on_cut.size(), 0);
+  for (int i = 0; i <= n;) {
+    if (!on_cut[static_cast<std::size_t>(i)]) {
+      ++i;
+      continue;
+    }
+    int j = i;
+    while (j + 1 <= n && on_cut[static_cast<std::size_t>(j + 1)]) ++j;
+    if ((static_cast<double>(j - i) / n) * length >= kRecutMinRunCells) {
+      std::fill(skip.begin() + i, skip.begin() + j + 1, 1);
+    }
+    i = j + 1;
+  }
+  std::vector<std::pair<Eigen::Vector2d, Eigen::Vector2d>> parts;
+  for (int i = 0; i <= n;) {
+    if (skip[static_cast<std::size_t>(i)]) {
+      ++i;
+      continue;
+    }
+    int j = i;
+    while (j + 1 <= n && !skip[static_cast<std::size_t>(j + 1)]) ++j;
+    const Eigen::Vector2d a = i > 0 ? nearest_on_cut(at(i - 1)) : from;
+    const Eigen::Vector2d b = j < n ? nearest_on_cut(at(j + 1)) : to;
+    if ((b - a).norm() > 1e-9) parts.emplace_back(a, b);
+    i = j + 1;
+  }
+  return parts;
 }
 
 double StrokeCutter::at_least(double cells, double metres) const {
@@ -422,6 +519,11 @@ TopologyChange StrokeCutter::add_sample(const StrokeSample& sample) {
     const double hand_m = static_cast<double>((sample.position - previous_->world).norm());
     const double slack_m = options_.exact_max_jump_cells * std::min(cloth_->spacing_x(), cloth_->spacing_y());
     if (jump_m > options_.exact_max_jump_ratio * hand_m + slack_m) return change;
+  }
+  // The samples on the cloth, for recut_parts (thinned to a twentieth of a cell).
+  if (point.inside) {
+    const Eigen::Vector2f on = clamp_uv(point.uv).cast<float>();
+    if (recent_.empty() || (recent_.back() - on).norm() >= static_cast<float>(kRecutStepCells)) recent_.push_back(on);
   }
   const Eigen::Vector3f direction = previous_ ? Eigen::Vector3f{sample.position - previous_->world}
                                               : Eigen::Vector3f::Zero();

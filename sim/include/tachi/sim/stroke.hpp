@@ -144,6 +144,14 @@ struct StrokeOptions {
 /// exactly between two rows; any margin keeps it on one).
 inline constexpr double kGridHysteresisCells = 0.25;
 
+/// Exact and delete modes: a stretch of a stroke within this of the samples a cut was already made along
+/// (cells; plus the simplification's tolerance for the path) runs along that cut and does not cut again,
+/// when it is at least kRecutMinRunCells long (a shorter one is where the path crosses or leaves the cut).
+/// Sampled every kRecutStepCells.
+inline constexpr double kRecutCells = 0.1;
+inline constexpr double kRecutMinRunCells = 1.0;
+inline constexpr double kRecutStepCells = 0.05;
+
 /// What a stroke did so far.
 struct StrokeReport {
   std::vector<GridCoord> cut_line;   ///< every cut line of the stroke, concatenated (an exit and re-entry starts a new one);
@@ -191,6 +199,15 @@ class StrokeCutter {
   /// Whether the cut from `from` to `to` would meet the current line's path and close a loop shorter than
   /// the options' minimum.
   [[nodiscard]] bool closes_small_loop(const Eigen::Vector2d& from, const Eigen::Vector2d& to) const;
+  /// Exact and delete modes: the parts of the segment from `from` to `to` (rest cells) that do not run along
+  /// a cut already made (within kRecutCells for at least kRecutMinRunCells): going over a cut again
+  /// changes nothing.
+  [[nodiscard]] std::vector<std::pair<Eigen::Vector2d, Eigen::Vector2d>> recut_parts(const Eigen::Vector2d& from,
+                                                                                   const Eigen::Vector2d& to) const;
+  /// Distance (cells) from `p` to the samples of the cut so far (tracks_).
+  [[nodiscard]] double distance_to_track(const Eigen::Vector2d& p) const;
+  /// The nearest point of the cut paths so far (paths_, without the segment being cut).
+  [[nodiscard]] Eigen::Vector2d nearest_on_cut(const Eigen::Vector2d& p) const;
   /// A length in cells: `cells`, or `metres` on this cloth if that is more.
   [[nodiscard]] double at_least(double cells, double metres) const;
   void add_line_to_report(const std::vector<GridCoord>& line);
@@ -206,6 +223,8 @@ class StrokeCutter {
   std::optional<ExactCutter> exact_;
   std::optional<Eigen::Vector2d> path_end_;  // exact/delete: where the open line's cut ends
   std::vector<std::vector<Eigen::Vector2f>> paths_;
+  std::vector<std::vector<Eigen::Vector2f>> tracks_;  // exact/delete: the samples (uv) the cuts so far were made along
+  std::vector<Eigen::Vector2f> recent_;               // ... and those since the last point that joined the cut
   ClothLocator locator_;
   double backtrack_cells_;
   bool open_ = false;

@@ -1,5 +1,7 @@
 #include "cli.hpp"
 
+#include "flags.hpp"
+
 #include <spdlog/spdlog.h>
 
 #include <iostream>

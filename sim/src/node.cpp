@@ -6,9 +6,11 @@
 #include "tachi/common/app.hpp"
 #include "tachi/common/latency.hpp"
 #include "tachi/common/peer_wait.hpp"
+#include "tachi/sim/export.hpp"
 #include "tachi/sim/journal.hpp"
 #include "tachi/sim/live_policies.hpp"
 #include "tachi/sim/session.hpp"
+#include "tachi/sim/summary.hpp"
 
 #include <spdlog/spdlog.h>
 

@@ -108,28 +108,6 @@ std::vector<Eigen::Vector3f> scene_from_recording(const std::filesystem::path& d
   return points;
 }
 
-void add_object_flags(CLI::App& app, ObjectOptions& o) {
-  app.add_option("--object", o.file, "PLY point cloud (ascii or binary) the cloth collides with (seed 000)")
-      ->check(CLI::ExistingFile);
-  app.add_option_function<std::string>(
-         "--object-pose",
-         [&o](const std::string& text) {
-           const auto pose = parse_object_pose(text);
-           if (!pose) {
-             throw CLI::ValidationError("--object-pose", "'" + text + "' is not X,Y,Z[,RX,RY,RZ[,S]] (metres, degrees, scale > 0)");
-           }
-           o.pose = *pose;
-         },
-         "Pose of --object in the cloth's frame: X,Y,Z[,RX,RY,RZ[,S]] (metres, degrees about x, y, z; scale)")
-      ->default_str("0,0,0");
-  app.add_option("--object-from-recording", o.recording,
-                 "Fakenect recording whose first depth frames' static scene is the object (what the Kinect saw)")
-      ->check(CLI::ExistingDirectory);
-  app.add_option("--object-influence", o.influence_m, "Distance from an object point within which the cloth is repelled, m")
-      ->check(CLI::Range(0.001F, 1.0F))
-      ->capture_default_str();
-}
-
 std::shared_ptr<const PointCloudCollider> load_object(const ObjectOptions& o) {
   std::vector<Eigen::Vector3f> points;
   if (!o.file.empty()) {

@@ -1,5 +1,6 @@
 #include "tachi/sim/solver.hpp"
 #include "tachi/sim/offline.hpp"
+#include "flags.hpp"  // tachi-sim's flags (sim/flags.cpp): the --threads test parses them in-process
 #include "tachi/sim/pieces.hpp"
 #include "tachi/sim/stroke.hpp"
 

@@ -4,7 +4,7 @@
 // as the tachi-sim process. Linked from tachi_sim_node, which adds DDS to the pure tachi_sim.
 #pragma once
 
-#include "tachi/sim/offline.hpp"
+#include "tachi/sim/options.hpp"
 
 #include <cstdint>
 #include <memory>

@@ -9,7 +9,6 @@
 #include "tachi/common/workspace.hpp"
 #include "tachi/sim/collision.hpp"
 
-#include <CLI/CLI.hpp>
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
@@ -55,9 +54,6 @@ struct ObjectOptions {
   float influence_m = 0.03F;     ///< repulsion reaches this far from an object point
   float stiffness = 300.0F;      ///< repulsive acceleration at zero distance, m/s^2
 };
-
-/// Registers --object, --object-pose, --object-from-recording, --object-influence on `app`.
-void add_object_flags(CLI::App& app, ObjectOptions& options);
 
 /// The collider the options ask for, or null when they ask for none. Throws naming the file.
 [[nodiscard]] std::shared_ptr<const PointCloudCollider> load_object(const ObjectOptions& options);

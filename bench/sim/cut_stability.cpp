@@ -5,6 +5,7 @@
 // forward again must give the same pieces as once.
 // Usage: cut_stability [--strokes N] [--first-seed S] [--grid G] [--recut] [--blade B] [--mode M] [--verbose]
 // (--blade, --mode: only that blade or mode; --verbose: each stroke's pieces and cut length, both runs).
+//        cut_stability --blade-table   prints docs/cutting.md's blade table (blade_table(), cut_stability.hpp).
 #include "tachi/sim/cut_stability.hpp"
 
 #include <cmath>
@@ -25,6 +26,12 @@ int main(int argc, char** argv) {
   bool verbose = false;
   std::optional<Blade> only_blade;
   std::optional<CutMode> only_mode;
+  const auto scratch = std::filesystem::temp_directory_path() / ("cut_stability_" + std::to_string(::getpid()) + ".csv");
+  if (argc == 2 && std::string{argv[1]} == "--blade-table") {
+    std::fputs(blade_table(scratch).c_str(), stdout);
+    std::filesystem::remove(scratch);
+    return 0;
+  }
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--strokes" && i + 1 < argc) {
@@ -43,11 +50,10 @@ int main(int argc, char** argv) {
       only_mode = parse_cut_mode(argv[++i]);
     } else {
       std::fprintf(stderr, "usage: cut_stability [--strokes N] [--first-seed S] [--grid G] [--recut] [--blade NAME] "
-                           "[--mode exact|grid|delete] [--verbose]\n");
+                           "[--mode exact|grid|delete] [--verbose]\n       cut_stability --blade-table\n");
       return 2;
     }
   }
-  const auto scratch = std::filesystem::temp_directory_path() / ("cut_stability_" + std::to_string(::getpid()) + ".csv");
   const Blade blades[] = {Blade::Razor, Blade::Scalpel, Blade::Utility, Blade::Kitchen, Blade::Hunting, Blade::Worn};
   const CutMode modes[] = {CutMode::Exact, CutMode::Grid, CutMode::Delete};
   std::printf("%s over %d strokes (seeds %llu..), %d x %d, top edge pinned\n",

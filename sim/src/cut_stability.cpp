@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <string>
 #include <fstream>
 #include <random>
 #include <stdexcept>
@@ -86,6 +87,52 @@ CutOutcome cut_outcome(const std::vector<StrokeSample>& stroke, Blade blade, Cut
   o.steps = stroke.empty() ? 0 : static_cast<int>(std::ceil((stroke.back().t + 0.5) * 60.0));
   const Summary s = run_offline(o);
   return {s.pieces, s.extra.at("cut_length_m").get<double>(), s.extra.at("stroke_outliers").get<std::size_t>()};
+}
+
+namespace {
+
+/// 60 Hz samples from (x0, y) to (x1, y), 2 cm in front of the cloth, over `seconds` from t = 0.5 s.
+std::vector<StrokeSample> straight_stroke(double x0, double x1, double y, double seconds) {
+  const int n = static_cast<int>(std::lround(seconds * 60.0));
+  std::vector<StrokeSample> out;
+  for (int i = 0; i <= n; ++i) {
+    const double a = static_cast<double>(i) / n;
+    out.push_back({0.5 + seconds * a, Eigen::Vector3d{x0 + (x1 - x0) * a, y, 0.02}.cast<float>()});
+  }
+  return out;
+}
+
+}  // namespace
+
+std::string blade_table(const std::filesystem::path& scratch) {
+  const std::vector<StrokeSample> strokes[] = {straight_stroke(-0.7, 0.7, 0.0, 6.0), straight_stroke(-0.7, 0.7, 0.0, 2.0),
+                                               straight_stroke(-0.1, 0.1, -0.45, 6.0)};
+  const Blade blades[] = {Blade::Razor, Blade::Scalpel, Blade::Utility, Blade::Kitchen, Blade::Hunting, Blade::Worn};
+  std::string out =
+      "| blade (force) | 6 s across: cut m / drag mm / pieces | 2 s across: cut m / drag mm / pieces | slow push on "
+      "the free flap: cut m / drag mm / pieces |\n|---|---|---|---|\n";
+  char cell[96];
+  for (const Blade blade : blades) {
+    std::snprintf(cell, sizeof cell, "| %s (%.3g N) |", std::string{to_string(blade)}.c_str(),
+                  static_cast<double>(sharpness(blade).force_n()));
+    out += cell;
+    for (const auto& stroke : strokes) {
+      write_stroke_csv(stroke, scratch);
+      OfflineOptions o;
+      o.cloth.columns = o.cloth.rows = 64;
+      o.cloth.pin = PinMode::TopEdge;
+      o.blade = blade;
+      o.cut_mode = CutMode::Grid;
+      o.stroke_file = scratch;
+      o.steps = 420;
+      const Summary s = run_offline(o);
+      std::snprintf(cell, sizeof cell, " %.3f / %.1f / %zu |", s.extra.at("cut_length_m").get<double>(),
+                    1000.0 * s.extra.at("blade_drag_m").get<double>(), s.pieces);
+      out += cell;
+    }
+    out += "\n";
+  }
+  return out;
 }
 
 }  // namespace tachi::sim

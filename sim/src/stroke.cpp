@@ -356,9 +356,12 @@ void StrokeCutter::commit(GridCoord g, const Eigen::Vector2d& uv, const Eigen::V
     }
     return;
   }
-  if (from && moved && parts.empty()) {
-    // Grid mode, the whole segment along an earlier cut: its staircase, rasterised from other grid points,
-    // would cut a second one beside the first. The line ends here and a new one starts at this point.
+  double kept_cells = 0.0;
+  for (const auto& [a, b] : parts) kept_cells += (b - a).norm();
+  if (from && moved && kept_cells < kRecutMinRunCells && (to - *from).norm() >= kRecutMinRunCells) {
+    // Grid mode, the segment along an earlier cut but for less than a cell: its staircase, rasterised from
+    // other grid points, would cut a second one beside the first. The line ends here and a new one starts
+    // at this point.
     add_line_to_report(line_->finish());
     line_.emplace(cloth_->columns, cloth_->rows);
     static_cast<void>(line_->append(g));
@@ -373,11 +376,22 @@ void StrokeCutter::commit(GridCoord g, const Eigen::Vector2d& uv, const Eigen::V
   change.merge(cut);
 }
 
-double StrokeCutter::distance_to_track(const Eigen::Vector2d& p) const {
+double StrokeCutter::distance_to_track(const Eigen::Vector2d& p, double tail_cells) const {
   double best = std::numeric_limits<double>::infinity();
-  for (const auto& track : tracks_) {
-    if (track.size() == 1) best = std::min(best, (track[0].cast<double>() - p).norm());
-    for (std::size_t k = 1; k < track.size(); ++k) {
+  for (std::size_t i = 0; i < tracks_.size(); ++i) {
+    const auto& track = tracks_[i];
+    // The current line's track ends where the segment being cut starts; its last `tail_cells` are left out,
+    // or a segment going straight on would be "along" the track it continues.
+    std::size_t end = track.size();
+    if (i + 1 == tracks_.size()) {
+      double walked = 0.0;
+      while (end > 0 && walked < tail_cells) {
+        --end;
+        if (end > 0) walked += (track[end].cast<double>() - track[end - 1].cast<double>()).norm();
+      }
+    }
+    if (end == 1) best = std::min(best, (track[0].cast<double>() - p).norm());
+    for (std::size_t k = 1; k < end; ++k) {
       best = std::min(best, closest_points(p, p, track[k - 1].cast<double>(), track[k].cast<double>()).distance);
     }
   }
@@ -419,7 +433,7 @@ std::vector<std::pair<Eigen::Vector2d, Eigen::Vector2d>> StrokeCutter::recut_par
   const double near = kRecutCells + options_.tolerance_cells;
   const auto at = [&](int i) -> Eigen::Vector2d { return from + (static_cast<double>(i) / n) * d; };
   std::vector<char> on_cut(static_cast<std::size_t>(n) + 1);
-  for (int i = 0; i <= n; ++i) on_cut[static_cast<std::size_t>(i)] = distance_to_track(at(i)) <= near;
+  for (int i = 0; i <= n; ++i) on_cut[static_cast<std::size_t>(i)] = distance_to_track(at(i), near) <= near;
   std::vector<char> skip(on_cut.size(), 0);
   for (int i = 0; i <= n;) {
     if (!on_cut[static_cast<std::size_t>(i)]) {
@@ -520,11 +534,6 @@ TopologyChange StrokeCutter::add_sample(const StrokeSample& sample) {
     const double slack_m = options_.exact_max_jump_cells * std::min(cloth_->spacing_x(), cloth_->spacing_y());
     if (jump_m > options_.exact_max_jump_ratio * hand_m + slack_m) return change;
   }
-  // The samples on the cloth, for recut_parts (thinned to a twentieth of a cell).
-  if (point.inside) {
-    const Eigen::Vector2f on = clamp_uv(point.uv).cast<float>();
-    if (recent_.empty() || (recent_.back() - on).norm() >= static_cast<float>(kRecutStepCells)) recent_.push_back(on);
-  }
   const Eigen::Vector3f direction = previous_ ? Eigen::Vector3f{sample.position - previous_->world}
                                               : Eigen::Vector3f::Zero();
   if (direction.squaredNorm() > 0.0F) last_direction_ = direction;
@@ -595,6 +604,12 @@ TopologyChange StrokeCutter::add_sample(const StrokeSample& sample) {
       commit(boundary_point(leave), leave, last_direction_, change);
       close_line();
     }
+  }
+  // The samples on the cloth, for recut_parts (thinned to a twentieth of a cell). After the commits above:
+  // a sample joins the track with the segment it belongs to, not with the one before.
+  if (point.inside && line_) {
+    const Eigen::Vector2f on = clamp_uv(point.uv).cast<float>();
+    if (recent_.empty() || (recent_.back() - on).norm() >= static_cast<float>(kRecutStepCells)) recent_.push_back(on);
   }
   previous_ = point;
   return change;

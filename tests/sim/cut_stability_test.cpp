@@ -3,12 +3,15 @@
 //  * a stroke moved by 1e-6 m gives the same pieces and a cut length within 1 %;
 //  * a stroke gone over forward, back and forward again gives the same pieces as once.
 // The full 500 strokes: bench/sim/cut_stability (seeds 1000..; these use 5000..).
+//  * docs/cutting.md's blade table is what blade_table() (cut_stability --blade-table) prints.
 #include "tachi/sim/cut_stability.hpp"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <filesystem>
+#include <fstream>
+#include <sstream>
 #include <string>
 #include <unistd.h>
 
@@ -60,6 +63,25 @@ TEST(CutStability, DISABLED_GoingOverACutAgainChangesNothing) {
     }
   }
   std::filesystem::remove(file);
+}
+
+TEST(BladeTable, TheDocsTableIsWhatTheCommandPrints) {
+  const auto file = scratch("blade_table");
+  const std::string printed = blade_table(file);
+  std::filesystem::remove(file);
+  std::ifstream doc{TACHI_CUTTING_DOC};
+  ASSERT_TRUE(doc) << TACHI_CUTTING_DOC;
+  // The table in the doc: from its header line to the first line that is not a table row.
+  const std::string header = printed.substr(0, printed.find('\n'));
+  std::string in_doc;
+  bool inside = false;
+  for (std::string line; std::getline(doc, line);) {
+    if (line == header) inside = true;
+    if (inside && line.rfind('|', 0) != 0) break;
+    if (inside) in_doc += line + "\n";
+  }
+  ASSERT_FALSE(in_doc.empty()) << "no table headed \"" << header << "\" in docs/cutting.md";
+  EXPECT_EQ(in_doc, printed) << "regenerate it with build/bin/cut_stability --blade-table";
 }
 
 }  // namespace

@@ -10,6 +10,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <string>
 #include <vector>
 
 namespace tachi::sim {
@@ -39,5 +40,12 @@ struct CutOutcome {
 /// mode, for the stroke's duration + 0.5 s.
 [[nodiscard]] CutOutcome cut_outcome(const std::vector<StrokeSample>& stroke, Blade blade, CutMode mode, int grid,
                                      const std::filesystem::path& scratch);
+
+/// The blade table of docs/cutting.md ("Blade sharpness decides the cut"), as markdown rows: for each
+/// blade, three strokes on a 64 x 64 cloth hanging from its top edge, 420 steps, grid mode (2 cm in front,
+/// 60 Hz, from t = 0.5 s): across at y = 0 from x = -0.7 to 0.7 m in 6 s and in 2 s, and a 20 cm push along
+/// the free bottom edge at y = -0.45 m in 6 s; each "cut m / drag mm / pieces". `cut_stability
+/// --blade-table` prints it; a test compares it with the doc. `scratch` is where the strokes are written.
+[[nodiscard]] std::string blade_table(const std::filesystem::path& scratch);
 
 }  // namespace tachi::sim

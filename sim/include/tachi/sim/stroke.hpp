@@ -204,8 +204,9 @@ class StrokeCutter {
   /// changes nothing.
   [[nodiscard]] std::vector<std::pair<Eigen::Vector2d, Eigen::Vector2d>> recut_parts(const Eigen::Vector2d& from,
                                                                                    const Eigen::Vector2d& to) const;
-  /// Distance (cells) from `p` to the samples of the cut so far (tracks_).
-  [[nodiscard]] double distance_to_track(const Eigen::Vector2d& p) const;
+  /// Distance (cells) from `p` to the samples of the cut so far (tracks_), without the current line's last
+  /// `tail_cells`.
+  [[nodiscard]] double distance_to_track(const Eigen::Vector2d& p, double tail_cells) const;
   /// The nearest point of the cut paths so far (paths_, without the segment being cut).
   [[nodiscard]] Eigen::Vector2d nearest_on_cut(const Eigen::Vector2d& p) const;
   /// A length in cells: `cells`, or `metres` on this cloth if that is more.

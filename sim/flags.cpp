@@ -188,6 +188,18 @@ void add_object_flags(CLI::App& app, ObjectOptions& o) {
   app.add_option("--object-from-recording", o.recording,
                  "Fakenect recording whose first depth frames' static scene is the object (what the Kinect saw)")
       ->check(CLI::ExistingDirectory);
+  app.add_option_function<std::string>(
+         "--workspace-config",
+         [&o](const std::string& file) {
+           try {
+             o.workspace = common::read_workspace_config(file);
+           } catch (const std::exception& e) {
+             throw CLI::ValidationError("--workspace-config", e.what());
+           }
+         },
+         "tachi-filter config whose workspace maps --object-from-recording's scene to the cloth, so it lands where the "
+         "filter puts the hand (tachi run passes filter.config; default: the filter's default mapping)")
+      ->check(CLI::ExistingFile);
   app.add_option("--object-influence", o.influence_m, "Distance from an object point within which the cloth is repelled, m")
       ->check(CLI::Range(0.001F, 1.0F))
       ->capture_default_str();

@@ -41,23 +41,13 @@ const json& section(const json& root, const char* key) {
   return root.at(key);
 }
 
+// The section's reader is common's, so the simulator maps a recorded scene exactly as the filter maps the hand.
 void read_workspace(const json& w, WorkspaceMapping& m) {
-  if (w.contains("rotation")) {
-    std::vector<std::vector<float>> rows;
-    read(w, "rotation", "workspace.", rows);
-    if (rows.size() != 3 || rows[0].size() != 3 || rows[1].size() != 3 || rows[2].size() != 3)
-      fail("workspace.rotation must be a 3x3 array of rows");
-    for (int r = 0; r < 3; ++r)
-      for (int c = 0; c < 3; ++c) m.rotation(r, c) = rows[static_cast<std::size_t>(r)][static_cast<std::size_t>(c)];
+  try {
+    m = common::workspace_from_json(w);
+  } catch (const std::invalid_argument& e) {
+    fail(e.what());
   }
-  if (w.contains("translation_m")) {
-    std::vector<float> t;
-    read(w, "translation_m", "workspace.", t);
-    if (t.size() != 3) fail("workspace.translation_m must be [x, y, z]");
-    m.translation_m = {t[0], t[1], t[2]};
-  }
-  read(w, "scale", "workspace.", m.scale);
-  if (const auto why = validate(m)) fail("workspace: " + *why);
 }
 // Floats printed through double show float noise (0.05000000074505806); 6 decimals are plenty.
 double tidy(float v) { return std::round(static_cast<double>(v) * 1e6) / 1e6; }

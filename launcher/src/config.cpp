@@ -222,6 +222,12 @@ std::vector<ChildSpec> plan(const RunConfig& c) {
       // No lost cuts (issue 13): a simulator the launcher restarts replays this run's journal.
       a.insert(a.end(), {"--journal", (out / "sim.journal").string()});
       if (!c.blade.empty()) a.insert(a.end(), {"--blade", c.blade});
+      // An object taken from the recording lands where the hand does: the simulator maps the scene with the
+      // workspace of the filter's config (unless sim.workspace-config names another).
+      const json filter_options = c.node_options.value("filter", json::object());
+      if (filter_options.contains("config") && filter_options.at("config").is_string() &&
+          !c.node_options.value("sim", json::object()).contains("workspace-config"))
+        a.insert(a.end(), {"--workspace-config", filter_options.at("config").get<std::string>()});
       // With a recording, the cloth has settled this long after the last hand sample: the run's end.
       if (recording) a.insert(a.end(), {"--exit-when-idle", json(c.settle_s).dump()});
       child.finite = recording;

@@ -53,6 +53,19 @@ TEST(RunConfig, NodeOptionsPassThroughAsFlags) {
   EXPECT_TRUE(has_pair(args, "--pin", "top-edge")) << "the default stays unless overridden";
 }
 
+TEST(RunConfig, TheSimulatorMapsARecordedObjectWithTheFiltersWorkspace) {
+  json j = default_config_json(false);
+  j["recording"] = "/rec";
+  const auto plain = child(plan(from_json(j)), "sim").args;
+  EXPECT_EQ(std::count(plain.begin(), plain.end(), "--workspace-config"), 0) << "no filter config: both keep the default mapping";
+  merge_into(j, parse_set("filter.config=/cfg/filter.json"));
+  EXPECT_TRUE(has_pair(child(plan(from_json(j)), "sim").args, "--workspace-config", "/cfg/filter.json"));
+  merge_into(j, parse_set("sim.workspace-config=/cfg/other.json"));
+  const auto sim = child(plan(from_json(j)), "sim").args;
+  EXPECT_EQ(std::count(sim.begin(), sim.end(), "--workspace-config"), 1) << "sim.workspace-config wins, given once";
+  EXPECT_TRUE(has_pair(sim, "--workspace-config", "/cfg/other.json"));
+}
+
 TEST(RunConfig, SetAssignsOneNodeFlagWithJsonValues) {
   EXPECT_EQ(parse_set("sim.material=denim"), json::parse(R"({"sim": {"material": "denim"}})"));
   EXPECT_EQ(parse_set("viewer.mouse=true"), json::parse(R"({"viewer": {"mouse": true}})"));

@@ -1,6 +1,7 @@
 #include "tachi/sim/solver.hpp"
 #include "tachi/sim/offline.hpp"
 #include "flags.hpp"  // tachi-sim's flags (sim/flags.cpp): the --threads test parses them in-process
+#include "parse_flags.hpp"
 #include "tachi/sim/pieces.hpp"
 #include "tachi/sim/stroke.hpp"
 
@@ -329,14 +330,8 @@ TEST(Threads, TwoThreadsHoldAHangingClothWithinTenPercentAsOneDoes) {
 // reaches the solver; 0 is refused naming the flag; by default one core is left to the other nodes.
 TEST(Threads, TachiSimsThreadsFlagReachesTheSolver) {
   const auto parse = [](std::vector<std::string> args) {
-    CLI::App app;
-    OfflineOptions options;
-    add_offline_flags(app, options);
-    args.insert(args.begin(), "tachi-sim");
-    std::vector<const char*> argv;
-    for (const auto& a : args) argv.push_back(a.c_str());
-    app.parse(static_cast<int>(argv.size()), argv.data());
-    return session_options(options).solver.threads;
+    const auto add = [](CLI::App& app, OfflineOptions& o) { add_offline_flags(app, o); };
+    return session_options(test::parse_flags<OfflineOptions>(add, std::move(args))).solver.threads;
   };
   EXPECT_EQ(parse({"--threads", "2"}), 2);
   EXPECT_EQ(parse({}), default_solver_threads());

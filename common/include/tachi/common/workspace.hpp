@@ -6,6 +6,9 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <nlohmann/json_fwd.hpp>
+
+#include <filesystem>
 
 #include <optional>
 #include <string>
@@ -29,5 +32,14 @@ WorkspaceMapping default_mapping(float plane_distance_m = 1.0F);
 /// Why a mapping is unusable, or nothing when it is valid (rotation orthonormal with det +1 within 1e-3,
 /// scale finite and > 0, translation finite).
 std::optional<std::string> validate(const WorkspaceMapping& mapping);
+
+/// A config's "workspace" section (docs/filter.md: "rotation" 3x3 rows, "translation_m" [x, y, z], "scale"), each
+/// missing key keeping the default mapping's value. Throws std::invalid_argument naming the key ("workspace.scale:
+/// ...") on a bad value, or saying why the mapping is unusable.
+WorkspaceMapping workspace_from_json(const nlohmann::json& section);
+
+/// The workspace of a tachi-filter config file (its "workspace" section; the default mapping without one), so
+/// another stage maps the camera exactly as the filter does. Throws std::invalid_argument naming the file.
+WorkspaceMapping read_workspace_config(const std::filesystem::path& file);
 
 }  // namespace tachi::common

@@ -5,6 +5,7 @@
 #include "src/preflight.hpp"
 #include "src/record.hpp"
 #include "src/run.hpp"
+#include "tachi/common/disk_full.hpp"
 #include "tachi/bus/discovery.hpp"
 #include "tachi/bus/run_partition.hpp"
 #include "tachi/common/app.hpp"
@@ -405,6 +406,9 @@ int main(int argc, char** argv) try {
     std::cerr << "tachi echo: " << e.what() << '\n';
     return tachi::common::kExitUsage;
   }
+} catch (const tachi::common::DiskFull& e) {
+  std::cerr << "tachi: " << e.what() << '\n';
+  return tachi::common::kExitDiskFull;
 } catch (const std::exception& e) {
   std::cerr << "tachi: " << e.what() << '\n';
   return tachi::common::kExitFailure;

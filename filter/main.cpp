@@ -1,5 +1,6 @@
 // tachi-filter: raw hand samples -> smoothed, gated strokes. Offline (CSV in, CSV out) or FilterNode on the bus.
 #include "cli.hpp"
+#include "tachi/common/disk_full.hpp"
 #include "tachi/bus/bus.hpp"
 #include "tachi/common/node.hpp"
 
@@ -14,6 +15,9 @@ int main(int argc, char** argv) try {
   tachi::bus::Participant dds{b.domain, b.dds_config, {b.secure_dir, b.identity}};
   tachi::filter::FilterNode node{flags.config, flags.journal, dds};
   return tachi::common::run_until_signal(node);
+} catch (const tachi::common::DiskFull& e) {
+  std::cerr << "tachi-filter: " << e.what() << '\n';  // the one line a full disk gets; tachi run does not restart it
+  return tachi::common::kExitDiskFull;
 } catch (const std::exception& e) {
   std::cerr << "tachi-filter: " << e.what() << '\n';
   return tachi::common::kExitFailure;

@@ -1,6 +1,7 @@
 // tachi-sensor: depth frames in (live Kinect v1 or a fakenect recording), one raw hand sample out
 // per depth frame (DDS topic tachi/hand/raw, and/or a CSV): SensorNode, run until the end or a signal.
 #include "cli.hpp"
+#include "tachi/common/disk_full.hpp"
 #include "tachi/bus/bus.hpp"
 #include "tachi/common/node.hpp"
 #include "tachi/sensor/kinect_source.hpp"
@@ -24,6 +25,9 @@ int main(int argc, char** argv) try {
     return tachi::common::kExitNoDevice;
   }
   return tachi::common::run_until_signal(*node);
+} catch (const tachi::common::DiskFull& e) {
+  std::cerr << "tachi-sensor: " << e.what() << '\n';  // the one line a full disk gets; tachi run does not restart it
+  return tachi::common::kExitDiskFull;
 } catch (const std::exception& e) {
   std::cerr << "tachi-sensor: " << e.what() << '\n';
   return tachi::common::kExitFailure;

@@ -1,6 +1,7 @@
 #include "cli.hpp"
 
 #include "flags.hpp"
+#include "tachi/bus/topics.hpp"
 
 #include <spdlog/spdlog.h>
 
@@ -35,6 +36,12 @@ int parse_flags(int argc, char** argv, Flags& flags) {
   common::add_log_level_flag(app, log_level);
   if (const int rc = common::parse(app, argc, argv); rc >= 0) return rc;
   common::set_log_level(log_level);
+  const auto& cloth = flags.options.cloth;
+  if (!flags.offline && (cloth.columns > bus::topics::kMaxLiveGrid || cloth.rows > bus::topics::kMaxLiveGrid)) {
+    std::cerr << "tachi-sim: --grid: the live simulator takes at most " << bus::topics::kMaxLiveGrid << " x "
+              << bus::topics::kMaxLiveGrid << " particles (--offline: up to 4096)\n";
+    return common::kExitUsage;
+  }
   // Live: strokes come from tachi-filter over DDS; --steps, when given, bounds the run.
   if (app.get_option("--steps")->count() > 0) live.max_steps = flags.options.steps;
   flags.options.object = load_object(flags.object);

@@ -2,6 +2,7 @@
 // headless (PNG frames, video); --mesh shows an exported mesh without DDS; --mouse cuts with the mouse.
 #include "cli.hpp"
 #include "tachi/bus/bus.hpp"
+#include "tachi/common/disk_full.hpp"
 #include "tachi/common/node.hpp"
 #include "window.hpp"
 
@@ -11,15 +12,28 @@
 int main(int argc, char** argv) try {
   tachi::viewer::ViewerOptions options;
   if (const int rc = tachi::viewer::parse_flags(argc, argv, options); rc >= 0) return rc;
-  const auto window = tachi::viewer::open_window(options);  // none with --headless
-  if (!options.mesh.empty()) {
-    tachi::viewer::MeshView view{options, window.get()};
-    return tachi::common::run_until_signal(view);
+  try {
+    const auto window = tachi::viewer::open_window(options);  // none with --headless
+    if (!options.mesh.empty()) {
+      tachi::viewer::MeshView view{options, window.get()};
+      return tachi::common::run_until_signal(view);
+    }
+    const auto& b = options.bus;
+    tachi::bus::Participant dds{b.domain, b.dds_config, {b.secure_dir, tachi::viewer::participant_identity(options)}};
+    tachi::viewer::ViewerNode node{options, dds, window.get()};
+    return tachi::common::run_until_signal(node);
+  } catch (const tachi::common::DiskFull&) {
+    throw;
+  } catch (const std::exception&) {
+    // OpenCV's writers say a full disk only as an assertion or a false return: the filesystem of the
+    // viewer's own outputs tells whether that is what happened.
+    for (const std::string& file : {options.video, options.snapshot, options.frames_dir})
+      if (!file.empty() && tachi::common::out_of_space(file, 0)) throw tachi::common::DiskFull(file);
+    throw;
   }
-  const auto& b = options.bus;
-  tachi::bus::Participant dds{b.domain, b.dds_config, {b.secure_dir, tachi::viewer::participant_identity(options)}};
-  tachi::viewer::ViewerNode node{options, dds, window.get()};
-  return tachi::common::run_until_signal(node);
+} catch (const tachi::common::DiskFull& e) {
+  std::cerr << "tachi-viewer: " << e.what() << '\n';  // the one line a full disk gets; tachi run does not restart it
+  return tachi::common::kExitDiskFull;
 } catch (const std::exception& e) {
   std::cerr << "tachi-viewer: " << e.what() << '\n';
   return tachi::common::kExitFailure;

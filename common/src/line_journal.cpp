@@ -1,5 +1,7 @@
 #include "tachi/common/line_journal.hpp"
 
+#include "tachi/common/disk_full.hpp"
+
 #include <stdexcept>
 
 namespace tachi::common {
@@ -46,7 +48,7 @@ LineJournal::LineJournal(std::filesystem::path path, const std::string& header, 
     out_.flush();
     bytes_ = header.size() + 1;
   }
-  if (!out_) throw fail("cannot write");
+  if (!out_) throw_write_error(path_, "journal " + path_.string() + ": cannot write");
 }
 
 bool LineJournal::append(const std::string& line) {
@@ -63,7 +65,7 @@ bool LineJournal::append(const std::string& line) {
 
 void LineJournal::flush() {
   out_.flush();
-  if (!out_) throw std::runtime_error("journal " + path_.string() + ": write failed");
+  if (!out_) throw_write_error(path_, "journal " + path_.string() + ": write failed");
 }
 
 }  // namespace tachi::common

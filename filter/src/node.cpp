@@ -26,8 +26,8 @@ constexpr float kMaxHandRange_m = 20.0F;
 constexpr float kMaxClothRange_m = 100.0F;
 // Hand samples carry no session id: a sensor whose clock jumps back by more than this restarted.
 constexpr std::int64_t kSensorRestartGap_ns = 1'000'000'000;
-// The largest cloth tachi-sim builds (4096 x 4096 particles, cut up to twice over), xyz each.
-constexpr std::size_t kMaxClothFloats = std::size_t{3} * 4096 * 4096 * 2;
+// The largest cloth tachi-sim simulates live, cut up to twice over, xyz each.
+constexpr std::size_t kMaxClothFloats = bus::topics::kMaxClothStateFloats;
 }  // namespace
 
 struct FilterNode::Impl {

@@ -2,7 +2,10 @@
 
 #include "tachi/common/app.hpp"
 #include "tachi/bus/serialized.hpp"
+#include "tachi/common/disk_full.hpp"
 #include "tachi/common/latency.hpp"
+
+#include <cerrno>
 
 #include <iostream>
 #include <map>
@@ -156,6 +159,7 @@ RunMonitor::RunMonitor(const bus::Participant& participant, const std::filesyste
   waitset_.attach(hands_);
   waitset_.attach(strokes_);
   waitset_.attach(cuts_);
+  trace_dir_ = trace_dir;
   std::filesystem::create_directories(trace_dir);
   const auto open = [&](std::ofstream& f, const char* name, const char* header) {
     f.open(trace_dir / name);
@@ -178,8 +182,16 @@ void RunMonitor::poll(StatusBoard& board, std::chrono::milliseconds timeout) {
     strokes_csv_ << s->frame << ',' << s->acquired_ns << ',' << now << ',' << int{s->tracked} << ',' << s->position_m.x << ','
                  << s->position_m.y << ',' << s->position_m.z << ',' << static_cast<int>(s->gate) << ',' << s->stroke_id << '\n';
   cut_events_ += cuts_.take().size();
-  hands_csv_.flush();
-  strokes_csv_.flush();
+  if (disk_full_) return;  // the trace stops where the disk filled; the run is ending
+  for (const auto& [csv, name] : {std::pair{&hands_csv_, "hands.csv"}, std::pair{&strokes_csv_, "strokes.csv"}}) {
+    csv->flush();
+    if (*csv) continue;
+    const int saved = errno;
+    const auto file = trace_dir_ / name;
+    if (!common::out_of_space(file, saved)) throw std::runtime_error("cannot write " + file.string());
+    disk_full_ = file;
+    return;
+  }
 }
 
 bool known_topic(const std::string& topic) { return bus::find_topic(topic) != nullptr; }

@@ -28,6 +28,8 @@ class RunMonitor {
   /// Takes whatever arrived, waiting up to `timeout` for something.
   void poll(StatusBoard& board, std::chrono::milliseconds timeout);
   [[nodiscard]] std::uint64_t cut_events() const { return cut_events_; }
+  /// The trace file a full disk refused (the trace stops there), if one did.
+  [[nodiscard]] const std::optional<std::filesystem::path>& disk_full() const { return disk_full_; }
 
  private:
   bus::Reader<tachi_msg_NodeStatus> status_;
@@ -36,6 +38,8 @@ class RunMonitor {
   bus::Reader<tachi_msg_CutEvent> cuts_;
   bus::WaitSet waitset_;
   std::ofstream hands_csv_, strokes_csv_;
+  std::filesystem::path trace_dir_;
+  std::optional<std::filesystem::path> disk_full_;
   std::uint64_t cut_events_ = 0;
 };
 

@@ -1,5 +1,7 @@
 #include "tachi/mcap/mcap.hpp"
 
+#include "tachi/common/disk_full.hpp"
+
 #include <algorithm>
 #include <array>
 #include <cstring>
@@ -242,7 +244,7 @@ std::uint64_t Writer::closed_size_with(std::uint16_t channel, std::size_t data_b
 
 void Writer::put(std::span<const std::byte> bytes) {
   if (std::fwrite(bytes.data(), 1, bytes.size(), file_) != bytes.size())
-    throw std::runtime_error("cannot write " + path_.string() + ": " + std::strerror(errno));
+    tachi::common::throw_write_error(path_, "cannot write " + path_.string() + ": " + std::strerror(errno));
   data_crc_ = crc32(bytes, data_crc_);
   file_offset_ += bytes.size();
 }
@@ -404,7 +406,7 @@ void Writer::close() {
   const bool flushed = std::fflush(file_) == 0;
   const bool closed = std::fclose(file_) == 0;
   file_ = nullptr;
-  if (!flushed || !closed) throw std::runtime_error("cannot write " + path_.string() + ": " + std::strerror(errno));
+  if (!flushed || !closed) tachi::common::throw_write_error(path_, "cannot write " + path_.string() + ": " + std::strerror(errno));
 }
 
 void read(const std::filesystem::path& file, const ReadCallbacks& callbacks) {

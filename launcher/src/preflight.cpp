@@ -215,9 +215,10 @@ std::optional<PreflightError> check_out_folder(const RunConfig& config, std::uin
   for (const auto& entry : fs::recursive_directory_iterator(out, fs::directory_options::skip_permission_denied, ec))
     if (entry.is_regular_file(ec)) reclaimable += entry.file_size(ec);
   if (space.available + reclaimable < needed_bytes)
-    return fail(human_bytes(space.available) + " free, but this run writes up to about " + human_bytes(needed_bytes) +
+    return PreflightError{"--out " + config.out + ": " + human_bytes(space.available) + " free, but this run writes up to about " + human_bytes(needed_bytes) +
                 " there (grid " + std::to_string(config.grid) + (config.video.empty() ? "" : ", " + config.video) +
-                "); free some space or choose another --out");
+                "); free some space or choose another --out",
+                          kRunDiskFull};
   return std::nullopt;
 }
 

@@ -2,14 +2,18 @@
 
 #include "bus_adapter.hpp"
 #include "tachi/common/app.hpp"
+#include "tachi/common/disk_full.hpp"
 #include "tachi/launcher/child.hpp"
 #include "tachi/launcher/status.hpp"
 #include "tachi/launcher/supervision.hpp"
 
 #include <spdlog/spdlog.h>
+#include <fcntl.h>
 #include <unistd.h>
 
+#include <cerrno>
 #include <cmath>
+#include <cstring>
 #include <csignal>
 #include <fstream>
 #include <iostream>
@@ -59,25 +63,62 @@ void clear_outputs(const fs::path& out) {
       fs::remove(entry.path());
 }
 
-// Every file the simulator exported (cloth.obj, pattern.svg, ...) next to the run's summary; the
-// simulator's summary.json is merged into the run's instead.
-nlohmann::json collect_sim_export(const fs::path& out) {
-  const fs::path dir = out / kSimExportDir;
-  nlohmann::json sim = nlohmann::json::object();
-  if (!fs::is_directory(dir)) return sim;
-  for (const auto& entry : fs::directory_iterator(dir)) {
-    if (entry.path().filename() == "summary.json") {
-      std::ifstream in(entry.path());
-      sim = nlohmann::json::parse(in, nullptr, false);
-      if (!sim.is_object()) {
-        spdlog::warn("{}: not a JSON object; the simulator's figures are missing from summary.json", entry.path().string());
-        sim = nlohmann::json::object();
-      }
-    } else if (entry.is_regular_file()) {
-      fs::copy_file(entry.path(), out / entry.path().filename(), fs::copy_options::overwrite_existing);
+// Room for summary.json is taken when the run starts, so that a disk filling up during the run still
+// leaves the summary: it is written over the reserved blocks at the end, then cut to its length.
+class ReservedFile {
+ public:
+  static constexpr off_t kReserve = 256 * 1024;  // a summary is a few KB; its per-node figures grow with nodes, not time
+  explicit ReservedFile(fs::path file) : file_(std::move(file)) {
+    fd_ = ::open(file_.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+    if (fd_ >= 0 && ::posix_fallocate(fd_, 0, kReserve) != 0) spdlog::warn("{}: cannot reserve room for it", file_.string());
+  }
+  ReservedFile(const ReservedFile&) = delete;
+  ReservedFile& operator=(const ReservedFile&) = delete;
+  ~ReservedFile() {
+    if (fd_ >= 0) ::close(fd_);
+    std::error_code ec;
+    if (!written_) fs::remove(file_, ec);  // a run that threw leaves no zero-filled summary behind
+  }
+  /// Writes `text` as the whole file; throws DiskFull or std::runtime_error naming it.
+  void write(const std::string& text) {
+    if (fd_ < 0) fd_ = ::open(file_.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+    bool ok = fd_ >= 0;
+    for (std::size_t done = 0; ok && done < text.size();) {
+      const ssize_t n = ::pwrite(fd_, text.data() + done, text.size() - done, static_cast<off_t>(done));
+      ok = n > 0;
+      if (ok) done += static_cast<std::size_t>(n);
     }
+    ok = ok && ::ftruncate(fd_, static_cast<off_t>(text.size())) == 0;
+    if (!ok) common::throw_write_error(file_, "cannot write " + file_.string() + ": " + std::strerror(errno));
+    written_ = true;
+  }
+
+ private:
+  fs::path file_;
+  int fd_ = -1;
+  bool written_ = false;
+};
+
+// The simulator's summary.json, merged into the run's.
+nlohmann::json read_sim_summary(const fs::path& out) {
+  const fs::path file = out / kSimExportDir / "summary.json";
+  if (!fs::is_regular_file(file)) return nlohmann::json::object();
+  std::ifstream in(file);
+  nlohmann::json sim = nlohmann::json::parse(in, nullptr, false);
+  if (!sim.is_object()) {
+    spdlog::warn("{}: not a JSON object; the simulator's figures are missing from summary.json", file.string());
+    return nlohmann::json::object();
   }
   return sim;
+}
+
+// Every other file the simulator exported (cloth.obj, pattern.svg, ...) next to the run's summary.
+void copy_sim_export(const fs::path& out) {
+  const fs::path dir = out / kSimExportDir;
+  if (!fs::is_directory(dir)) return;
+  for (const auto& entry : fs::directory_iterator(dir))
+    if (entry.path().filename() != "summary.json" && entry.is_regular_file())
+      fs::copy_file(entry.path(), out / entry.path().filename(), fs::copy_options::overwrite_existing);
 }
 
 nlohmann::json make_summary(const RunConfig& config, const StatusBoard& board, const nlohmann::json& sim,
@@ -144,6 +185,7 @@ fs::path plot_script(const fs::path& bin_dir) { return bin_dir.parent_path() / "
 int run(const RunConfig& config, const RunPaths& paths) {
   const fs::path out(config.out);
   clear_outputs(out);
+  ReservedFile summary_file(out / "summary.json");
   {
     std::ofstream cfg(out / "config.json");
     cfg << to_json(config).dump(2) << '\n';
@@ -217,12 +259,18 @@ int run(const RunConfig& config, const RunPaths& paths) {
           if (spec.node == "sensor") sensor_done_at = now;
           if (spec.node == "viewer" && !recording) viewer_closed = true;
           break;
+        case ExitMeaning::DiskFull:
+          // The node logged "<file>: no space left on device" itself: that line once, no restart.
+          spdlog::error("{} stopped the run: {}", spec.program, c.child->last_log_lines(1));
+          exit_code = kRunDiskFull;
+          ended = "disk full (" + spec.program + ")";
+          failed = true;
+          break;
         case ExitMeaning::Usage:
-        case ExitMeaning::NoDevice:
-        case ExitMeaning::DiskFull: {
+        case ExitMeaning::NoDevice: {
           spdlog::error("{} cannot run ({}); its log {} ends:\n{}", spec.program, describe_exit(*status), c.child->log().string(),
                         c.child->last_log_lines(10));
-          exit_code = meaning == ExitMeaning::Usage ? kRunUsage : meaning == ExitMeaning::NoDevice ? kRunNoDevice : kRunDiskFull;
+          exit_code = meaning == ExitMeaning::Usage ? kRunUsage : kRunNoDevice;
           ended = spec.program + " " + describe_exit(*status);
           failed = true;
           break;
@@ -249,6 +297,12 @@ int run(const RunConfig& config, const RunPaths& paths) {
       }
     }
     if (failed) break;
+    if (const auto& file = monitor.disk_full()) {
+      spdlog::error("{}: no space left on device", file->string());
+      exit_code = kRunDiskFull;
+      ended = "disk full (" + file->filename().string() + ")";
+      break;
+    }
     // Recovered: the restarted process reported (its first heartbeat: it is up and, for the simulator,
     // has replayed its journal). From the death to that report, backoff included.
     for (auto& c : children) {
@@ -320,14 +374,21 @@ int run(const RunConfig& config, const RunPaths& paths) {
   }
   monitor.poll(board, 200ms);  // the nodes' last heartbeats (NODE_STOPPING, final figures)
 
-  const nlohmann::json sim = collect_sim_export(out);
+  // summary.json first: on a full disk it is what the run must leave; the copies and plots come after.
+  const nlohmann::json sim = read_sim_summary(out);
   const nlohmann::json summary = make_summary(config, board, sim, monitor.cut_events(), restarts, recoveries, ended);
-  {
-    std::ofstream f(out / "summary.json");
-    f << summary.dump(2) << '\n';
-    if (!f) throw std::runtime_error("cannot write " + (out / "summary.json").string());
+  try {
+    summary_file.write(summary.dump(2) + '\n');
+    copy_sim_export(out);
+    draw_plots(plotter.get());
+  } catch (const common::DiskFull& e) {
+    if (exit_code != kRunDiskFull) spdlog::error("{}", e.what());  // a node already said the disk is full
+    exit_code = kRunDiskFull;
+  } catch (const fs::filesystem_error& e) {
+    if (e.code() != std::errc::no_space_on_device) throw;
+    if (exit_code != kRunDiskFull) spdlog::error("{}: no space left on device", e.path2().string());
+    exit_code = kRunDiskFull;
   }
-  draw_plots(plotter.get());
   // stdout: the headline figures (summary.json has them all), then where the outputs are.
   nlohmann::json headline = nlohmann::json::object();
   for (const char* key : {"frames", "tracked_frames", "strokes", "cuts", "pieces", "fallen_pieces", "cut_length_m",

@@ -1,5 +1,7 @@
 #include "tachi/sensor/playback_progress.hpp"
 
+#include "tachi/common/disk_full.hpp"
+
 #include <fcntl.h>
 #include <unistd.h>
 
@@ -30,7 +32,10 @@ PlaybackProgress::PlaybackProgress(std::filesystem::path path) : path_(std::move
     ::close(fd_);
     throw error(path_, std::strerror(err));
   }
-  if (n == 0) return;  // a new file: nothing played yet
+  if (n == 0) {  // a new file: nothing played yet. Its line is written now, so that later rewrites in place need no new room
+    record(0);
+    return;
+  }
   const bool well_formed = n == static_cast<ssize_t>(kLineBytes) && line[kDigits] == '\n' &&
                            std::strspn(line, "0123456789") == kDigits;
   if (!well_formed) {
@@ -47,7 +52,8 @@ PlaybackProgress::~PlaybackProgress() {
 void PlaybackProgress::record(std::uint64_t frames_published) {
   char line[kLineBytes + 1];
   std::snprintf(line, sizeof line, "%020llu\n", static_cast<unsigned long long>(frames_published));
-  if (::pwrite(fd_, line, kLineBytes, 0) != static_cast<ssize_t>(kLineBytes)) throw error(path_, std::strerror(errno));
+  if (::pwrite(fd_, line, kLineBytes, 0) != static_cast<ssize_t>(kLineBytes))
+    common::throw_write_error(path_, "playback progress " + path_.string() + ": " + std::strerror(errno));
 }
 
 }  // namespace tachi::sensor

@@ -1,5 +1,6 @@
 #include "tachi/sim/export.hpp"
 
+#include "tachi/common/disk_full.hpp"
 #include "tachi/sim/pieces.hpp"
 
 #include <algorithm>
@@ -61,7 +62,8 @@ void write_obj(const Cloth& cloth, const std::filesystem::path& file) {
       out << '\n';
     }
   }
-  if (!out) throw std::runtime_error("error while writing " + file.string());
+  out.close();  // a full disk may refuse only the last buffer, written here
+  if (!out) common::throw_write_error(file, "error while writing " + file.string());
 }
 
 void write_pattern_svg(const Cloth& cloth, const StrokeCutter& cutter, const std::filesystem::path& file) {
@@ -137,7 +139,8 @@ void write_pattern_svg(const Cloth& cloth, const StrokeCutter& cutter, const std
     out << "\"/>\n";
   }
   out << "</svg>\n";
-  if (!out) throw std::runtime_error("error while writing " + file.string());
+  out.close();  // a full disk may refuse only the last buffer, written here
+  if (!out) common::throw_write_error(file, "error while writing " + file.string());
 }
 
 void export_run(const Summary& summary, const Cloth& cloth, const std::filesystem::path& dir,
@@ -150,7 +153,8 @@ void export_run(const Summary& summary, const Cloth& cloth, const std::filesyste
   const auto json_path = dir / "summary.json";
   std::ofstream out{json_path};
   out << to_json(summary).dump(2) << '\n';
-  if (!out) throw std::runtime_error("cannot write " + json_path.string());
+  out.close();
+  if (!out) common::throw_write_error(json_path, "cannot write " + json_path.string());
 }
 
 }  // namespace tachi::sim

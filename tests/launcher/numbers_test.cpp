@@ -100,7 +100,7 @@ TEST(TachiRunPreflight, AnOutWithoutRoomOrWritePermissionIsRefused) {
     if (::mount("tmpfs", small.c_str(), "tmpfs", 0, "size=256k") != 0) GTEST_SKIP() << "mount not permitted here";
     const auto r = tachi::test::run(run_args(kRecordings + "/top_edge", 212, small / "run"), 60s);
     ::umount2(small.c_str(), MNT_DETACH);
-    EXPECT_EQ(r.exit_code, 1) << r.err;
+    EXPECT_EQ(r.exit_code, 5) << r.err;  // disk full
     EXPECT_NE(r.err.find("tachi run: --out " + (small / "run").string()), std::string::npos) << r.err;
     EXPECT_NE(r.err.find("free"), std::string::npos) << r.err;
     EXPECT_EQ(r.out, "");

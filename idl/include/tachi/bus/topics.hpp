@@ -6,6 +6,7 @@
 #include "tachi.h"
 #include "tachi/bus/bus.hpp"
 
+#include <cstddef>
 #include <string>
 #include <string_view>
 #include <type_traits>
@@ -38,6 +39,11 @@ inline constexpr TopicSpec<tachi_msg_ClothTopology> cloth_topology{"tachi/cloth/
 inline constexpr TopicSpec<tachi_msg_ClothTopologyDelta> cloth_topology_delta{"tachi/cloth/topology_delta",
                                                                                 QosProfile::Commands};
 inline constexpr TopicSpec<tachi_msg_ClothState> cloth_state{"tachi/cloth/state", QosProfile::State};
+/// The largest grid tachi-sim simulates live (per side; --offline goes to 4096): a 512 x 512 state is
+/// 3 MB at every published step, already more than a frame's time on this bus, and it bounds what
+/// a reader takes as a state: the particles of that grid cut up to twice over, xyz each (1.57 M floats).
+inline constexpr int kMaxLiveGrid = 512;
+inline constexpr std::size_t kMaxClothStateFloats = std::size_t{3} * kMaxLiveGrid * kMaxLiveGrid * 2;
 inline constexpr TopicSpec<tachi_msg_CutEvent> cut_event{"tachi/cloth/cut", QosProfile::Commands};
 inline constexpr TopicSpec<tachi_msg_NodeStatus> node_status{"tachi/node/status", QosProfile::Status};
 /// Transient-local like the topology: a late viewer still gets the object.

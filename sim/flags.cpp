@@ -70,7 +70,7 @@ void add_offline_flags(CLI::App& app, OfflineOptions& o) {
            o.cloth.columns = grid->first;
            o.cloth.rows = grid->second;
          },
-         "Particles per side: N (square) or NxM (columns x rows), 2..4096")
+         "Particles per side: N (square) or NxM (columns x rows), 2..4096 (live: 2..512)")
       ->default_str("64");
   app.add_option_function<float>(
          "--size-m",

@@ -1,5 +1,7 @@
 #include "bus_adapter.hpp"
 
+#include "tachi/bus/topics.hpp"
+
 namespace tachi::viewer {
 namespace {
 std::uint32_t packed(const tachi_msg_GridCoord& g) { return std::uint32_t{g.u} | std::uint32_t{g.v} << 16; }
@@ -118,8 +120,8 @@ tachi_msg_StrokeSample to_msg(const BladeSample& sample, const MouseSource& sour
 }
 
 namespace {
-// 4096 x 4096 particles (tachi-sim's largest grid), cut up to twice over.
-constexpr std::size_t kMaxParticles = std::size_t{4096} * 4096 * 2;
+// The largest cloth tachi-sim simulates live, cut up to twice over (the filter takes the same bound).
+constexpr std::size_t kMaxParticles = bus::topics::kMaxClothStateFloats / 3;
 }  // namespace
 
 bool plausible(const tachi_msg_ClothTopology& msg, bus::InputGuard& guard) {

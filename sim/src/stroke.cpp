@@ -306,11 +306,12 @@ void StrokeCutter::commit(GridCoord g, const Eigen::Vector2d& uv, const Eigen::V
   // of one slit). Such a point does not join the cut; the next one goes on from where the cut ends.
   if (follows_path() && path_end_ && closes_small_loop(*path_end_, to)) return;
   // For the same reason a step shorter than the wobble does not join the cut either, unless it reaches the
-  // cloth's edge (a cut across the cloth must get there to separate it).
+  // cloth's edge (a cut across the cloth must get there to separate it) or ends the stroke (the cut reaches
+  // the stroke's end point; a pass going back over the cut would otherwise cut that last step then).
   if (follows_path() && path_end_) {
     const bool on_edge = to.x() <= 0.0 || to.y() <= 0.0 || to.x() >= cloth_->columns - 1 || to.y() >= cloth_->rows - 1;
     const double min_step = at_least(options_.exact_min_step_cells, options_.exact_min_step_m);
-    if (!on_edge && (to - *path_end_).norm() < min_step) return;
+    if (!on_edge && !ending_ && (to - *path_end_).norm() < min_step) return;
   }
   const bool moved = !path_end_ || (to - *path_end_).norm() > 1e-9;
   if (!path_end_) paths_.emplace_back();
@@ -320,11 +321,14 @@ void StrokeCutter::commit(GridCoord g, const Eigen::Vector2d& uv, const Eigen::V
   if (!from) {
     tracks_.emplace_back(1, to.cast<float>());
     recent_.clear();
+    arrived_on_cut_ = true;
   }
   // Where the segment runs along a cut already made it does not cut again (recut_parts); the samples up to
   // here then join the cut's track.
   const auto parts = from && moved ? recut_parts(*from, to) : std::vector<std::pair<Eigen::Vector2d, Eigen::Vector2d>>{};
   if (from && moved) {
+    // Whether this segment ends along a cut (the next one then goes on along it).
+    arrived_on_cut_ = parts.empty() || (parts.back().second - to).norm() > 1e-9;
     tracks_.back().insert(tracks_.back().end(), recent_.begin(), recent_.end());
     tracks_.back().push_back(to.cast<float>());
     recent_.clear();
@@ -442,7 +446,9 @@ std::vector<std::pair<Eigen::Vector2d, Eigen::Vector2d>> StrokeCutter::recut_par
     }
     int j = i;
     while (j + 1 <= n && on_cut[static_cast<std::size_t>(j + 1)]) ++j;
-    if ((static_cast<double>(j - i) / n) * length >= kRecutMinRunCells) {
+    // A run at the segment's start is skipped whatever its length when the path got here along a cut (or the
+    // line starts here): it goes on along that cut.
+    if ((static_cast<double>(j - i) / n) * length >= kRecutMinRunCells || (i == 0 && arrived_on_cut_)) {
       std::fill(skip.begin() + i, skip.begin() + j + 1, 1);
     }
     i = j + 1;
@@ -619,8 +625,10 @@ TopologyChange StrokeCutter::end_stroke() {
   TopologyChange change;
   if (!open_) return change;
   if (line_) {
-    // Figure 5: the cut reaches the stroke's end point.
+    // Figure 5: the cut reaches the stroke's end point, however short the last step (the blade stops there).
+    ending_ = true;
     if (!pending_.empty()) commit(pending_.back().grid, pending_.back().uv, last_direction_, change);
+    ending_ = false;
     close_line();
   }
   open_ = false;

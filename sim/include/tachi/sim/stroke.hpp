@@ -226,6 +226,8 @@ class StrokeCutter {
   std::vector<std::vector<Eigen::Vector2f>> paths_;
   std::vector<std::vector<Eigen::Vector2f>> tracks_;  // exact/delete: the samples (uv) the cuts so far were made along
   std::vector<Eigen::Vector2f> recent_;               // ... and those since the last point that joined the cut
+  bool ending_ = false;          // end_stroke's commit: the last step joins however short
+  bool arrived_on_cut_ = false;  // the current line's path got to its end along an earlier cut (or starts there)
   ClothLocator locator_;
   double backtrack_cells_;
   bool open_ = false;

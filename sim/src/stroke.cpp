@@ -306,12 +306,14 @@ void StrokeCutter::commit(GridCoord g, const Eigen::Vector2d& uv, const Eigen::V
   // of one slit). Such a point does not join the cut; the next one goes on from where the cut ends.
   if (follows_path() && path_end_ && closes_small_loop(*path_end_, to)) return;
   // For the same reason a step shorter than the wobble does not join the cut either, unless it reaches the
-  // cloth's edge (a cut across the cloth must get there to separate it) or ends the stroke (the cut reaches
-  // the stroke's end point; a pass going back over the cut would otherwise cut that last step then).
+  // cloth's edge (a cut across the cloth must get there to separate it) or ends a stroke that has cut (the cut
+  // reaches the stroke's end point; a pass going back over the cut would otherwise cut that last step then).
+  // A stroke that only wobbled where the blade entered cuts nothing: its end is no cut either.
   if (follows_path() && path_end_) {
     const bool on_edge = to.x() <= 0.0 || to.y() <= 0.0 || to.x() >= cloth_->columns - 1 || to.y() >= cloth_->rows - 1;
+    const bool ends_a_cut = ending_ && !paths_.empty() && paths_.back().size() >= 2;
     const double min_step = at_least(options_.exact_min_step_cells, options_.exact_min_step_m);
-    if (!on_edge && !ending_ && (to - *path_end_).norm() < min_step) return;
+    if (!on_edge && !ends_a_cut && (to - *path_end_).norm() < min_step) return;
   }
   const bool moved = !path_end_ || (to - *path_end_).norm() > 1e-9;
   if (!path_end_) paths_.emplace_back();

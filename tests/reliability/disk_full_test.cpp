@@ -3,6 +3,7 @@
 // naming the file and "no space left on device", exit 5, no node restarted, and summary.json written
 // (its room is reserved when the run starts). Needs root for mount(8): exit 77 (skipped) otherwise.
 // Domain ids 220-221 belong to this file.
+#include "paths.hpp"
 #include "files.hpp"
 #include "process.hpp"
 #include "scratch_dir.hpp"
@@ -21,8 +22,8 @@ using tachi::test::ChildProcess;
 namespace fs = std::filesystem;
 
 namespace {
-const std::string kBin = TACHI_BIN_DIR;
-const std::string kRecordings = TACHI_RECORDINGS_DIR;
+const std::string kBin = tachi::test::bin_dir();
+const std::string kRecordings = tachi::test::recordings_dir();
 
 // A tmpfs of `size` mounted for the test's lifetime.
 class Tmpfs {

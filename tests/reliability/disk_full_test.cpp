@@ -2,7 +2,7 @@
 // is refused before any node starts; on one that fills up during the run, the run ends with one line
 // naming the file and "no space left on device", exit 5, no node restarted, and summary.json written
 // (its room is reserved when the run starts). Needs root for mount(8): exit 77 (skipped) otherwise.
-// Domain ids 220-221 belong to this file.
+// Domain ids 222-223 belong to this file (220 is ChildrenDieWithTheLauncher's).
 #include "paths.hpp"
 #include "files.hpp"
 #include "process.hpp"
@@ -67,7 +67,7 @@ std::vector<std::string> run_args(unsigned domain, const fs::path& out) {
 TEST(DiskFull, TachiRunOnATwoMegabyteTmpfsFailsBeforeStartingAnyNode) {
   Tmpfs disk("tachi_disk_2m", "2m");
   ASSERT_TRUE(disk.mounted());
-  ChildProcess launcher(run_args(220, disk.path() / "run"));
+  ChildProcess launcher(run_args(222, disk.path() / "run"));
   EXPECT_EQ(launcher.wait(30s), 5) << launcher.err();
   EXPECT_NE(launcher.err().find("free, but this run writes up to about"), std::string::npos) << launcher.err();
   EXPECT_EQ(launcher.err().find("started tachi-"), std::string::npos) << launcher.err();
@@ -77,7 +77,7 @@ TEST(DiskFull, ADiskFillingDuringTheRunEndsItWithOneMessageAndASummaryRestarting
   Tmpfs disk("tachi_disk_8m", "8m");  // room for the preflight's estimate (5.5 MB at grid 32 with video)
   ASSERT_TRUE(disk.mounted());
   const fs::path out = disk.path() / "run";
-  ChildProcess launcher(run_args(221, out));
+  ChildProcess launcher(run_args(223, out));
   // The launcher logs on stderr: read until it started the sensor, the last node.
   const auto deadline = std::chrono::steady_clock::now() + 30s;
   while (launcher.err().find("started tachi-sensor") == std::string::npos && launcher.running() &&

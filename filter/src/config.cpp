@@ -1,5 +1,6 @@
 #include "tachi/filter/config.hpp"
 
+#include "tachi/common/json_value.hpp"
 #include "tachi/common/text_file.hpp"
 
 #include <nlohmann/json.hpp>
@@ -19,9 +20,11 @@ template <class T>
 void read(const json& object, const char* key, const std::string& path, T& value) {
   if (!object.contains(key)) return;
   try {
-    value = object.at(key).get<T>();
+    value = common::json_value<T>(object.at(key));
   } catch (const json::exception& e) {
     fail(path + key + ": " + e.what());
+  } catch (const std::invalid_argument& e) {
+    fail(path + key + " " + e.what());
   }
 }
 

@@ -1,5 +1,7 @@
 #include "tachi/launcher/config.hpp"
 
+#include "tachi/common/json_value.hpp"
+
 #include <algorithm>
 #include <set>
 #include <sstream>
@@ -23,9 +25,11 @@ T get(const json& config, const std::string& key, const T& fallback) {
   const auto it = config.find(key);
   if (it == config.end() || it->is_null()) return fallback;
   try {
-    return it->get<T>();
+    return common::json_value<T>(*it);
   } catch (const json::exception&) {
     throw bad(key, "has the wrong type (" + std::string(it->type_name()) + ")");
+  } catch (const std::invalid_argument& e) {
+    throw bad(key, e.what());
   }
 }
 

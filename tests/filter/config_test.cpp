@@ -59,6 +59,17 @@ TEST(FilterConfig, BadValuesNameTheKey) {
   EXPECT_NE(error_of("[1, 2]").find("object"), std::string::npos);
 }
 
+// An integer field takes a whole number its type holds: 5.7e90 once reached a float-to-integer cast
+// (undefined behaviour, found by fuzz/config_fuzz.cpp) and -1 wrapped to 2^64-1.
+TEST(FilterConfig, IntegerFieldsRefuseNumbersTheyCannotHold) {
+  for (const char* bad : {"5.66667e+90", "-1", "2.5", "18446744073709551616", "true"}) {
+    const std::string error = error_of(std::string(R"({"smoother": {"moving_average_window": )") + bad + "}}");
+    EXPECT_NE(error.find("smoother.moving_average_window"), std::string::npos) << bad << ": " << error;
+  }
+  EXPECT_NE(error_of(R"({"gate": {"exit_dwell_samples": 3e9}})").find("gate.exit_dwell_samples"), std::string::npos);
+  EXPECT_EQ(parse_filter_config(R"({"smoother": {"moving_average_window": 4.0}})").smoother.moving_average_window, 4U);
+}
+
 TEST(FilterConfig, MissingFileIsARuntimeError) {
   EXPECT_THROW(load_filter_config("/nonexistent/filter.json"), std::runtime_error);
 }

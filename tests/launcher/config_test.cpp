@@ -125,6 +125,12 @@ TEST(RunConfig, BadValuesNameTheirKey) {
   j = base;
   j["sim"] = json{{"--grid", 3}};
   EXPECT_NE(message(j).find("without dashes"), std::string::npos);
+  // A whole-number key refuses what its type cannot hold instead of casting it (undefined for 1e90).
+  for (const json& unholdable : {json(1e90), json(32.5)}) {
+    j = base;
+    j["grid"] = unholdable;
+    EXPECT_NE(message(j).find("whole number"), std::string::npos) << unholdable << ": " << message(j);
+  }
 }
 
 TEST(RunConfig, PrintedConfigReadsBackToTheSameRun) {

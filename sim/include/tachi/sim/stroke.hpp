@@ -236,7 +236,6 @@ class StrokeCutter {
   std::vector<Point> pending_;              // samples since the anchor, not yet in the cut
   std::optional<Point> previous_;           // the stroke's previous sample
   Eigen::Vector3f last_direction_ = Eigen::Vector3f::Zero();  // hand motion, for the blade's drag
-  std::size_t committed_in_line_ = 0;       // line length already counted in the report
   StrokeReport report_;
   StrokeReport total_;
   BladeScratch drag_scratch_;

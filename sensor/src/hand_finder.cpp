@@ -289,6 +289,14 @@ struct HandFinder::Impl {
     const int left = (params.invalid_left_columns + kStep - 1) / kStep;
     return cells.x <= left || cells.y <= 0 || cells.x + cells.width >= kGridW || cells.y + cells.height >= kGridH;
   }
+  /// Whether a component's nearest reading (grid cell `seed`) lies at the image's border: what is
+  /// nearer still is out of view, so its end (a hand, or only a forearm of an arm that leaves the
+  /// image) is not seen, and a track does not start on it: an arm leaving the image shows a thick
+  /// place at its bend that passes for a palm (seen on seed 78, 55 frames).
+  bool nearest_at_border(cv::Point seed) const {
+    const int m = params.nearest_border_cells;
+    return m >= 0 && touches_border(cv::Rect(seed.x - m, seed.y - m, 2 * m + 1, 2 * m + 1));
+  }
   bool palm_sized(const Palm& palm) const {
     return palm.radius_m >= params.min_palm_radius_m && palm.radius_m <= params.max_palm_radius_m;
   }
@@ -1186,7 +1194,7 @@ HandObservation HandFinder::Impl::find(std::span<const std::uint16_t> raw) {
               (continuing || (palm.radius_m <= params.max_new_palm_radius_m && palm.ridge_m <= params.max_palm_ridge_m &&
                               (palm.z <= params.max_acquire_depth_m ||
                                (palm.z <= params.max_track_depth_m && reaches_back(seed, near_raw))) &&
-                              !is_joint(seed, near_raw)));
+                              !is_joint(seed, near_raw) && !nearest_at_border(seed)));
       if (jump || (!found && !continuing)) tracking = false;
     } else {
       tracking = false;

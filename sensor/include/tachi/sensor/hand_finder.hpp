@@ -77,6 +77,11 @@ struct HandFinderParams {
   /// of constant width: the upper arm (4.5 cm in radius) holds a palm-sized circle all along it,
   /// and an elbow or a shoulder at the hand's depth took the track (chosen on seeds 1-100).
   double max_palm_ridge_m = 0.09;
+  /// A new track from the foreground does not start on a component whose nearest reading is within
+  /// this many grid cells (4 px) of the image border: what is nearer still is out of view, and an
+  /// arm leaving the image across a side shows a palm-sized place at its bend (chosen on seeds
+  /// 1-100). Negative: no such test.
+  int nearest_border_cells = 1;
 };
 
 struct HandObservation {

@@ -16,6 +16,11 @@
 namespace tachi::bus {
 namespace {
 
+// lossy_config_xml's retransmission timing (measured: docs/reliability.md, "Lossy links").
+constexpr const char* kLossyLinkTimingXml =
+    "<NackDelay>0 ms</NackDelay>"
+    "<HeartbeatInterval min=\"2 ms\" minsched=\"5 ms\" max=\"100 ms\">10 ms</HeartbeatInterval>";
+
 // Cyclone allows one explicitly created domain per id per process, and deleting it deletes every
 // participant in it; so domains are shared and reference counted between Participants.
 struct DomainEntry {
@@ -83,7 +88,7 @@ void acquire_domain(std::uint32_t id, const std::string& config_file) {
     ++it->second.users;
     return;
   }
-  const std::string xml = config_file.empty() ? std::string(kLoopbackConfigXml) : read_dds_config(config_file);
+  const std::string xml = dds_config_xml(config_file);
   const dds_entity_t domain = check(
       dds_create_domain(id, xml.c_str()),
       "create DDS domain " + std::to_string(id) + (config_file.empty() ? "" : " from " + config_file) + ": dds_create_domain");
@@ -147,6 +152,21 @@ QosPtr make_qos(QosProfile profile) {
 }
 
 }  // namespace
+
+std::string dds_config_xml(const std::string& config_file) {
+  return config_file.empty() ? std::string(kLoopbackConfigXml) : read_dds_config(config_file);
+}
+
+std::string lossy_config_xml(const std::string& base_xml, int permille) {
+  if (permille < 0 || permille > 999) throw std::invalid_argument("transmit loss must be 0-999 per mille, not " + std::to_string(permille));
+  // Cyclone's defaults answer a loss late: a reader NACKs 100 ms after the heartbeat that shows the
+  // gap (NackDelay), and a writer heartbeats every 100 ms (HeartbeatInterval), so one lost hand
+  // sample waited ~100-200 ms. A link that loses packets wants the answer at once; the heartbeats
+  // are sent only while data is unacknowledged, so the extra traffic stops when nothing is lost.
+  return base_xml + "\n<CycloneDDS xmlns=\"https://cdds.io/config\"><Domain id=\"any\"><Internal>" +
+         "<Test><XmitLossiness>" + std::to_string(permille) + "</XmitLossiness></Test>" +
+         std::string(kLossyLinkTimingXml) + "</Internal></Domain></CycloneDDS>\n";
+}
 
 DdsError::DdsError(std::string_view context, dds_return_t code)
     : std::runtime_error(std::string(context) + ": " + dds_strretcode(code)), code_(code) {}

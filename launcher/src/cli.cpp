@@ -31,6 +31,10 @@ int parse_command(int argc, char** argv, Command& c) {
   run->add_option("--grid", f.grid, "Cloth particles per side")->check(CLI::Range(2, 1024));
   run->add_option("--domain", f.domain, "DDS domain id of this pipeline")->check(CLI::Range(0u, 232u));
   run->add_option("--dds-config", f.dds_config, "Cyclone DDS XML for every node (default: loopback only)")->check(CLI::ExistingFile);
+  run->add_option("--lossy", f.lossy,
+                  "Test a lossy link: every node drops PERMILLE of 1000 packets it sends (Cyclone's transmit loss), "
+                  "with retransmission timing for such a link")
+      ->check(CLI::Range(0, 999));
   run->add_option("--secure", f.secure, "DDS Security folder (scripts/make_test_pki.sh) for every node; each uses its own identity")
       ->check(CLI::ExistingDirectory);
   run->add_option("--out", f.out, "Output folder (summary.json, cloth.obj, plots, logs); default out/run");

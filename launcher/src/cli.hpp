@@ -16,7 +16,7 @@ namespace tachi::launcher {
 struct RunFlags {
   std::string config_file, recording, rate, gate, voice_wav, voice_device, blade, out, nodes, dds_config, secure, run_id;
   bool live = false, headless = false, print_config = false, mouse = false, record = false, foxglove = false;
-  int grid = 0;
+  int grid = 0, lossy = 0;
   unsigned domain = 0;
   double settle_s = 0;
   std::vector<std::string> sets;

@@ -46,6 +46,7 @@ json effective_config(const RunFlags& f) {
   if (given("--grid")) config["grid"] = f.grid;
   if (given("--domain")) config["domain"] = f.domain;
   if (given("--dds-config")) config["dds_config"] = fs::absolute(f.dds_config).string();
+  if (given("--lossy")) config["lossy"] = f.lossy;
   if (given("--secure")) config["secure"] = fs::absolute(f.secure).string();
   if (given("--out")) config["out"] = f.out;
   if (given("--headless")) config["headless"] = f.headless;

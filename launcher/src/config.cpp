@@ -14,7 +14,7 @@ using nlohmann::json;
 
 const std::set<std::string> kTopKeys{"recording", "live",   "rate",       "gate",     "voice_wav", "voice_device",
                                      "blade",     "grid",   "domain",     "dds_config", "out",     "headless",
-                                     "settle_s",  "nodes",  "secure", "mouse", "video"};
+                                     "settle_s",  "nodes",  "secure", "mouse", "video", "lossy"};
 
 std::invalid_argument bad(const std::string& key, const std::string& why) {
   return std::invalid_argument("config key \"" + key + "\": " + why);
@@ -101,6 +101,8 @@ RunConfig from_json(const json& config) {
   c.domain = static_cast<unsigned>(domain);
   c.dds_config = get<std::string>(config, "dds_config", "");
   c.secure = get<std::string>(config, "secure", "");
+  c.lossy_permille = get<int>(config, "lossy", 0);
+  if (c.lossy_permille < 0 || c.lossy_permille > 999) throw bad("lossy", "must be 0-999 (per mille of packets dropped)");
   c.out = get<std::string>(config, "out", c.out);
   if (c.out.empty()) throw bad("out", "must name a folder");
   c.headless = get<bool>(config, "headless", c.headless);
@@ -146,7 +148,8 @@ json to_json(const RunConfig& c) {
             {"voice_wav", c.voice_wav}, {"voice_device", c.voice_device}, {"blade", c.blade}, {"grid", c.grid},
             {"domain", c.domain},       {"dds_config", c.dds_config}, {"secure", c.secure},   {"out", c.out},
             {"headless", c.headless},
-            {"settle_s", c.settle_s},   {"nodes", nodes},             {"mouse", c.mouse},     {"video", c.video}};
+            {"settle_s", c.settle_s},   {"nodes", nodes},             {"mouse", c.mouse},     {"video", c.video},
+            {"lossy", c.lossy_permille}};
   for (const auto& [node, options] : c.node_options.items()) j[node] = options;
   return j;
 }

@@ -49,12 +49,26 @@ void keep_aside_partial_video(const RunConfig& config, int restart) {
   else spdlog::warn("the killed viewer's unfinished video is {}", aside.string());
 }
 
+constexpr const char* kLossyConfigFile = "cyclonedds-lossy.xml";
+
+// `tachi run --lossy`: every participant of the run (the nodes, restarted ones too, and the
+// launcher's monitor) reads one lossy config, written into the run's folder, where a user also finds
+// what the run used.
+RunConfig with_lossy_link(const RunConfig& requested, const fs::path& out) {
+  if (requested.lossy_permille == 0) return requested;
+  RunConfig config = requested;
+  config.dds_config = (fs::absolute(out) / kLossyConfigFile).string();
+  std::ofstream(config.dds_config) << bus::lossy_config_xml(bus::dds_config_xml(requested.dds_config), requested.lossy_permille);
+  spdlog::info("lossy link: every node drops {} of 1000 packets it sends ({})", requested.lossy_permille, config.dds_config);
+  return config;
+}
+
 // A previous run's results in the same folder must not pass for this run's.
 void clear_outputs(const fs::path& out) {
   fs::create_directories(out);
   for (const auto* name : {"summary.json", "cloth.obj", "pattern.svg", "final.png", "video.mp4", "video.avi",
                            "latency.png", "trajectory.png", "config.json", "sim.journal", "filter.journal",
-                           "sensor.progress"})
+                           "sensor.progress", kLossyConfigFile})
     fs::remove(out / name);
   fs::remove_all(out / kSimExportDir);
   fs::remove_all(out / "trace");
@@ -182,14 +196,15 @@ void draw_plots(Child* plotter) {
 
 fs::path plot_script(const fs::path& bin_dir) { return bin_dir.parent_path() / "share" / "tachi" / "plot_run.py"; }
 
-int run(const RunConfig& config, const RunPaths& paths) {
-  const fs::path out(config.out);
+int run(const RunConfig& requested, const RunPaths& paths) {
+  const fs::path out(requested.out);
   clear_outputs(out);
   ReservedFile summary_file(out / "summary.json");
   {
     std::ofstream cfg(out / "config.json");
-    cfg << to_json(config).dump(2) << '\n';
+    cfg << to_json(requested).dump(2) << '\n';
   }
+  const RunConfig config = with_lossy_link(requested, out);
   // With DDS Security the launcher reads as "monitor", the identity that may read every topic.
   bus::Participant dds{config.domain, config.dds_config, {config.secure, "monitor"}};
   RunMonitor monitor{dds, out / "trace"};

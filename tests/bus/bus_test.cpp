@@ -154,6 +154,22 @@ TEST(Bus, EmbeddedConfigKeepsTrafficOnLoopback) {
   EXPECT_NE(xml.find(R"(<Peer address="127.0.0.1"/>)"), std::string::npos);
 }
 
+// `tachi run --lossy`'s config: Cyclone accepts the two documents (it refuses an element it does not
+// know, as above). Whether the loss is applied and repaired needs two processes: the launcher's
+// TachiRun.ALossyLinkCutsAsTheCleanRunDoes (in one process Cyclone delivers without the network).
+TEST(Bus, ALossyConfigIsOneCycloneAccepts) {
+  constexpr std::uint32_t kLossyDomain = 18;
+  EXPECT_THROW((void)bus::lossy_config_xml(bus::kLoopbackConfigXml, 1000), std::invalid_argument);
+  EXPECT_THROW((void)bus::lossy_config_xml(bus::kLoopbackConfigXml, -1), std::invalid_argument);
+  const std::string xml = bus::lossy_config_xml(bus::dds_config_xml(""), 500);
+  EXPECT_EQ(xml.find(bus::kLoopbackConfigXml), 0u) << "the base config first, whole";
+  EXPECT_NE(xml.find("<XmitLossiness>500</XmitLossiness>"), std::string::npos);
+  const auto path = std::filesystem::temp_directory_path() / "tachi_lossy_cyclone_config.xml";
+  std::ofstream(path) << xml;
+  EXPECT_NO_THROW(bus::Participant(kLossyDomain, path.string()));
+  std::filesystem::remove(path);
+}
+
 TEST(Heartbeat, AnnouncesStartStateChangesAndStop) {
   constexpr std::uint32_t kHeartbeatDomain = 16;
   bus::Participant dds{kHeartbeatDomain};

@@ -125,6 +125,9 @@ TEST(RunConfig, BadValuesNameTheirKey) {
   j = base;
   j["sim"] = json{{"--grid", 3}};
   EXPECT_NE(message(j).find("without dashes"), std::string::npos);
+  j = base;
+  j["lossy"] = 1000;  // per mille: 1000 would drop everything
+  EXPECT_NE(message(j).find("\"lossy\""), std::string::npos) << message(j);
   // A whole-number key refuses what its type cannot hold instead of casting it (undefined for 1e90).
   for (const json& unholdable : {json(1e90), json(32.5)}) {
     j = base;

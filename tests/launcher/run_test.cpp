@@ -302,6 +302,26 @@ TEST(TachiRun, LiveWithoutAKinectStopsTheRunWithExitCode3) {
   EXPECT_TRUE(fs::exists(out / "summary.json"));
 }
 
+// `tachi run --lossy 100`: every node drops 10% of the packets it sends (data, heartbeats,
+// acknowledgements, discovery); reliable topics resend what was lost, so the recording cuts the cloth
+// as a clean run does, cell for cell (a clean run beside it, on another domain).
+TEST(TachiRun, ALossyLinkCutsAsTheCleanRunDoes) {
+  tachi::test::ScratchDir clean("tachi_run_clean"), lossy("tachi_run_lossy");
+  ChildProcess clean_run(run_args("straight_cut", 132, clean.path()));
+  ChildProcess lossy_run(run_args("straight_cut", 133, lossy.path(), {"--lossy", "100"}));
+  ASSERT_EQ(clean_run.wait(120s), 0) << clean_run.err();
+  ASSERT_EQ(lossy_run.wait(120s), 0) << lossy_run.err() << logs(lossy.path());
+  const auto sc = read_json(clean / "summary.json"), sl = read_json(lossy / "summary.json");
+  EXPECT_EQ(read_json(lossy / "config.json")["lossy"], 100);
+  EXPECT_NE(read_text(lossy / "cyclonedds-lossy.xml").find("<XmitLossiness>100</XmitLossiness>"), std::string::npos);
+  EXPECT_NE(read_text(lossy / "sim.log").find("cyclonedds-lossy.xml"), std::string::npos) << "the nodes read it";
+  EXPECT_EQ(sl["frames"], depth_frames("straight_cut")) << "every frame was played";
+  EXPECT_EQ(sl["hand_samples"], sc["hand_samples"]) << "none lost for good";
+  EXPECT_EQ(sl["cuts"], 1);
+  EXPECT_EQ(sl["pieces"], sc["pieces"]);
+  EXPECT_EQ(sl["cut_line"], sc["cut_line"]);
+}
+
 TEST(TachiRun, SecureRunAuthenticatesEveryNodeAndTheLauncher) {
   tachi::test::ScratchDir out("tachi_run_secure");
   const auto r = tachi::test::run(run_args("straight_cut", 130, out.path() / "run", {"--secure", tachi::test::test_pki("ours")}), 120s);

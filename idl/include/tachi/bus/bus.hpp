@@ -21,6 +21,18 @@ namespace tachi::bus {
 /// config/cyclonedds-loopback.xml, embedded at build time: every byte stays on `lo`.
 extern const char* const kLoopbackConfigXml;
 
+/// The Cyclone config a Participant given `config_file` uses: the file's XML (throws naming the file
+/// when it cannot be read, is empty or is not XML: never Cyclone's network defaults), or
+/// kLoopbackConfigXml when `config_file` is empty.
+std::string dds_config_xml(const std::string& config_file);
+
+/// `base_xml` with Cyclone's transmit loss: each process drops `permille` of the packets it sends
+/// (Internal/Test/XmitLossiness; data, heartbeats, acknowledgements and discovery alike), and the
+/// reliable protocol's timing for such a link (a prompt NACK, frequent heartbeats while data is
+/// unacknowledged; docs/reliability.md gives the measurement). Cyclone reads the two documents in
+/// turn, the second's settings over the first's. Throws std::invalid_argument outside 0-999.
+std::string lossy_config_xml(const std::string& base_xml, int permille);
+
 /// A Cyclone call failed. what() names the entity and the call, e.g.
 /// "create writer on topic tachi/hand/raw: dds_create_writer: Precondition not met".
 class DdsError : public std::runtime_error {

@@ -26,6 +26,7 @@ struct RunConfig {
   int grid = 64;
   unsigned domain = 0;
   std::string dds_config;         ///< empty: every node's built-in loopback config
+  int lossy_permille = 0;         ///< > 0: every node's config drops this many of 1000 sent packets (bus::lossy_config_xml)
   std::string secure;             ///< DDS Security folder (scripts/make_test_pki.sh) for every node; empty: none
   std::string out = "out/run";
   bool headless = true;

@@ -4,16 +4,18 @@
 # makes (a veth pair, TEST-NET-2 addresses, nothing routed anywhere else), each with
 # config/cyclonedds-multihost.xml filled in for it. Host B's summary must show the cut the recording
 # makes and the sensor's frame count, which reaches it only through host A's heartbeats.
-# Usage: two_hosts_test.sh BIN_DIR RECORDING CONFIG_TEMPLATE    (exit 77 = skipped: needs root + ip netns)
+# With LOSSY (per mille), both launchers run with `--lossy LOSSY`: the link between the hosts loses
+# packets both ways, and the cut must be the same.
+# Usage: two_hosts_test.sh BIN_DIR RECORDING CONFIG_TEMPLATE [LOSSY]   (exit 77 = skipped: needs root + ip netns)
 set -u
-bin=$1 recording=$2 template=$3
-prefix=r
+bin=$1 recording=$2 template=$3 lossy=${4:-0}
+prefix=r dom=127 loss=()
+if [ "$lossy" -gt 0 ]; then prefix=l dom=134 loss=(--lossy "$lossy"); fi
 source "$(dirname "$0")/../support/two_hosts.sh"
-dom=127
 
-ip netns exec "$b" timeout 120 "$bin/tachi" run --nodes sim,viewer --grid 32 --domain $dom --dds-config "$work/$if_b.xml" \
+ip netns exec "$b" timeout 120 "$bin/tachi" run --nodes sim,viewer --grid 32 --domain $dom --dds-config "$work/$if_b.xml" "${loss[@]}" \
   --recording "$recording" --headless --settle 1.5 --set sim.cut-mode=grid --out "$work/b" >"$work/b.out" 2>"$work/b.err" & run_b=$!; pids+=("$run_b")
-ip netns exec "$a" timeout 120 "$bin/tachi" run --nodes sensor,filter --domain $dom --dds-config "$work/$if_a.xml" \
+ip netns exec "$a" timeout 120 "$bin/tachi" run --nodes sensor,filter --domain $dom --dds-config "$work/$if_a.xml" "${loss[@]}" \
   --recording "$recording" --headless --out "$work/a" >"$work/a.out" 2>"$work/a.err"
 a_status=$?
 wait "$run_b"; b_status=$?
@@ -36,4 +38,4 @@ assert s["pieces"] == 1, "a slit, not a cut-off"
 rows = {v for _, v in s["cut_line"]}
 assert rows and min(rows) >= 14 and max(rows) <= 17, f"the cut follows the hand at mid height: rows {sorted(rows)}"
 PY
-echo "tachi run across two hosts: $(python3 -c "import json;s=json.load(open('$work/b/summary.json'));print(s['frames'],'frames,',s['cut_particles'],'particles cut, e2e p50',s['e2e_p50_ms'],'ms')")"
+echo "tachi run across two hosts${loss[*]:+ (${loss[*]})}: $(python3 -c "import json;s=json.load(open('$work/b/summary.json'));print(s['frames'],'frames,',s['cut_particles'],'particles cut, e2e p50',s['e2e_p50_ms'],'ms, p99',s['e2e_p99_ms'],'ms')")"

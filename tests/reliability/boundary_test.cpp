@@ -158,6 +158,17 @@ TEST(Boundary, TheFilterRefusesAndCountsBadClothStates) {
     states.write(s);
     counted = rejections(status, "tachi-filter", reason);
   };
+  // A piece cut off an hour ago has fallen ~70 km at its terminal speed: a real state, accepted (the
+  // out_of_range count below stays 1). Given time to be looked at before the next state hides it.
+  {
+    std::vector<float> fallen{0.0F, 0.0F, 0.0F, 0.1F, -7.0e4F, 0.0F};
+    tachi_msg_ClothState s{};
+    s.cloth_id = 1;
+    s.positions._buffer = fallen.data();
+    s.positions._length = s.positions._maximum = static_cast<std::uint32_t>(fallen.size());
+    states.write(s);
+    std::this_thread::sleep_for(500ms);
+  }
   send({0.0F, 0.0F, std::numeric_limits<float>::quiet_NaN(), 0.1F, 0.0F, 0.0F}, "nonfinite");
   send({0.0F, 0.0F, 1e30F, 0.1F, 0.0F, 0.0F}, "out_of_range");
   send({0.0F, 0.0F, 0.0F, 0.1F}, "oversized");  // not xyz triples

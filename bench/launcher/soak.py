@@ -13,12 +13,15 @@ tachi-filter: 6.8 MB from 40 s to 200 s), but its RSS still grows for minutes as
 buffers allocated at the start (Cyclone's receive buffers, the writers' history caches) are touched
 for the first time.
 
+With TACHI_SOAK_KEEP=DIR the run's folder (summary.json, trace/, logs) is copied there.
+
 Usage: soak.py BIN_DIR RECORDING MINUTES [TACHI_RUN_FLAGS...]   (domain 148)
        e.g. soak.py build/bin build/recordings/straight_cut 5 --grid 64
 """
 import csv
 import json
 import os
+import shutil
 import signal
 import statistics
 import subprocess
@@ -92,6 +95,8 @@ def main():
             sys.exit("soak: the run did not stop within 30 s of SIGINT")
         if ended_early:
             sys.exit(f"soak: the run ended by itself after {time.monotonic() - start:.0f} s (exit {run.returncode}):\n{err[-2000:]}")
+        if os.environ.get("TACHI_SOAK_KEEP"):
+            shutil.copytree(out, os.environ["TACHI_SOAK_KEEP"], dirs_exist_ok=True)
         summary = json.load(open(os.path.join(out, "summary.json")))
         latency = {}  # minute -> ms
         first_ns = None

@@ -58,7 +58,9 @@ RunConfig with_lossy_link(const RunConfig& requested, const fs::path& out) {
   if (requested.lossy_permille == 0) return requested;
   RunConfig config = requested;
   config.dds_config = (fs::absolute(out) / kLossyConfigFile).string();
-  std::ofstream(config.dds_config) << bus::lossy_config_xml(bus::dds_config_xml(requested.dds_config), requested.lossy_permille);
+  std::ofstream file(config.dds_config);
+  file << bus::lossy_config_xml(bus::dds_config_xml(requested.dds_config), requested.lossy_permille);
+  if (!file.flush()) throw std::runtime_error("--lossy: cannot write " + config.dds_config);
   spdlog::info("lossy link: every node drops {} of 1000 packets it sends ({})", requested.lossy_permille, config.dds_config);
   return config;
 }

@@ -158,7 +158,9 @@ std::string dds_config_xml(const std::string& config_file) {
 }
 
 std::string lossy_config_xml(const std::string& base_xml, int permille) {
-  if (permille < 0 || permille > 999) throw std::invalid_argument("transmit loss must be 0-999 per mille, not " + std::to_string(permille));
+  if (permille < 0 || permille > kMaxTransmitLossPermille)
+    throw std::invalid_argument("transmit loss must be 0-" + std::to_string(kMaxTransmitLossPermille) + " per mille, not " +
+                                std::to_string(permille));
   // Cyclone's defaults answer a loss late: a reader NACKs 100 ms after the heartbeat that shows the
   // gap (NackDelay), and a writer heartbeats every 100 ms (HeartbeatInterval), so one lost hand
   // sample waited ~100-200 ms. A link that loses packets wants the answer at once; the heartbeats

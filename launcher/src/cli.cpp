@@ -1,6 +1,7 @@
 #include "cli.hpp"
 
 #include "tachi/bus/topics.hpp"
+#include "tachi/launcher/config.hpp"
 
 #include <iostream>
 #include <utility>
@@ -34,7 +35,7 @@ int parse_command(int argc, char** argv, Command& c) {
   run->add_option("--lossy", f.lossy,
                   "Test a lossy link: every node drops PERMILLE of 1000 packets it sends (Cyclone's transmit loss), "
                   "with retransmission timing for such a link")
-      ->check(CLI::Range(0, 999));
+      ->check(CLI::Range(0, kMaxLossyPermille));
   run->add_option("--secure", f.secure, "DDS Security folder (scripts/make_test_pki.sh) for every node; each uses its own identity")
       ->check(CLI::ExistingDirectory);
   run->add_option("--out", f.out, "Output folder (summary.json, cloth.obj, plots, logs); default out/run");

@@ -102,7 +102,8 @@ RunConfig from_json(const json& config) {
   c.dds_config = get<std::string>(config, "dds_config", "");
   c.secure = get<std::string>(config, "secure", "");
   c.lossy_permille = get<int>(config, "lossy", 0);
-  if (c.lossy_permille < 0 || c.lossy_permille > 999) throw bad("lossy", "must be 0-999 (per mille of packets dropped)");
+  if (c.lossy_permille < 0 || c.lossy_permille > kMaxLossyPermille)
+    throw bad("lossy", "must be 0-" + std::to_string(kMaxLossyPermille) + " (per mille of packets dropped)");
   c.out = get<std::string>(config, "out", c.out);
   if (c.out.empty()) throw bad("out", "must name a folder");
   c.headless = get<bool>(config, "headless", c.headless);

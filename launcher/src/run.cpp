@@ -50,6 +50,7 @@ void keep_aside_partial_video(const RunConfig& config, int restart) {
 }
 
 constexpr const char* kLossyConfigFile = "cyclonedds-lossy.xml";
+static_assert(kMaxLossyPermille == bus::kMaxTransmitLossPermille, "tachi run's --lossy bound is the bus's");
 
 // `tachi run --lossy`: every participant of the run (the nodes, restarted ones too, and the
 // launcher's monitor) reads one lossy config, written into the run's folder, where a user also finds

@@ -30,8 +30,11 @@ std::string dds_config_xml(const std::string& config_file);
 /// (Internal/Test/XmitLossiness; data, heartbeats, acknowledgements and discovery alike), and the
 /// reliable protocol's timing for such a link (a prompt NACK, frequent heartbeats while data is
 /// unacknowledged; docs/reliability.md gives the measurement). Cyclone reads the two documents in
-/// turn, the second's settings over the first's. Throws std::invalid_argument outside 0-999.
+/// turn, the second's settings over the first's. Throws std::invalid_argument outside
+/// 0-kMaxTransmitLossPermille.
 std::string lossy_config_xml(const std::string& base_xml, int permille);
+/// The most lossy_config_xml drops: 1000 would be no link at all.
+inline constexpr int kMaxTransmitLossPermille = 999;
 
 /// A Cyclone call failed. what() names the entity and the call, e.g.
 /// "create writer on topic tachi/hand/raw: dds_create_writer: Precondition not met".

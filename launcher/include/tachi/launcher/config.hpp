@@ -16,6 +16,10 @@ namespace tachi::launcher {
 /// The nodes a run may start, in start order (consumers before producers, so none misses a sample).
 inline const std::vector<std::string> kNodes{"sim", "viewer", "filter", "voice", "sensor"};
 
+/// `lossy`'s bound, bus::kMaxTransmitLossPermille (this library does not link the bus; run.cpp checks
+/// that the two agree).
+inline constexpr int kMaxLossyPermille = 999;
+
 struct RunConfig {
   std::string recording;          ///< fakenect recording folder; empty = live Kinect
   std::string rate = "1";         ///< recording pace (tachi-sensor --rate)
@@ -26,7 +30,7 @@ struct RunConfig {
   int grid = 64;
   unsigned domain = 0;
   std::string dds_config;         ///< empty: every node's built-in loopback config
-  int lossy_permille = 0;         ///< > 0: every node's config drops this many of 1000 sent packets (bus::lossy_config_xml)
+  int lossy_permille = 0;         ///< > 0: every node's config drops this many of 1000 sent packets (bus::lossy_config_xml), up to kMaxLossyPermille
   std::string secure;             ///< DDS Security folder (scripts/make_test_pki.sh) for every node; empty: none
   std::string out = "out/run";
   bool headless = true;

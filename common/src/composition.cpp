@@ -1,0 +1,116 @@
+#include "tachi/common/composition.hpp"
+
+#include "tachi/common/app.hpp"
+#include "tachi/common/disk_full.hpp"
+
+#include <spdlog/pattern_formatter.h>
+#include <spdlog/sinks/stdout_color_sinks.h>
+#include <spdlog/spdlog.h>
+
+#include <atomic>
+#include <condition_variable>
+#include <memory>
+#include <mutex>
+#include <thread>
+
+namespace tachi::common {
+namespace {
+
+thread_local std::string t_node_name;  // the node whose thread this is ("" outside run_composed)
+
+// spdlog pattern flag %*: ":<node>" on a node's thread, nothing elsewhere.
+class NodeNameFlag final : public spdlog::custom_flag_formatter {
+ public:
+  void format(const spdlog::details::log_msg&, const std::tm&, spdlog::memory_buf_t& dest) override {
+    if (t_node_name.empty()) return;
+    dest.push_back(':');
+    dest.append(t_node_name.data(), t_node_name.data() + t_node_name.size());
+  }
+  [[nodiscard]] std::unique_ptr<custom_flag_formatter> clone() const override { return std::make_unique<NodeNameFlag>(); }
+};
+
+// What the threads tell the composing thread.
+struct Board {
+  std::mutex mutex;
+  std::condition_variable changed;
+  std::vector<bool> finished;
+  int failure_code = 0;  ///< a node that threw: its process-like exit code (guarded by mutex)
+};
+
+}  // namespace
+
+void log_node_names(const std::string& logger_name) {
+  // Each stage's flag parsing made its own logger the default (spdlog drops the one it replaces).
+  auto logger = spdlog::get(logger_name);
+  if (!logger) logger = spdlog::stderr_color_mt(logger_name);
+  auto formatter = std::make_unique<spdlog::pattern_formatter>();
+  formatter->add_flag<NodeNameFlag>('*').set_pattern("[%Y-%m-%d %H:%M:%S.%e] [%n%*] [%^%l%$] %v");
+  logger->set_formatter(std::move(formatter));
+  spdlog::set_default_logger(logger);
+}
+
+int run_composed(std::vector<ComposedNode> nodes, std::chrono::milliseconds grace) {
+  install_stop_handlers();
+  Board board;
+  board.finished.assign(nodes.size(), false);
+  // Each node's own stop: the non-finite nodes are stopped once the finite ones are done, the others
+  // (and everything on SIGINT) by the process-wide stop flag.
+  std::vector<std::unique_ptr<std::atomic<bool>>> stop;
+  std::vector<int> codes(nodes.size(), kExitOk);
+  for (std::size_t i = 0; i < nodes.size(); ++i) stop.push_back(std::make_unique<std::atomic<bool>>(false));
+
+  std::vector<std::thread> threads;
+  threads.reserve(nodes.size());
+  for (std::size_t i = 0; i < nodes.size(); ++i) {
+    threads.emplace_back([&, i] {
+      ComposedNode& node = nodes[i];
+      t_node_name = node.name;
+      int code = kExitOk;
+      bool threw = true;
+      try {
+        while (!stop_requested() && !stop[i]->load() && node.spin_once()) {
+        }
+        code = node.finish();
+        threw = false;
+      } catch (const DiskFull& e) {
+        spdlog::error("{}", e.what());  // the one line a full disk gets
+        code = kExitDiskFull;
+      } catch (const std::exception& e) {
+        spdlog::error("{} failed: {}", node.name, e.what());
+        code = kExitFailure;
+      }
+      {
+        std::lock_guard lock(board.mutex);
+        codes[i] = code;
+        board.finished[i] = true;
+        if (threw && board.failure_code == 0) board.failure_code = code;
+      }
+      board.changed.notify_all();
+    });
+  }
+
+  bool any_finite = false;
+  for (const auto& n : nodes) any_finite = any_finite || n.finite;
+  {
+    std::unique_lock lock(board.mutex);
+    const auto finite_done = [&] {
+      for (std::size_t i = 0; i < nodes.size(); ++i)
+        if (nodes[i].finite && !board.finished[i]) return false;
+      return true;
+    };
+    // Woken by a finished node, or every 10 ms to see a signal (the stop flag is set in a handler).
+    while (!stop_requested() && board.failure_code == 0 && !(any_finite && finite_done()))
+      board.changed.wait_for(lock, std::chrono::milliseconds(10));
+  }
+  // A node that failed ends the composition at once, as a dying process ends its run; finished finite
+  // nodes leave the others their grace.
+  if (!stop_requested() && board.failure_code == 0) sleep_unless_stopped(std::chrono::steady_clock::now() + grace);
+  for (auto& s : stop) s->store(true);
+  for (auto& t : threads) t.join();
+  if (board.failure_code != 0) return board.failure_code;
+  for (const int code : codes)
+    if (code != kExitOk) return code;
+  return kExitOk;
+}
+
+}  // namespace tachi::common

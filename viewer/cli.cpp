@@ -1,5 +1,8 @@
 #include "cli.hpp"
 
+#include "tachi/common/disk_full.hpp"
+
+#include <exception>
 #include <filesystem>
 
 namespace tachi::viewer {
@@ -55,6 +58,12 @@ int parse_flags(int argc, char** argv, ViewerOptions& options) {
   if (const int rc = common::parse(app, argc, argv); rc >= 0) return rc;
   common::set_log_level(log_level);
   return -1;
+}
+
+void rethrow_naming_a_full_disk(const ViewerOptions& options) {
+  for (const std::string& file : {options.video, options.snapshot, options.frames_dir})
+    if (!file.empty() && common::out_of_space(file, 0)) throw common::DiskFull(file);
+  throw;
 }
 
 }  // namespace tachi::viewer

@@ -9,4 +9,9 @@ namespace tachi::viewer {
 /// `--fps nan` refused) and applies --log-level. An exit code when the process should stop now, else -1.
 int parse_flags(int argc, char** argv, ViewerOptions& options);
 
+/// For a catch block around the viewer's run: OpenCV's writers say a full disk only as an assertion or a
+/// false return, so the filesystem of the viewer's own outputs tells whether that is what happened.
+/// Throws DiskFull naming the output when one has no room left, else rethrows the current exception.
+[[noreturn]] void rethrow_naming_a_full_disk(const ViewerOptions& options);
+
 }  // namespace tachi::viewer

@@ -25,11 +25,7 @@ int main(int argc, char** argv) try {
   } catch (const tachi::common::DiskFull&) {
     throw;
   } catch (const std::exception&) {
-    // OpenCV's writers say a full disk only as an assertion or a false return: the filesystem of the
-    // viewer's own outputs tells whether that is what happened.
-    for (const std::string& file : {options.video, options.snapshot, options.frames_dir})
-      if (!file.empty() && tachi::common::out_of_space(file, 0)) throw tachi::common::DiskFull(file);
-    throw;
+    tachi::viewer::rethrow_naming_a_full_disk(options);
   }
 } catch (const tachi::common::DiskFull& e) {
   std::cerr << "tachi-viewer: " << e.what() << '\n';  // the one line a full disk gets; tachi run does not restart it

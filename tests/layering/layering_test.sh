@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
 # The project's shape, checked: a stage (sim, filter, sensor, viewer, launcher) includes only its own
 # headers, idl/'s (tachi/bus/) and common/'s (tachi/common/) -- never another stage's -- and every
-# executable's main file stays a thin main (<= 40 lines: flags, a node, run_until_signal).
+# executable's main file stays a thin main (<= 40 lines: flags, a node, run_until_signal). pipeline/
+# (tachi-pipeline, `tachi run --in-process`) is the composition root: it alone includes every stage's
+# flags ("sim/cli.hpp", ...), and its main is thin too.
 # Usage: layering_test.sh SOURCE_DIR {includes|mains}. Exit 1 naming each file that breaks the rule.
 set -euo pipefail
 src=${1:?source dir}
@@ -38,6 +40,10 @@ includes)
       if grep -qE '^[[:space:]]*#[[:space:]]*include[[:space:]]*"(\.\./)+(sim|filter|sensor|viewer|launcher)/' "$file"; then
         fail "$rel includes another stage's file by a relative path"
       fi
+      # Another stage's executable headers (its flags, "filter/cli.hpp") are tachi-pipeline's to include.
+      while IFS= read -r header; do
+        [[ ${header%%/*} == "$stage" ]] || fail "$rel includes $header: another stage's executable header"
+      done < <(sed -nE 's/^[[:space:]]*#[[:space:]]*include[[:space:]]*"((sim|filter|sensor|viewer|launcher)\/[^"]*)".*/\1/p' "$file")
     done < <(find "$src/$stage" -name '*.cpp' -o -name '*.hpp' -o -name '*.h' | sort)
   done
   for pair in "${allowed_includes[@]}"; do
@@ -45,7 +51,7 @@ includes)
   done
   ;;
 mains)
-  for stage in "${stages[@]}"; do
+  for stage in "${stages[@]}" pipeline; do
     while IFS= read -r file; do
       rel=${file#"$src"/}
       lines=$(wc -l < "$file")

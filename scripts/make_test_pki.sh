@@ -7,6 +7,8 @@
 # Nodes and their topics are the table below; `tachi-<node> --secure DIR` picks <node> by default.
 # "mouse" is tachi-viewer --mouse: a viewer that may also publish strokes (the blade of seed 001);
 # "monitor" reads everything and publishes only its own status (tachi status/echo, tests).
+# "pipeline" is `tachi run --in-process`: every node in one process, the process the security boundary
+# (as a ROS 2 enclave); it may do what sensor, voice, filter, sim and viewer may.
 # The keys are unencrypted and every identity's key sits in DIR: this is a test PKI. On real hosts,
 # copy each host only its own <node>.key.pem (docs/reliability.md).
 # Usage: make_test_pki.sh DIR [--days N]
@@ -47,7 +49,10 @@ declare -A reads=(
   [mouse]="tachi/cloth/topology tachi/cloth/topology_delta tachi/cloth/state tachi/cloth/cut tachi/scene/object tachi/hand/stroke tachi/node/status"
   [monitor]="*"
 )
-nodes=(sensor voice filter sim viewer mouse monitor)
+union() { tr ' ' '\n' <<<"$*" | sed '/^$/d' | sort -u | tr '\n' ' '; }
+publishes[pipeline]=$(union "${publishes[sensor]} ${publishes[voice]} ${publishes[filter]} ${publishes[sim]}")
+reads[pipeline]=$(union "${reads[filter]} ${reads[sim]} ${reads[viewer]}")
+nodes=(sensor voice filter sim viewer mouse monitor pipeline)
 
 # A distinct organisation per PKI: two PKIs made by this script never trust each other.
 org="tachi test PKI $(openssl rand -hex 4)"

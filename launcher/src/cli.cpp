@@ -40,6 +40,9 @@ int parse_command(int argc, char** argv, Command& c) {
       ->check(CLI::ExistingDirectory);
   run->add_option("--out", f.out, "Output folder (summary.json, cloth.obj, plots, logs); default out/run");
   run->add_flag("--headless,!--window", f.headless, "Viewer without a window (default when DISPLAY is unset)");
+  run->add_flag("--in-process", f.in_process,
+                "The nodes in one process (tachi-pipeline), each on its own thread and participant, as ROS 2 composes "
+                "components; same nodes, same bus, no process isolation");
   run->add_option("--nodes", f.nodes, "Start only these nodes, e.g. sensor,filter (the other host runs sim,viewer)");
   run->add_option("--settle", f.settle_s, "With a recording: end this many seconds after the last hand sample")
       ->check(CLI::Range(0.1, 60.0));

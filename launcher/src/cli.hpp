@@ -15,7 +15,7 @@ namespace tachi::launcher {
 /// `tachi run`'s flags, and which of them were given (they override the config file; the others do not).
 struct RunFlags {
   std::string config_file, recording, rate, gate, voice_wav, voice_device, blade, out, nodes, dds_config, secure, run_id;
-  bool live = false, headless = false, print_config = false, mouse = false, record = false, foxglove = false;
+  bool live = false, headless = false, print_config = false, mouse = false, record = false, foxglove = false, in_process = false;
   int grid = 0, lossy = 0;
   unsigned domain = 0;
   double settle_s = 0;

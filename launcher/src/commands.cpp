@@ -53,6 +53,7 @@ json effective_config(const RunFlags& f) {
   if (given("--nodes")) config["nodes"] = f.nodes;
   if (given("--settle")) config["settle_s"] = f.settle_s;
   if (given("--mouse")) config["mouse"] = f.mouse;
+  if (given("--in-process")) config["in_process"] = f.in_process;
   for (const auto& s : f.sets) merge_into(config, parse_set(s));
   return config;
 }

@@ -14,7 +14,7 @@ using nlohmann::json;
 
 const std::set<std::string> kTopKeys{"recording", "live",   "rate",       "gate",     "voice_wav", "voice_device",
                                      "blade",     "grid",   "domain",     "dds_config", "out",     "headless",
-                                     "settle_s",  "nodes",  "secure", "mouse", "video", "lossy"};
+                                     "settle_s",  "nodes",  "secure", "mouse", "video", "lossy", "in_process"};
 
 std::invalid_argument bad(const std::string& key, const std::string& why) {
   return std::invalid_argument("config key \"" + key + "\": " + why);
@@ -107,6 +107,7 @@ RunConfig from_json(const json& config) {
   c.out = get<std::string>(config, "out", c.out);
   if (c.out.empty()) throw bad("out", "must name a folder");
   c.headless = get<bool>(config, "headless", c.headless);
+  c.in_process = get<bool>(config, "in_process", false);
   c.mouse = get<bool>(config, "mouse", false);
   if (c.mouse && (!c.recording.empty() || live)) throw bad("mouse", "the mouse blade replaces the camera: no recording or live");
   if (c.mouse && c.headless) throw bad("mouse", "the mouse blade needs the viewer's window (a DISPLAY, not headless)");
@@ -150,7 +151,7 @@ json to_json(const RunConfig& c) {
             {"domain", c.domain},       {"dds_config", c.dds_config}, {"secure", c.secure},   {"out", c.out},
             {"headless", c.headless},
             {"settle_s", c.settle_s},   {"nodes", nodes},             {"mouse", c.mouse},     {"video", c.video},
-            {"lossy", c.lossy_permille}};
+            {"lossy", c.lossy_permille}, {"in_process", c.in_process}};
   for (const auto& [node, options] : c.node_options.items()) j[node] = options;
   return j;
 }
@@ -218,6 +219,10 @@ std::vector<ChildSpec> plan(const RunConfig& c) {
   if (!c.secure.empty()) {  // each node uses its own identity (its name) from the folder
     bus.push_back("--secure");
     bus.push_back(c.secure);
+    // In one process Cyclone grants every participant of a domain the first one's permissions: the
+    // composed nodes share one identity, whose grant is their union (the process is the security
+    // boundary, as a ROS 2 enclave is).
+    if (c.in_process) bus.insert(bus.end(), {"--identity", kInProcessIdentity});
   }
   const bool recording = !c.recording.empty();
   std::vector<ChildSpec> children;
@@ -276,6 +281,27 @@ std::vector<ChildSpec> plan(const RunConfig& c) {
     children.push_back(std::move(child));
   }
   return children;
+}
+
+ChildSpec composed(const std::vector<ChildSpec>& nodes) {
+  ChildSpec pipeline{"pipeline", "tachi-pipeline", {}, false};
+  for (const auto& node : nodes) {
+    pipeline.args.push_back("--");
+    pipeline.args.push_back(node.program);
+    for (const auto& arg : node.args) {
+      // "--" separates the stages on tachi-pipeline's command line
+      if (arg == "--") throw std::invalid_argument(node.node + ": an argument \"--\" cannot pass to tachi-pipeline (in_process)");
+      pipeline.args.push_back(arg);
+    }
+    pipeline.finite = pipeline.finite || node.finite;
+  }
+  return pipeline;
+}
+
+std::vector<ChildSpec> children_of(const RunConfig& config) {
+  auto nodes = plan(config);
+  if (!config.in_process) return nodes;
+  return {composed(nodes)};
 }
 
 }  // namespace tachi::launcher

@@ -223,7 +223,11 @@ std::optional<PreflightError> check_out_folder(const RunConfig& config, std::uin
 }
 
 std::optional<PreflightError> check_node_flags(const RunConfig& config, const fs::path& bin_dir) {
-  for (const auto& spec : plan(config)) {
+  // Each node's flags by its own executable (errors name the node's setting), then, in_process, the
+  // composition's command line as tachi-pipeline reads it.
+  auto specs = plan(config);
+  if (config.in_process) specs.push_back(composed(specs));
+  for (const auto& spec : specs) {
     const fs::path program = bin_dir / spec.program;
     if (::access(program.c_str(), X_OK) != 0)
       return PreflightError{spec.program + " not found next to tachi (" + program.string() + ")", kRunFailure};

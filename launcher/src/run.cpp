@@ -11,6 +11,7 @@
 #include <fcntl.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstring>
@@ -214,7 +215,7 @@ int run(const RunConfig& requested, const RunPaths& paths) {
   StatusBoard board;
 
   std::vector<Supervised> children;
-  for (auto& spec : plan(config)) {
+  for (auto& spec : children_of(config)) {
     const fs::path program = paths.bin_dir / spec.program;
     const fs::path log = out / (spec.node + ".log");
     children.push_back({std::make_unique<Child>(std::move(spec), program, log), RestartPolicy{}, {}, false, 0, {}});
@@ -275,7 +276,8 @@ int run(const RunConfig& requested, const RunPaths& paths) {
           c.done = true;
           spdlog::info("{} finished", spec.program);
           if (spec.node == "sensor") sensor_done_at = now;
-          if (spec.node == "viewer" && !recording) viewer_closed = true;
+          // Live, a composed pipeline ends by itself only when its viewer's window closed.
+          if ((spec.node == "viewer" || spec.node == "pipeline") && !recording) viewer_closed = true;
           break;
         case ExitMeaning::DiskFull:
           // The node logged "<file>: no space left on device" itself: that line once, no restart.
@@ -325,8 +327,9 @@ int run(const RunConfig& requested, const RunPaths& paths) {
     // has replayed its journal). From the death to that report, backoff included.
     for (auto& c : children) {
       if (!c.died_at || c.restart_at || !c.child->running()) continue;
-      const auto it = board.nodes().find(c.child->spec().program);
-      if (it == board.nodes().end() || it->second.pid != static_cast<std::uint32_t>(c.child->pid())) continue;
+      // Its heartbeat (any node's, for tachi-pipeline's composed nodes) comes from the new process.
+      const auto pid = static_cast<std::uint32_t>(c.child->pid());
+      if (std::none_of(board.nodes().begin(), board.nodes().end(), [&](const auto& n) { return n.second.pid == pid; })) continue;
       const double ms = std::chrono::duration<double, std::milli>(now - *c.died_at).count();
       recoveries.push_back({{"node", c.child->spec().node}, {"restart", c.restarts}, {"recovery_ms", std::round(ms)}});
       spdlog::info("{} recovered {:.0f} ms after it died", c.child->spec().program, ms);

@@ -165,3 +165,51 @@ TEST(RunConfig, VideoByDefaultAndTheMouseBladeInsteadOfTheCamera) {
   j["video"] = "run.mov";
   EXPECT_THROW((void)from_json(j), std::invalid_argument);
 }
+
+TEST(RunConfig, InProcessStartsOnePipelineWithEachNodesOwnCommandLine) {
+  json j = default_config_json(false);
+  j["recording"] = "/rec";
+  j["domain"] = 7;
+  const auto nodes = plan(from_json(j));
+  j["in_process"] = true;
+  const auto children = children_of(from_json(j));
+  ASSERT_EQ(children.size(), 1u);
+  const auto& pipeline = children.front();
+  EXPECT_EQ(pipeline.program, "tachi-pipeline");
+  EXPECT_TRUE(pipeline.finite) << "a recording's pipeline ends by itself";
+  // "-- tachi-sim ARGS... -- tachi-viewer ARGS..." in the multi-process run's start order and arguments.
+  std::vector<std::string> expected;
+  for (const auto& node : nodes) {
+    expected.push_back("--");
+    expected.push_back(node.program);
+    expected.insert(expected.end(), node.args.begin(), node.args.end());
+  }
+  EXPECT_EQ(pipeline.args, expected);
+
+  j["recording"] = "";
+  j["live"] = true;
+  j["headless"] = true;
+  EXPECT_FALSE(children_of(from_json(j)).front().finite) << "live and headless: runs until stopped";
+  j["headless"] = false;
+  EXPECT_TRUE(children_of(from_json(j)).front().finite) << "its viewer's window closing ends it";
+}
+
+TEST(RunConfig, InProcessAndSecureGiveEveryNodeThePipelineIdentity) {
+  json j = default_config_json(false);
+  j["recording"] = "/rec";
+  j["secure"] = "/pki";
+  j["in_process"] = true;
+  for (const auto& node : plan(from_json(j))) EXPECT_TRUE(has_pair(node.args, "--identity", "pipeline")) << node.node;
+  j["in_process"] = false;
+  for (const auto& node : plan(from_json(j))) EXPECT_FALSE(has_pair(node.args, "--identity", "pipeline")) << node.node;
+}
+
+TEST(RunConfig, InProcessRefusesAnArgumentThatWouldSplitItsCommandLine) {
+  json j = default_config_json(false);
+  j["recording"] = "/rec";
+  j["in_process"] = true;
+  j["sim"]["material"] = "--";
+  EXPECT_THROW((void)children_of(from_json(j)), std::invalid_argument);
+  j["in_process"] = "yes";
+  EXPECT_THROW((void)from_json(j), std::invalid_argument) << "in_process is a boolean";
+}

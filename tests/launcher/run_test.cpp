@@ -121,6 +121,33 @@ TEST(TachiRun, PlaysARecordingAndTheCutFollowsTheStroke) {
   EXPECT_GE(count_lines(out / "trace" / "hands.csv"), depth_frames("straight_cut") * 9 / 10);
 }
 
+// `tachi run --in-process`: the same nodes in one process (tachi-pipeline), each on its own thread and
+// participant: the run is the multi-process run's, cell for cell (one beside it, on another domain).
+TEST(TachiRun, InProcessCutsAsTheProcessesDo) {
+  tachi::test::ScratchDir composed("tachi_run_in_process"), processes("tachi_run_processes");
+  ChildProcess composed_run(run_args("straight_cut", 135, composed.path(), {"--in-process"}));
+  ChildProcess processes_run(run_args("straight_cut", 136, processes.path()));
+  ASSERT_EQ(composed_run.wait(120s), 0) << composed_run.err() << read_text(composed / "pipeline.log");
+  ASSERT_EQ(processes_run.wait(120s), 0) << processes_run.err();
+  const auto s = read_json(composed / "summary.json"), sp = read_json(processes / "summary.json");
+  for (const char* key : {"frames", "tracked_frames", "strokes", "cuts", "pieces", "fallen_pieces", "cut_length_m", "restarts",
+                          "e2e_p50_ms", "e2e_p99_ms", "sensor_p50_ms", "filter_p50_ms", "sim_p50_ms", "viewer_p50_ms"})
+    EXPECT_TRUE(s.contains(key) && !s[key].is_null()) << key << ": " << s.dump();
+  EXPECT_EQ(s["frames"], depth_frames("straight_cut"));
+  EXPECT_EQ(s["restarts"], 0);
+  for (const char* key : {"tracked_frames", "hand_samples", "strokes", "cuts", "pieces", "cut_line"})
+    EXPECT_EQ(s[key], sp[key]) << key;
+  EXPECT_EQ(read_json(composed / "config.json")["in_process"], true);
+  // One process, its log naming each node's lines; the outputs are the multi-process run's.
+  EXPECT_FALSE(fs::exists(composed / "sim.log"));
+  const std::string log = read_text(composed / "pipeline.log");
+  for (const char* node : {"[tachi-pipeline:sensor]", "[tachi-pipeline:sim]", "[tachi-pipeline:viewer]", "[tachi-pipeline:filter]"})
+    EXPECT_NE(log.find(node), std::string::npos) << node << " in " << log;
+  for (const char* file : {"cloth.obj", "pattern.svg", "final.png", "video.mp4", "latency.png", "trajectory.png"})
+    EXPECT_TRUE(fs::exists(composed / file)) << file;
+  EXPECT_GT(fs::file_size(composed / "video.mp4"), 10'000u);
+}
+
 TEST(TachiRun, TwoRunsOnDifferentDomainsDoNotSeeEachOther) {
   tachi::test::ScratchDir a("tachi_run_a"), b("tachi_run_b");
   ChildProcess run_a(run_args("straight_cut", 121, a.path()));
@@ -201,6 +228,29 @@ TEST(TachiRun, SigintStopsTheRunCleanlyWithOutputsWritten) {
   EXPECT_GT(s["frames"].get<int>(), 0);
   EXPECT_LT(s["frames"].get<int>(), static_cast<int>(depth_frames("straight_cut")));
   for (const char* file : {"cloth.obj", "latency.png", "trajectory.png", "sim.log"}) EXPECT_TRUE(fs::exists(out / file)) << file;
+}
+
+TEST(TachiRun, SigintStopsAnInProcessRunCleanlyWithOutputsWritten) {
+  tachi::test::ScratchDir out("tachi_run_sigint_in_process");
+  tachi::bus::read_every_run();
+  tachi::bus::Participant dds{137};
+  tachi::bus::Reader<tachi_msg_RawHandSample> hands{dds, tachi::bus::topics::raw_hand};
+  ChildProcess run(run_args("straight_cut", 137, out.path(), {"--rate", "0.5", "--in-process"}));
+  ASSERT_EQ(tachi::test::wait_for_matching<tachi_msg_RawHandSample>(hands, 30, any_sample, 60s), 30) << run.err();
+  // The nodes run in one process: no tachi-sim, tachi-filter, ... of their own.
+  EXPECT_EQ(find_processes({"tachi-pipeline", "--domain 137 "}).size(), 1u);
+  for (const char* program : {"tachi-sim", "tachi-filter", "tachi-sensor", "tachi-viewer"})
+    for (const pid_t pid : find_processes({"--domain 137 "}))
+      EXPECT_NE(read_text(fs::path("/proc") / std::to_string(pid) / "comm"), std::string(program) + "\n");
+  run.signal(SIGINT);
+  EXPECT_EQ(run.wait(20s), 0) << run.err();
+  EXPECT_TRUE(find_processes({"--domain 137 "}).empty()) << "the pipeline does not outlive the launcher";
+  const auto s = read_json(out / "summary.json");
+  ASSERT_TRUE(s.is_object());
+  EXPECT_EQ(s["ended"], "stopped by signal");
+  EXPECT_GT(s["frames"].get<int>(), 0);
+  EXPECT_LT(s["frames"].get<int>(), static_cast<int>(depth_frames("straight_cut")));
+  for (const char* file : {"cloth.obj", "latency.png", "trajectory.png", "pipeline.log"}) EXPECT_TRUE(fs::exists(out / file)) << file;
 }
 
 TEST(TachiBusTools, TopicsEchoAndStatusShowARunningPipeline) {
@@ -332,4 +382,19 @@ TEST(TachiRun, SecureRunAuthenticatesEveryNodeAndTheLauncher) {
   EXPECT_EQ(s["cuts"], 1);
   EXPECT_GT(s["cut_particles"].get<int>(), 5);
   EXPECT_NE(read_text(out / "run" / "sim.log").find("--secure"), std::string::npos);
+}
+
+// In one process each node keeps its own participant, all with the identity "pipeline" (Cyclone gives
+// every participant of a domain in a process the first one's permissions; the grant is the nodes' union):
+// the secure in-process run authenticates and cuts as the multi-process run does.
+TEST(TachiRun, SecureInProcessRunAuthenticatesEveryNode) {
+  tachi::test::ScratchDir out("tachi_run_secure_in_process");
+  const auto r = tachi::test::run(
+      run_args("straight_cut", 138, out.path() / "run", {"--secure", tachi::test::test_pki("ours"), "--in-process"}), 120s);
+  ASSERT_EQ(r.exit_code, 0) << r.err << read_text(out / "run" / "pipeline.log");
+  const auto s = read_json(out / "run" / "summary.json");
+  EXPECT_EQ(s["frames"], depth_frames("straight_cut"));
+  EXPECT_EQ(s["cuts"], 1);
+  EXPECT_GT(s["cut_particles"].get<int>(), 5);
+  EXPECT_NE(read_text(out / "run" / "pipeline.log").find("--identity pipeline"), std::string::npos);
 }

@@ -6,7 +6,8 @@
 // with the undisturbed run's cut: the same strokes and pieces, the cut line from the same entry to the
 // same exit (within a cell: two live runs differ by a frame in where the gate opens on the swaying
 // cloth). The kill waits for the hand to be cutting, and the test checks that cutting went on after
-// it. Domain ids 195-199 belong to this file.
+// it. The same for `tachi run --in-process`, whose one process (tachi-pipeline, every node in it) is
+// killed mid-stroke. Domain ids 195-199 and 221 belong to this file.
 #include "paths.hpp"
 #include "bus_wait.hpp"
 #include "process.hpp"
@@ -56,20 +57,25 @@ std::optional<pid_t> started_pid(ChildProcess& launcher, const std::string& prog
   return std::nullopt;
 }
 
+// victim: a node of a multi-process run ("sensor", ...), "pipeline" for an in-process run's one process,
+// or none.
 RunResult run(unsigned domain, const std::string& victim) {
   tachi::test::ScratchDir out("tachi_kill_" + (victim.empty() ? std::string("none") : victim));
+  const bool in_process = victim == "pipeline";
   // The test watches the run's strokes (in the run's partition; read_every_run() was called) to kill
   // on an event, not after a guess.
   tachi::bus::Participant dds{domain};
   tachi::bus::Reader<tachi_msg_StrokeSample> strokes{dds, tachi::bus::topics::stroke};
-  ChildProcess launcher({kBin + "/tachi", "run", "--recording", kRecordings + "/straight_cut", "--grid", "32", "--domain",
-                         std::to_string(domain), "--out", out.path().string(), "--headless", "--settle", "1.5",
-                         // The grid cut lists the cells it cut (summary cut_line), which the comparison reads.
-                         "--set", "sim.cut-mode=grid"});
+  std::vector<std::string> args{kBin + "/tachi", "run", "--recording", kRecordings + "/straight_cut", "--grid", "32", "--domain",
+                                std::to_string(domain), "--out", out.path().string(), "--headless", "--settle", "1.5",
+                                // The grid cut lists the cells it cut (summary cut_line), which the comparison reads.
+                                "--set", "sim.cut-mode=grid"};
+  if (in_process) args.push_back("--in-process");
+  ChildProcess launcher(args);
   RunResult r;
   if (!victim.empty()) {
     // The sensor starts last; the hand crosses the cloth between ~1.5 s and ~3.5 s of the recording.
-    const auto sensor = started_pid(launcher, "tachi-sensor", 20s);
+    const auto sensor = started_pid(launcher, in_process ? "tachi-pipeline" : "tachi-sensor", 20s);
     const auto pid = victim == "sensor" ? sensor : started_pid(launcher, "tachi-" + victim, 1s);
     EXPECT_TRUE(sensor && pid) << launcher.err();
     if (pid) {
@@ -91,7 +97,7 @@ RunResult run(unsigned domain, const std::string& victim) {
   std::ifstream in(out / "summary.json");
   r.summary = in ? nlohmann::json::parse(in, nullptr, false) : nlohmann::json();
   if (!victim.empty())
-    for (const char* log : {"sensor.log", "filter.log", "sim.log"}) {
+    for (const char* log : {"sensor.log", "filter.log", "sim.log", "pipeline.log"}) {
       std::ifstream l(out / log);
       r.log += std::string("\n--- ") + log + "\n" + std::string(std::istreambuf_iterator<char>(l), {});
     }
@@ -105,7 +111,7 @@ TEST(NoLostCutsUnderTheLauncher, EachNodeKilledMidStrokeInTurnLeavesTheUndisturb
   // time (the five took ~55 s one after another), and each waits on its own events. Not all five at
   // once: on a loaded machine five pipelines starved each other (a restarted sensor's run once cut nothing).
   tachi::bus::read_every_run();
-  const std::vector<std::string> victims{"sensor", "filter", "sim", "viewer"};
+  const std::vector<std::string> victims{"sensor", "filter", "sim", "viewer", "pipeline"};
   auto undisturbed_run = std::async(std::launch::async, run, 195u, std::string());
   std::vector<std::future<RunResult>> killed_runs;
   for (unsigned i = 0; i < 2; ++i) killed_runs.push_back(std::async(std::launch::async, run, 196u + i, victims[i]));
@@ -113,7 +119,8 @@ TEST(NoLostCutsUnderTheLauncher, EachNodeKilledMidStrokeInTurnLeavesTheUndisturb
   std::vector<RunResult> killed_results;
   for (auto& f : killed_runs) killed_results.push_back(f.get());
   killed_runs.clear();
-  for (unsigned i = 2; i < victims.size(); ++i) killed_runs.push_back(std::async(std::launch::async, run, 196u + i, victims[i]));
+  for (unsigned i = 2; i < victims.size(); ++i)
+    killed_runs.push_back(std::async(std::launch::async, run, victims[i] == "pipeline" ? 221u : 196u + i, victims[i]));
   for (auto& f : killed_runs) killed_results.push_back(f.get());
 
   ASSERT_EQ(undisturbed.exit_code, 0) << undisturbed.log;
@@ -127,7 +134,7 @@ TEST(NoLostCutsUnderTheLauncher, EachNodeKilledMidStrokeInTurnLeavesTheUndisturb
   for (std::size_t i = 0; i < victims.size(); ++i) {
     const std::string& victim = victims[i];
     const RunResult& killed = killed_results[i];
-    SCOPED_TRACE("tachi-" + victim + " killed");
+    SCOPED_TRACE("tachi-" + victim + " killed");  // tachi-pipeline: every node of an in-process run at once
     ASSERT_EQ(killed.exit_code, 0) << killed.log;
     ASSERT_TRUE(killed.summary.is_object()) << killed.log;
     // The kill landed inside the stroke: the hand was cutting before it and went on cutting after it.

@@ -34,6 +34,7 @@ struct RunConfig {
   std::string secure;             ///< DDS Security folder (scripts/make_test_pki.sh) for every node; empty: none
   std::string out = "out/run";
   bool headless = true;
+  bool in_process = false;        ///< one tachi-pipeline process runs the nodes (threads), not one process each
   bool mouse = false;             ///< seed 001's blade: the viewer's --mouse cuts, no camera (sensor, filter)
   std::string video = "video.mp4";///< the viewer's render of the run, in --out (.mp4 or .avi); empty: none
   double settle_s = 2.0;          ///< a recording run ends this long after the last hand sample
@@ -66,11 +67,19 @@ struct ChildSpec {
   bool waits_for_sigusr1 = false;
 };
 
+/// With `secure` and `in_process`: the identity every composed node uses (scripts/make_test_pki.sh makes it).
+inline constexpr const char* kInProcessIdentity = "pipeline";
+
 /// Sim export folder inside the run's output folder (the launcher collects from it).
 inline constexpr const char* kSimExportDir = "sim";
 
-/// The children of a run, in start order.
+/// The children of a run, in start order: one process a node.
 [[nodiscard]] std::vector<ChildSpec> plan(const RunConfig& config);
+/// `in_process`: the one child, tachi-pipeline, running plan()'s nodes with the same arguments
+/// (`-- tachi-sim ARGS... -- tachi-viewer ARGS...`); it ends by itself when one of them would.
+[[nodiscard]] ChildSpec composed(const std::vector<ChildSpec>& nodes);
+/// What `tachi run` starts: plan(), or with `in_process` its composition.
+[[nodiscard]] std::vector<ChildSpec> children_of(const RunConfig& config);
 /// `--key value` pairs for one node's pass-through options.
 [[nodiscard]] std::vector<std::string> pass_through_args(const nlohmann::json& options);
 

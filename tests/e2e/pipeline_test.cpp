@@ -1,6 +1,8 @@
 // The whole pipeline as separate processes on one DDS domain: tachi-sensor plays a bundled
 // recording, tachi-filter smooths and gates it, tachi-sim cuts the cloth, tachi-viewer draws it
-// headless. Checks what comes out: the cut in the simulator's summary and the viewer's image.
+// headless. Checks what comes out: the cut in the simulator's summary and the viewer's image. The
+// same four command lines composed in one process (tachi-pipeline, `tachi run --in-process`) must cut
+// the same way.
 #include "paths.hpp"
 #include "process.hpp"
 #include "scratch_dir.hpp"
@@ -28,15 +30,27 @@ struct Pipeline {
   std::string logs;
 };
 
-void run_pipeline(Pipeline& p, const std::string& recording, unsigned domain, const std::string& rate) {
+// The stages' command lines, consumers first (program name, then its arguments).
+std::vector<std::vector<std::string>> stages(const Pipeline& p, const std::string& recording, unsigned domain) {
   const std::string d = std::to_string(domain);
-  ChildProcess sim({kBin + "/tachi-sim", "--grid", "32", "--pin", "top-edge", "--domain", d, "--exit-when-idle", "2",
-                    "--export", p.out.string()});
-  ChildProcess viewer({kBin + "/tachi-viewer", "--headless", "--domain", d, "--snapshot", (p.out / "final.png").string(),
-                       "--fps", "10", "--exit-when-idle", "3"});
-  ChildProcess filter({kBin + "/tachi-filter", "--domain", d, "--gate", "threshold"});
-  ChildProcess sensor({kBin + "/tachi-sensor", "--recording", kRecordings + "/" + recording, "--rate", rate,
-                       "--domain", d, "--wait-readers", "1"});
+  return {{"tachi-sim", "--grid", "32", "--pin", "top-edge", "--domain", d, "--exit-when-idle", "2", "--export", p.out.string()},
+          {"tachi-viewer", "--headless", "--domain", d, "--snapshot", (p.out / "final.png").string(), "--fps", "10",
+           "--exit-when-idle", "3"},
+          {"tachi-filter", "--domain", d, "--gate", "threshold"},
+          {"tachi-sensor", "--recording", kRecordings + "/" + recording, "--rate", "1", "--domain", d, "--wait-readers", "1"}};
+}
+
+std::vector<std::string> process(std::vector<std::string> stage) {
+  stage.front() = kBin + "/" + stage.front();
+  return stage;
+}
+
+void run_pipeline(Pipeline& p, const std::string& recording, unsigned domain) {
+  const auto s = stages(p, recording, domain);
+  ChildProcess sim(process(s[0]));
+  ChildProcess viewer(process(s[1]));
+  ChildProcess filter(process(s[2]));
+  ChildProcess sensor(process(s[3]));
   p.sensor_exit = sensor.wait(120s);
   p.sim_exit = sim.wait(60s);
   p.viewer_exit = viewer.wait(30s);
@@ -46,11 +60,24 @@ void run_pipeline(Pipeline& p, const std::string& recording, unsigned domain, co
   std::ifstream in(p.out / "summary.json");
   if (in) p.summary = nlohmann::json::parse(in, nullptr, false);
 }
-}  // namespace
 
-TEST(Pipeline, AStraightHandStrokeCutsTheClothAlongItsPath) {
-  Pipeline p;
-  run_pipeline(p, "straight_cut", 90, "1");
+// tachi-pipeline -- tachi-sim ... -- tachi-viewer ... : it ends by itself once sensor, sim and viewer
+// are done, and stops the filter.
+void run_in_one_process(Pipeline& p, const std::string& recording, unsigned domain) {
+  std::vector<std::string> argv{kBin + "/tachi-pipeline"};
+  for (const auto& stage : stages(p, recording, domain)) {
+    argv.push_back("--");
+    argv.insert(argv.end(), stage.begin(), stage.end());
+  }
+  ChildProcess pipeline(argv);
+  const int exit_code = pipeline.wait(120s);
+  p.sensor_exit = p.filter_exit = p.sim_exit = p.viewer_exit = exit_code;
+  p.logs = "pipeline: " + pipeline.err();
+  std::ifstream in(p.out / "summary.json");
+  if (in) p.summary = nlohmann::json::parse(in, nullptr, false);
+}
+
+void expect_the_cut_along_the_stroke(const Pipeline& p) {
   EXPECT_EQ(p.sensor_exit, 0) << p.logs;
   EXPECT_EQ(p.filter_exit, 0) << p.logs;
   EXPECT_EQ(p.sim_exit, 0) << p.logs;
@@ -75,4 +102,18 @@ TEST(Pipeline, AStraightHandStrokeCutsTheClothAlongItsPath) {
   EXPECT_GE(min_v, 12) << p.summary["cut_line"];
   EXPECT_LE(max_v, 19) << p.summary["cut_line"];
   EXPECT_TRUE(std::filesystem::exists(p.out / "final.png")) << p.logs;
+}
+}  // namespace
+
+TEST(Pipeline, AStraightHandStrokeCutsTheClothAlongItsPath) {
+  Pipeline p;
+  run_pipeline(p, "straight_cut", 90);
+  expect_the_cut_along_the_stroke(p);
+}
+
+TEST(Pipeline, InOneProcessTheStrokeCutsTheClothAlongItsPath) {
+  Pipeline p;
+  run_in_one_process(p, "straight_cut", 91);
+  expect_the_cut_along_the_stroke(p);
+  EXPECT_NE(p.logs.find("[tachi-pipeline:filter] [info] stopping"), std::string::npos) << "the filter was stopped: " << p.logs;
 }

@@ -10,11 +10,17 @@
 #include <mutex>
 #include <atomic>
 #include <cstdlib>
+#include <cstring>
+#include <string_view>
+#include <vector>
 #include <random>
 #include <thread>
 
 namespace tachi::bus {
 namespace {
+
+// USER_DATA of an observer's reader (ReaderKind::Observer).
+constexpr std::string_view kObserverMark = "tachi.observer";
 
 // lossy_config_xml's retransmission timing (measured: docs/reliability.md, "Lossy links").
 constexpr const char* kLossyLinkTimingXml =
@@ -231,8 +237,9 @@ dds_entity_t create_writer(const Participant& participant, dds_entity_t topic, Q
 }
 
 dds_entity_t create_reader(const Participant& participant, dds_entity_t topic, QosProfile profile,
-                           const char* name, ReaderQos change) {
+                           const char* name, ReaderQos change, ReaderKind kind) {
   const auto qos = make_qos(profile);
+  if (kind == ReaderKind::Observer) dds_qset_userdata(qos.get(), kObserverMark.data(), kObserverMark.size());
   if (change == ReaderQos::KeepAll) dds_qset_history(qos.get(), DDS_HISTORY_KEEP_ALL, DDS_LENGTH_UNLIMITED);
   if (change == ReaderQos::Volatile) dds_qset_durability(qos.get(), DDS_DURABILITY_VOLATILE);
   if (g_read_every_run) dds_qset_partition1(qos.get(), "*");
@@ -243,10 +250,25 @@ dds_entity_t create_reader(const Participant& participant, dds_entity_t topic, Q
 
 void delete_entity(dds_entity_t entity) noexcept { dds_delete(entity); }
 
-std::uint32_t matched_readers(dds_entity_t writer) {
-  dds_publication_matched_status_t status{};
-  check(dds_get_publication_matched_status(writer, &status), "dds_get_publication_matched_status");
-  return status.current_count;
+std::uint32_t matched_consumers(dds_entity_t writer) {
+  std::vector<dds_instance_handle_t> readers(8);
+  dds_return_t n = 0;
+  while ((n = check(dds_get_matched_subscriptions(writer, readers.data(), readers.size()), "dds_get_matched_subscriptions")) >
+         static_cast<dds_return_t>(readers.size()))
+    readers.resize(static_cast<std::size_t>(n));
+  std::uint32_t consumers = 0;
+  for (dds_return_t i = 0; i < n; ++i) {
+    dds_builtintopic_endpoint_t* reader = dds_get_matched_subscription_data(writer, readers[static_cast<std::size_t>(i)]);
+    if (reader == nullptr) continue;  // unmatched meanwhile
+    void* mark = nullptr;
+    std::size_t size = 0;
+    const bool observer = reader->qos != nullptr && dds_qget_userdata(reader->qos, &mark, &size) && size == kObserverMark.size() &&
+                          std::memcmp(mark, kObserverMark.data(), size) == 0;
+    dds_free(mark);
+    dds_builtintopic_free_endpoint(reader);
+    if (!observer) ++consumers;
+  }
+  return consumers;
 }
 
 std::uint32_t matched_writers(dds_entity_t reader) {

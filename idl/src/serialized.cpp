@@ -37,7 +37,8 @@ SerializedReader::SerializedReader(const Participant& participant, const TopicIn
     : topic_(topic),
       topic_entity_(detail::create_topic(participant, topic.descriptor, topic.name)),
       reader_(detail::create_reader(participant, topic_entity_, topic.profile, topic.name,
-                                    role == ReaderRole::Recorder ? detail::ReaderQos::KeepAll : detail::ReaderQos::Volatile)) {}
+                                    role == ReaderRole::Recorder ? detail::ReaderQos::KeepAll : detail::ReaderQos::Volatile,
+                                    ReaderKind::Observer)) {}
 
 SerializedReader::~SerializedReader() { detail::delete_entity(reader_); }
 
@@ -82,7 +83,7 @@ SerializedWriter::SerializedWriter(const Participant& participant, const TopicIn
 SerializedWriter::~SerializedWriter() { detail::delete_entity(writer_); }
 
 bool SerializedWriter::wait_for_readers(std::uint32_t n, std::chrono::nanoseconds timeout) const {
-  return detail::wait_until_count([this] { return detail::matched_readers(writer_); }, n, timeout);
+  return detail::wait_until_count([this] { return detail::matched_consumers(writer_); }, n, timeout);
 }
 
 void deserialize_into(const dds_topic_descriptor_t& descriptor, std::span<const std::byte> cdr, void* sample,

@@ -106,7 +106,7 @@ json to_json(const tachi_msg_NodeStatus& m, bool) {
 namespace {
 template <class T>
 std::uint64_t echo_topic(const bus::Participant& participant, const bus::TopicSpec<T>& topic, const EchoOptions& o) {
-  bus::Reader<T> reader{participant, topic};
+  bus::Reader<T> reader{participant, topic, bus::ReaderKind::Observer};
   std::uint64_t printed = 0;
   const auto deadline = std::chrono::steady_clock::now() + o.timeout;
   common::run_until_stopped([&] {
@@ -150,10 +150,10 @@ NodeReport from_msg(const tachi_msg_NodeStatus& msg) {
 }
 
 RunMonitor::RunMonitor(const bus::Participant& participant, const std::filesystem::path& trace_dir)
-    : status_(participant, bus::topics::node_status),
-      hands_(participant, bus::topics::raw_hand),
-      strokes_(participant, bus::topics::stroke),
-      cuts_(participant, bus::topics::cut_event),
+    : status_(participant, bus::topics::node_status, bus::ReaderKind::Observer),
+      hands_(participant, bus::topics::raw_hand, bus::ReaderKind::Observer),
+      strokes_(participant, bus::topics::stroke, bus::ReaderKind::Observer),
+      cuts_(participant, bus::topics::cut_event, bus::ReaderKind::Observer),
       waitset_(participant) {
   waitset_.attach(status_);
   waitset_.attach(hands_);

@@ -215,7 +215,7 @@ int cmd_topics(const common::BusOptions& b, double listen_s, bool verbose) {
 
 int cmd_status(const common::BusOptions& b, double listen_s) {
   bus::Participant dds{b.domain, b.dds_config, {b.secure_dir, b.identity}};
-  bus::Reader<tachi_msg_NodeStatus> reader{dds, bus::topics::node_status};
+  bus::Reader<tachi_msg_NodeStatus> reader{dds, bus::topics::node_status, bus::ReaderKind::Observer};
   StatusBoard board;
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(listen_s);
   // Transient-local: each node's latest heartbeat arrives as soon as it is discovered.

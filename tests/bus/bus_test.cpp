@@ -13,7 +13,7 @@ using namespace std::chrono_literals;
 namespace bus = tachi::bus;
 
 namespace {
-// Domain ids 10-19 belong to this file (docs/testing.md).
+// Domain ids 10-19 belong to this file (docs/testing.md; 16-19 are set in their tests).
 constexpr std::uint32_t kKeyedDomain = 10;
 constexpr std::uint32_t kLargeDomain = 11;
 constexpr std::uint32_t kLateJoinerDomain = 12;
@@ -226,4 +226,22 @@ TEST(Heartbeat, CarriesHostMetricsAndRejectionsByReason) {
   EXPECT_DOUBLE_EQ(metrics["frames"], 13.0);
   EXPECT_DOUBLE_EQ(metrics["rejected.nonfinite"], 3.0);
   EXPECT_DOUBLE_EQ(metrics["rejected.backwards_time"], 1.0);
+}
+
+// An observer (the launcher's trace, the bus tools) is not a consumer: a writer waiting for its readers
+// (tachi-sensor --wait-readers, for the filter) is not let go by an observer that matched first.
+TEST(Bus, AnObserverDoesNotCountAsAWritersReader) {
+  constexpr std::uint32_t kObserverDomain = 19;
+  bus::Participant dds{kObserverDomain};
+  bus::Writer<tachi_msg_RawHandSample> writer{dds, bus::topics::raw_hand};
+  bus::Reader<tachi_msg_RawHandSample> trace{dds, bus::topics::raw_hand, bus::ReaderKind::Observer};
+  ASSERT_TRUE(trace.wait_for_writers(1, 5s)) << "the observer matched the writer";
+  dds_publication_matched_status_t status{};
+  ASSERT_EQ(dds_get_publication_matched_status(writer.handle(), &status), DDS_RETCODE_OK);
+  EXPECT_EQ(status.current_count, 1u) << "DDS matched it";
+  EXPECT_EQ(writer.matched_readers(), 0u);
+  EXPECT_FALSE(writer.wait_for_readers(1, 200ms));
+  bus::Reader<tachi_msg_RawHandSample> filter{dds, bus::topics::raw_hand};
+  EXPECT_TRUE(writer.wait_for_readers(1, 5s));
+  EXPECT_EQ(writer.matched_readers(), 1u);
 }

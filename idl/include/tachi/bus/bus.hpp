@@ -105,6 +105,13 @@ class Participant {
   dds_entity_t participant_;
 };
 
+/// What a reader is to the writers it matches: a stage consuming the topic, or an observer of the run
+/// (the launcher's monitor and trace, the bus tools, a recorder; marked in the reader's USER_DATA, which
+/// discovery carries to remote writers). A writer counting or waiting for its readers counts consumers
+/// only: the launcher's trace, up before any node, must not let a recording's first frames go before the
+/// filter has matched (under a lossy link discovery takes seconds, and those frames were lost).
+enum class ReaderKind { Consumer, Observer };
+
 namespace detail {
 dds_entity_t create_topic(const Participant& participant, const dds_topic_descriptor_t* descriptor, const char* name);
 dds_entity_t create_writer(const Participant& participant, dds_entity_t topic, QosProfile profile, const char* name);
@@ -112,9 +119,10 @@ dds_entity_t create_writer(const Participant& participant, dds_entity_t topic, Q
 /// Volatile asks for no samples written before it joined (a rate meter).
 enum class ReaderQos { Profile, KeepAll, Volatile };
 dds_entity_t create_reader(const Participant& participant, dds_entity_t topic, QosProfile profile, const char* name,
-                           ReaderQos change = ReaderQos::Profile);
+                           ReaderQos change = ReaderQos::Profile, ReaderKind kind = ReaderKind::Consumer);
 void delete_entity(dds_entity_t entity) noexcept;
-std::uint32_t matched_readers(dds_entity_t writer);
+/// The writer's matched readers that are consumers (ReaderKind): observers do not count.
+std::uint32_t matched_consumers(dds_entity_t writer);
 std::uint32_t matched_writers(dds_entity_t reader);
 /// Polls `count()` until it reaches `n` or the timeout passes.
 bool wait_until_count(const std::function<std::uint32_t()>& count, std::uint32_t n, std::chrono::nanoseconds timeout);
@@ -166,11 +174,12 @@ class Writer {
   Writer& operator=(const Writer&) = delete;
 
   void write(const T& sample) { check(dds_write(writer_, &sample), "write on topic " + name_ + ": dds_write"); }
-  std::uint32_t matched_readers() const { return detail::matched_readers(writer_); }
+  /// The matched readers that consume the topic (an observer, such as the launcher's trace, does not count).
+  std::uint32_t matched_readers() const { return detail::matched_consumers(writer_); }
   /// Blocks until every matched reliable reader acknowledged all written samples; false on timeout.
   /// Call before a process exits so its last samples are not lost with it.
   bool wait_for_acks(std::chrono::nanoseconds timeout) const { return detail::wait_for_acks(writer_, timeout); }
-  /// True once at least `n` readers have matched, false after `timeout`.
+  /// True once at least `n` consumers (not observers) have matched, false after `timeout`.
   bool wait_for_readers(std::uint32_t n, std::chrono::nanoseconds timeout) const {
     return detail::wait_until_count([this] { return matched_readers(); }, n, timeout);
   }
@@ -186,10 +195,10 @@ class Writer {
 template <class T>
 class Reader {
  public:
-  Reader(const Participant& participant, const TopicSpec<T>& topic)
+  Reader(const Participant& participant, const TopicSpec<T>& topic, ReaderKind kind = ReaderKind::Consumer)
       : name_(topic.name),
         topic_(detail::create_topic(participant, &Descriptor<T>::value(), topic.name)),
-        reader_(detail::create_reader(participant, topic_, topic.profile, topic.name)) {}
+        reader_(detail::create_reader(participant, topic_, topic.profile, topic.name, detail::ReaderQos::Profile, kind)) {}
   ~Reader() { detail::delete_entity(reader_); }
   Reader(const Reader&) = delete;
   Reader& operator=(const Reader&) = delete;

@@ -213,3 +213,12 @@ TEST(RunConfig, InProcessRefusesAnArgumentThatWouldSplitItsCommandLine) {
   j["in_process"] = "yes";
   EXPECT_THROW((void)from_json(j), std::invalid_argument) << "in_process is a boolean";
 }
+
+TEST(RunConfig, TheClothHangsAboveAFloorUnlessItIsTakenAway) {
+  json j = default_config_json(false);
+  j["recording"] = "/rec";
+  EXPECT_TRUE(has_pair(child(plan(from_json(j)), "sim").args, "--ground", "-1.5")) << "cut-off pieces come to rest";
+  merge_into(j, parse_set("sim.ground=null"));
+  const auto& args = child(plan(from_json(j)), "sim").args;
+  EXPECT_EQ(std::find(args.begin(), args.end(), "--ground"), args.end());
+}

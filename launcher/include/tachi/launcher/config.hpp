@@ -16,6 +16,9 @@ namespace tachi::launcher {
 /// The nodes a run may start, in start order (consumers before producers, so none misses a sample).
 inline const std::vector<std::string> kNodes{"sim", "viewer", "filter", "voice", "sensor"};
 
+/// The floor `tachi run` puts under the cloth by default (`sim.ground`, tachi-sim --ground): metres, world y.
+inline constexpr double kFloorHeightM = -1.5;
+
 /// `lossy`'s bound, bus::kMaxTransmitLossPermille (this library does not link the bus; run.cpp checks
 /// that the two agree).
 inline constexpr int kMaxLossyPermille = 999;
@@ -51,7 +54,7 @@ struct RunConfig {
 [[nodiscard]] nlohmann::json to_json(const RunConfig& config);
 /// Merges `overrides` into `base` key by key (objects recursively: {"sim": {"x": 1}} adds one sim key).
 void merge_into(nlohmann::json& base, const nlohmann::json& overrides);
-/// "sim.material=denim" -> {"sim": {"material": "denim"}}; "true"/"false"/numbers become JSON values.
+/// "sim.material=denim" -> {"sim": {"material": "denim"}}; "true"/"false"/"null"/numbers become JSON values.
 [[nodiscard]] nlohmann::json parse_set(const std::string& assignment);
 
 /// One child process: its node name, program (next to `tachi`) and arguments.

@@ -249,8 +249,10 @@ int run(const RunConfig& requested, const RunPaths& paths) {
   nlohmann::json recoveries = nlohmann::json::array();
   int exit_code = kRunOk;
   std::string ended = "stopped";
-  std::optional<Clock::time_point> finite_done_at, sensor_done_at;
-  const auto sensor_in_run = config.has("sensor");
+  std::optional<Clock::time_point> finite_done_at, upstream_done_at;
+  // The run's most upstream producer: the sensor, or on a host without one (--nodes sim,viewer) the
+  // simulator. Once it finished, nothing more will come to the nodes after it.
+  const std::string upstream = config.has("sensor") ? "sensor" : config.has("sim") ? "sim" : "";
   bool viewer_closed = false;
   while (true) {
     monitor.poll(board, 100ms);
@@ -275,7 +277,7 @@ int run(const RunConfig& requested, const RunPaths& paths) {
         case ExitMeaning::Done:
           c.done = true;
           spdlog::info("{} finished", spec.program);
-          if (spec.node == "sensor") sensor_done_at = now;
+          if (spec.node == upstream) upstream_done_at = now;
           // Live, a composed pipeline ends by itself only when its viewer's window closed.
           if ((spec.node == "viewer" || spec.node == "pipeline") && !recording) viewer_closed = true;
           break;
@@ -356,11 +358,14 @@ int run(const RunConfig& requested, const RunPaths& paths) {
           break;
         }
       }
-      // A node that never saw the recording's samples (e.g. restarted after the sensor finished)
-      // would wait forever for them: the recording is over, so the run ends.
-      if (sensor_in_run && sensor_done_at && now - *sensor_done_at > std::chrono::duration<double>(config.settle_s + 20.0)) {
-        spdlog::warn("the recording ended {:.0f} s ago and some nodes are still waiting; stopping them",
-                     config.settle_s + 20.0);
+      // A node that never saw the recording's samples (restarted after the sensor finished; on a host
+      // without the sensor, a viewer that never got the cloth) would wait forever: the run ends.
+      if (upstream_done_at && now - *upstream_done_at > std::chrono::duration<double>(config.settle_s + 20.0)) {
+        std::string waiting;
+        for (const auto& c : children)
+          if (!c.done) waiting += (waiting.empty() ? "" : ", ") + c.child->spec().program;
+        spdlog::warn("tachi-{} finished {:.0f} s ago and {} still waiting; stopping them", upstream, config.settle_s + 20.0,
+                     waiting);
         ended = "recording played; nodes stopped after a timeout";
         break;
       }

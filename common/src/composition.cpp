@@ -11,6 +11,7 @@
 #include <condition_variable>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <thread>
 
 namespace tachi::common {
@@ -59,53 +60,79 @@ int run_composed(std::vector<ComposedNode> nodes, std::chrono::milliseconds grac
   std::vector<int> codes(nodes.size(), kExitOk);
   for (std::size_t i = 0; i < nodes.size(); ++i) stop.push_back(std::make_unique<std::atomic<bool>>(false));
 
+  // One spin of node i, or its end: false once it has finished (its code and any failure on the board).
+  const auto step = [&](std::size_t i) {
+    ComposedNode& node = nodes[i];
+    int code = kExitOk;
+    bool threw = true;
+    try {
+      if (!stop_requested() && !stop[i]->load() && node.spin_once()) return true;
+      code = node.finish();
+      threw = false;
+    } catch (const DiskFull& e) {
+      spdlog::error("{}", e.what());  // the one line a full disk gets
+      code = kExitDiskFull;
+    } catch (const std::exception& e) {
+      spdlog::error("{} failed: {}", node.name, e.what());
+      code = kExitFailure;
+    }
+    {
+      std::lock_guard lock(board.mutex);
+      codes[i] = code;
+      board.finished[i] = true;
+      if (threw && board.failure_code == 0) board.failure_code = code;
+    }
+    board.changed.notify_all();
+    return false;
+  };
+
+  // A window's node spins on this thread, the one that opened the window: GUI toolkits (OpenCV's Qt
+  // highgui) refuse to be driven from another. The others get a thread each.
+  std::optional<std::size_t> on_this_thread;
+  for (std::size_t i = 0; i < nodes.size(); ++i)
+    if (nodes[i].needs_calling_thread && !on_this_thread) on_this_thread = i;
   std::vector<std::thread> threads;
   threads.reserve(nodes.size());
   for (std::size_t i = 0; i < nodes.size(); ++i) {
+    if (on_this_thread == i) continue;
     threads.emplace_back([&, i] {
-      ComposedNode& node = nodes[i];
-      t_node_name = node.name;
-      int code = kExitOk;
-      bool threw = true;
-      try {
-        while (!stop_requested() && !stop[i]->load() && node.spin_once()) {
-        }
-        code = node.finish();
-        threw = false;
-      } catch (const DiskFull& e) {
-        spdlog::error("{}", e.what());  // the one line a full disk gets
-        code = kExitDiskFull;
-      } catch (const std::exception& e) {
-        spdlog::error("{} failed: {}", node.name, e.what());
-        code = kExitFailure;
+      t_node_name = nodes[i].name;
+      while (step(i)) {
       }
-      {
-        std::lock_guard lock(board.mutex);
-        codes[i] = code;
-        board.finished[i] = true;
-        if (threw && board.failure_code == 0) board.failure_code = code;
-      }
-      board.changed.notify_all();
     });
   }
 
   bool any_finite = false;
   for (const auto& n : nodes) any_finite = any_finite || n.finite;
-  {
-    std::unique_lock lock(board.mutex);
-    const auto finite_done = [&] {
-      for (std::size_t i = 0; i < nodes.size(); ++i)
-        if (nodes[i].finite && !board.finished[i]) return false;
-      return true;
-    };
-    // Woken by a finished node, or every 10 ms to see a signal (the stop flag is set in a handler).
-    while (!stop_requested() && board.failure_code == 0 && !(any_finite && finite_done()))
-      board.changed.wait_for(lock, std::chrono::milliseconds(10));
+  const auto finite_done = [&] {
+    for (std::size_t i = 0; i < nodes.size(); ++i)
+      if (nodes[i].finite && !board.finished[i]) return false;
+    return true;
+  };
+  // Until a signal, a failed node (which ends the composition at once, as a dying process ends its run),
+  // or the finite nodes done and the others' grace over. Between the window's spins, or woken by a node
+  // that finished, or every 10 ms to see a signal (the stop flag is set in a handler).
+  if (on_this_thread) t_node_name = nodes[*on_this_thread].name;
+  std::optional<std::chrono::steady_clock::time_point> grace_ends;
+  bool on_this_thread_runs = on_this_thread.has_value();
+  while (!stop_requested()) {
+    {
+      std::unique_lock lock(board.mutex);
+      if (board.failure_code != 0) break;
+      if (any_finite && finite_done()) {
+        if (!grace_ends) grace_ends = std::chrono::steady_clock::now() + grace;
+        if (std::chrono::steady_clock::now() >= *grace_ends) break;
+      }
+      if (!on_this_thread_runs) {
+        board.changed.wait_for(lock, std::chrono::milliseconds(10));
+        continue;
+      }
+    }
+    on_this_thread_runs = step(*on_this_thread);
   }
-  // A node that failed ends the composition at once, as a dying process ends its run; finished finite
-  // nodes leave the others their grace.
-  if (!stop_requested() && board.failure_code == 0) sleep_unless_stopped(std::chrono::steady_clock::now() + grace);
   for (auto& s : stop) s->store(true);
+  if (on_this_thread_runs) step(*on_this_thread);  // stopped: it finishes, on its own thread
+  t_node_name.clear();
   for (auto& t : threads) t.join();
   if (board.failure_code != 0) return board.failure_code;
   for (const int code : codes)

@@ -122,6 +122,7 @@ int build_viewer(std::span<char*> argv, Composition& out) {
   stage->node.emplace(options, *stage->dds, stage->window.get());
   // The viewer's outputs name a full disk as its executable does (viewer/main.cpp).
   ComposedNode node = composed("viewer", options.exit_when_idle_s > 0.0 || stage->window != nullptr, stage);
+  node.needs_calling_thread = stage->window != nullptr;  // opened on this thread; Qt's highgui is driven from it only
   node.spin_once = [stage] {
     try {
       return stage->node->spin_once();

@@ -111,3 +111,32 @@ TEST(Composition, EachThreadsLogLinesNameItsNode) {
   EXPECT_NE(lines.str().find("[composition_test:sim] [info] stopped"), std::string::npos) << lines.str();
   EXPECT_NE(lines.str().find("[composition_test] [info] outside"), std::string::npos) << lines.str();
 }
+
+TEST(Composition, AWindowsNodeSpinsOnTheCallingThreadAndTheOthersOnTheirOwn) {
+  const auto caller = std::this_thread::get_id();
+  std::atomic<bool> window_on_caller{true}, filter_on_caller{false};
+  std::atomic<int> window_spins{0};
+  std::vector<ComposedNode> nodes{
+      {"viewer", true,
+       [&] {
+         window_on_caller = window_on_caller && std::this_thread::get_id() == caller;
+         std::this_thread::sleep_for(1ms);
+         return ++window_spins < 20;
+       },
+       [&] {
+         window_on_caller = window_on_caller && std::this_thread::get_id() == caller;
+         return 0;
+       },
+       true},
+      {"filter", false,
+       [&] {
+         filter_on_caller = filter_on_caller || std::this_thread::get_id() == caller;
+         std::this_thread::sleep_for(1ms);
+         return true;
+       },
+       [] { return 0; }}};
+  EXPECT_EQ(tachi::common::run_composed(std::move(nodes), 0ms), 0);
+  EXPECT_EQ(window_spins.load(), 20);
+  EXPECT_TRUE(window_on_caller) << "spun and finished on the thread that opened its window";
+  EXPECT_FALSE(filter_on_caller);
+}

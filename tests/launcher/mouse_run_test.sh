@@ -1,10 +1,13 @@
 #!/usr/bin/env bash
 # `tachi run --mouse` as a user runs it, under a virtual display: the launcher starts only tachi-sim and
 # tachi-viewer --mouse; a mouse drag across the window (xdotool) cuts the cloth; `q` closes the window,
-# which ends the run with its outputs written.
-# Usage: mouse_run_test.sh BIN_DIR    (exit 77 = skipped: Xvfb or xdotool missing)
+# which ends the run with its outputs written. With in-process, the same with `--in-process`: the viewer's
+# window on a thread of tachi-pipeline.
+# Usage: mouse_run_test.sh BIN_DIR [in-process]   (exit 77 = skipped: Xvfb or xdotool missing)
 set -u
-bin=$1
+bin=$1 mode=${2:-processes}
+domain=131 extra=() viewer_log=viewer.log
+if [ "$mode" = in-process ]; then domain=139 extra=(--in-process) viewer_log=pipeline.log; fi
 command -v Xvfb >/dev/null && command -v xdotool >/dev/null || { echo "skip: needs Xvfb and xdotool"; exit 77; }
 work=$(mktemp -d /tmp/tachi-mouse-run-XXXXXX)
 pids=() xvfb=""
@@ -15,8 +18,8 @@ Xvfb ":$n" -screen 0 1024x900x24 -nolisten tcp >/dev/null 2>&1 & xvfb=$!
 for _ in $(seq 100); do [ -S "/tmp/.X11-unix/X$n" ] && break; sleep 0.05; done
 export DISPLAY=":$n"
 
-timeout 120 "$bin/tachi" run --mouse --grid 16 --domain 131 --out "$work/run" --set viewer.size=600 \
-  --set sim.cut-mode=grid >"$work/out" 2>"$work/err" & run=$!; pids+=("$run")
+timeout 120 "$bin/tachi" run --mouse --grid 16 --domain $domain --out "$work/run" --set viewer.size=600 \
+  --set sim.cut-mode=grid "${extra[@]}" >"$work/out" 2>"$work/err" & run=$!; pids+=("$run")
 fail() { echo "FAIL: $*"; cat "$work/err"; for f in "$work"/run/*.log; do echo "--- $f"; tail -5 "$f"; done; exit 1; }
 window=""
 for _ in $(seq 200); do window=$(xdotool search --onlyvisible --name '^tachi$' 2>/dev/null | head -1); [ -n "$window" ] && break; sleep 0.1; done
@@ -37,7 +40,7 @@ wait "$run"; status=$?
 pids=()
 [ "$status" -eq 0 ] || fail "tachi run --mouse exited $status"
 [ ! -e "$work/run/sensor.log" ] || fail "the mouse run started a sensor"
-grep -q -- "--mouse" "$work/run/viewer.log" || fail "the viewer did not get --mouse"
+grep -q -- "--mouse" "$work/run/$viewer_log" || fail "the viewer did not get --mouse"
 [ -s "$work/run/video.mp4" ] || fail "no video.mp4"
 python3 - "$work/run/summary.json" <<'PY' || fail "summary: $(head -c 600 "$work/run/summary.json")"
 import json, sys
@@ -47,4 +50,4 @@ assert s["cuts"] >= 1, "the mouse drag cut the cloth"
 assert s["strokes"] >= s["cuts"], ("the mouse blade's strokes count as strokes", s["strokes"], s["cuts"])
 assert s["cut_particles"] > 3, s["cut_particles"]
 PY
-echo "tachi run --mouse: $(python3 -c "import json;s=json.load(open('$work/run/summary.json'));print(s['cuts'],'cut(s),',s['cut_particles'],'particles,',s['pieces'],'pieces')")"
+echo "tachi run --mouse${extra[*]:+ ${extra[*]}}: $(python3 -c "import json;s=json.load(open('$work/run/summary.json'));print(s['cuts'],'cut(s),',s['cut_particles'],'particles,',s['pieces'],'pieces')")"

@@ -17,9 +17,13 @@ struct ComposedNode {
   bool finite = false;              ///< ends by itself (a played recording, a settled cloth)
   std::function<bool()> spin_once;  ///< as Node::spin_once: blocks briefly, false when the node's run is over
   std::function<int()> finish;      ///< as Node::finish: flushes what the node owes, returns its exit code
+  /// Spins on run_composed's calling thread, not one of its own: a node with a window (GUI toolkits are
+  /// driven from the thread that opened the window). The first such node only.
+  bool needs_calling_thread = false;
 };
 
-/// Runs each node on its own thread until SIGINT/SIGTERM (or request_stop), or, when some nodes are
+/// Runs each node on its own thread (one that needs_calling_thread on the caller's) until SIGINT/SIGTERM
+/// (or request_stop), or, when some nodes are
 /// finite, until every finite node has finished: the others then get `grace` to pass their last
 /// samples on, are stopped, and finish. The rule is `tachi run`'s for its children.
 /// A node that throws stops the composition, as a process that dies stops with its exit code: the

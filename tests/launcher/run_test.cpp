@@ -79,8 +79,11 @@ std::string logs(const fs::path& out) {
 }
 }  // namespace
 
-TEST(TachiRun, PlaysARecordingAndTheCutFollowsTheStroke) {
-  tachi::test::ScratchDir out("tachi_run");
+// Beside the run, the same run `--in-process`: the same nodes in one process (tachi-pipeline), each on its
+// own thread and participant, on another domain; its run must be the multi-process run's, cell for cell.
+TEST(TachiRun, PlaysARecordingAndTheCutFollowsTheStrokeAsProcessesAndInOne) {
+  tachi::test::ScratchDir out("tachi_run"), composed("tachi_run_in_process");
+  ChildProcess composed_run(run_args("straight_cut", 135, composed.path(), {"--in-process"}));
   const auto r = tachi::test::run(run_args("straight_cut", 120, out.path()), 120s);
   ASSERT_EQ(r.exit_code, 0) << r.err << logs(out.path());
   EXPECT_NE(r.out.find("outputs in " + out.path().string()), std::string::npos) << r.out;
@@ -119,24 +122,16 @@ TEST(TachiRun, PlaysARecordingAndTheCutFollowsTheStroke) {
   // The trace saw the run's raw hand samples (keep-last 64: one may be overwritten if the launcher stalls).
   EXPECT_LE(count_lines(out / "trace" / "hands.csv"), depth_frames("straight_cut") + 1);
   EXPECT_GE(count_lines(out / "trace" / "hands.csv"), depth_frames("straight_cut") * 9 / 10);
-}
 
-// `tachi run --in-process`: the same nodes in one process (tachi-pipeline), each on its own thread and
-// participant: the run is the multi-process run's, cell for cell (one beside it, on another domain).
-TEST(TachiRun, InProcessCutsAsTheProcessesDo) {
-  tachi::test::ScratchDir composed("tachi_run_in_process"), processes("tachi_run_processes");
-  ChildProcess composed_run(run_args("straight_cut", 135, composed.path(), {"--in-process"}));
-  ChildProcess processes_run(run_args("straight_cut", 136, processes.path()));
   ASSERT_EQ(composed_run.wait(120s), 0) << composed_run.err() << read_text(composed / "pipeline.log");
-  ASSERT_EQ(processes_run.wait(120s), 0) << processes_run.err();
-  const auto s = read_json(composed / "summary.json"), sp = read_json(processes / "summary.json");
+  const auto c = read_json(composed / "summary.json");
   for (const char* key : {"frames", "tracked_frames", "strokes", "cuts", "pieces", "fallen_pieces", "cut_length_m", "restarts",
                           "e2e_p50_ms", "e2e_p99_ms", "sensor_p50_ms", "filter_p50_ms", "sim_p50_ms", "viewer_p50_ms"})
-    EXPECT_TRUE(s.contains(key) && !s[key].is_null()) << key << ": " << s.dump();
-  EXPECT_EQ(s["frames"], depth_frames("straight_cut"));
-  EXPECT_EQ(s["restarts"], 0);
+    EXPECT_TRUE(c.contains(key) && !c[key].is_null()) << key << ": " << c.dump();
+  EXPECT_EQ(c["frames"], depth_frames("straight_cut"));
+  EXPECT_EQ(c["restarts"], 0);
   for (const char* key : {"tracked_frames", "hand_samples", "strokes", "cuts", "pieces", "cut_line"})
-    EXPECT_EQ(s[key], sp[key]) << key;
+    EXPECT_EQ(c[key], s[key]) << key << " in one process and as processes";
   EXPECT_EQ(read_json(composed / "config.json")["in_process"], true);
   // One process, its log naming each node's lines; the outputs are the multi-process run's.
   EXPECT_FALSE(fs::exists(composed / "sim.log"));
@@ -210,47 +205,51 @@ TEST(TachiRun, AChildThatKeepsDyingStopsTheRunNamingIt) {
   EXPECT_NE(r.err.find("  | tachi-sim: "), std::string::npos) << "its last log lines: " << r.err;
 }
 
-TEST(TachiRun, SigintStopsTheRunCleanlyWithOutputsWritten) {
-  tachi::test::ScratchDir out("tachi_run_sigint");
-  // The test waits on the sensor's samples (in every run's partition) instead of sleeping.
+// SIGINT mid-run, as processes and in one process (side by side, each on its own domain).
+TEST(TachiRun, SigintStopsTheRunCleanlyWithOutputsWrittenAsProcessesAndInOne) {
+  struct Mode {
+    unsigned domain;
+    std::vector<std::string> flags;
+    const char* log;
+  };
+  const std::vector<Mode> modes{{125, {}, "sim.log"}, {137, {"--in-process"}, "pipeline.log"}};
+  // The test waits on the sensors' samples (in every run's partition) instead of sleeping.
   tachi::bus::read_every_run();
-  tachi::bus::Participant dds{125};
-  tachi::bus::Reader<tachi_msg_RawHandSample> hands{dds, tachi::bus::topics::raw_hand};
-  ChildProcess run(run_args("straight_cut", 125, out.path(), {"--rate", "0.5"}));
-  // Mid-run: 30 of the recording's 90 frames played.
-  ASSERT_EQ(tachi::test::wait_for_matching<tachi_msg_RawHandSample>(hands, 30, any_sample, 60s), 30) << run.err();
-  run.signal(SIGINT);
-  EXPECT_EQ(run.wait(20s), 0) << run.err();
-  EXPECT_TRUE(find_processes({"--domain 125 "}).empty()) << "no child outlives the launcher";
-  const auto s = read_json(out / "summary.json");
-  ASSERT_TRUE(s.is_object());
-  EXPECT_EQ(s["ended"], "stopped by signal");
-  EXPECT_GT(s["frames"].get<int>(), 0);
-  EXPECT_LT(s["frames"].get<int>(), static_cast<int>(depth_frames("straight_cut")));
-  for (const char* file : {"cloth.obj", "latency.png", "trajectory.png", "sim.log"}) EXPECT_TRUE(fs::exists(out / file)) << file;
-}
-
-TEST(TachiRun, SigintStopsAnInProcessRunCleanlyWithOutputsWritten) {
-  tachi::test::ScratchDir out("tachi_run_sigint_in_process");
-  tachi::bus::read_every_run();
-  tachi::bus::Participant dds{137};
-  tachi::bus::Reader<tachi_msg_RawHandSample> hands{dds, tachi::bus::topics::raw_hand};
-  ChildProcess run(run_args("straight_cut", 137, out.path(), {"--rate", "0.5", "--in-process"}));
-  ASSERT_EQ(tachi::test::wait_for_matching<tachi_msg_RawHandSample>(hands, 30, any_sample, 60s), 30) << run.err();
-  // The nodes run in one process: no tachi-sim, tachi-filter, ... of their own.
-  EXPECT_EQ(find_processes({"tachi-pipeline", "--domain 137 "}).size(), 1u);
-  for (const char* program : {"tachi-sim", "tachi-filter", "tachi-sensor", "tachi-viewer"})
-    for (const pid_t pid : find_processes({"--domain 137 "}))
-      EXPECT_NE(read_text(fs::path("/proc") / std::to_string(pid) / "comm"), std::string(program) + "\n");
-  run.signal(SIGINT);
-  EXPECT_EQ(run.wait(20s), 0) << run.err();
-  EXPECT_TRUE(find_processes({"--domain 137 "}).empty()) << "the pipeline does not outlive the launcher";
-  const auto s = read_json(out / "summary.json");
-  ASSERT_TRUE(s.is_object());
-  EXPECT_EQ(s["ended"], "stopped by signal");
-  EXPECT_GT(s["frames"].get<int>(), 0);
-  EXPECT_LT(s["frames"].get<int>(), static_cast<int>(depth_frames("straight_cut")));
-  for (const char* file : {"cloth.obj", "latency.png", "trajectory.png", "pipeline.log"}) EXPECT_TRUE(fs::exists(out / file)) << file;
+  std::vector<std::unique_ptr<tachi::test::ScratchDir>> outs;
+  std::vector<std::unique_ptr<tachi::bus::Participant>> participants;
+  std::vector<std::unique_ptr<tachi::bus::Reader<tachi_msg_RawHandSample>>> hands;
+  std::vector<std::unique_ptr<ChildProcess>> runs;
+  for (const auto& m : modes) {
+    outs.push_back(std::make_unique<tachi::test::ScratchDir>("tachi_run_sigint_" + std::to_string(m.domain)));
+    participants.push_back(std::make_unique<tachi::bus::Participant>(m.domain));
+    hands.push_back(std::make_unique<tachi::bus::Reader<tachi_msg_RawHandSample>>(*participants.back(), tachi::bus::topics::raw_hand));
+    auto flags = m.flags;
+    flags.insert(flags.begin(), {"--rate", "0.5"});
+    runs.push_back(std::make_unique<ChildProcess>(run_args("straight_cut", m.domain, outs.back()->path(), flags)));
+  }
+  for (std::size_t i = 0; i < modes.size(); ++i) {
+    SCOPED_TRACE(modes[i].flags.empty() ? "processes" : "in one process");
+    const std::string domain = "--domain " + std::to_string(modes[i].domain) + " ";
+    // Mid-run: at least 30 of the recording's 142 frames played (the second run's came meanwhile).
+    ASSERT_GE(tachi::test::wait_for_matching<tachi_msg_RawHandSample>(*hands[i], 30, any_sample, 60s), 30) << runs[i]->err();
+    if (!modes[i].flags.empty()) {
+      // The nodes run in one process: no tachi-sim, tachi-filter, ... of their own.
+      EXPECT_EQ(find_processes({"tachi-pipeline", domain}).size(), 1u);
+      for (const pid_t pid : find_processes({domain}))
+        for (const char* program : {"tachi-sim", "tachi-filter", "tachi-sensor", "tachi-viewer"})
+          EXPECT_NE(read_text(fs::path("/proc") / std::to_string(pid) / "comm"), std::string(program) + "\n");
+    }
+    runs[i]->signal(SIGINT);
+    EXPECT_EQ(runs[i]->wait(20s), 0) << runs[i]->err();
+    EXPECT_TRUE(find_processes({domain}).empty()) << "no node outlives the launcher";
+    const fs::path out = outs[i]->path();
+    const auto s = read_json(out / "summary.json");
+    ASSERT_TRUE(s.is_object());
+    EXPECT_EQ(s["ended"], "stopped by signal");
+    EXPECT_GT(s["frames"].get<int>(), 0);
+    EXPECT_LT(s["frames"].get<int>(), static_cast<int>(depth_frames("straight_cut")));
+    for (const char* file : {"cloth.obj", "latency.png", "trajectory.png", modes[i].log}) EXPECT_TRUE(fs::exists(out / file)) << file;
+  }
 }
 
 TEST(TachiBusTools, TopicsEchoAndStatusShowARunningPipeline) {
@@ -372,9 +371,14 @@ TEST(TachiRun, ALossyLinkCutsAsTheCleanRunDoes) {
   EXPECT_EQ(sl["cut_line"], sc["cut_line"]);
 }
 
-TEST(TachiRun, SecureRunAuthenticatesEveryNodeAndTheLauncher) {
-  tachi::test::ScratchDir out("tachi_run_secure");
-  const auto r = tachi::test::run(run_args("straight_cut", 130, out.path() / "run", {"--secure", tachi::test::test_pki("ours")}), 120s);
+// Secure, as processes and in one process (side by side). In one process each node keeps its own
+// participant, all with the identity "pipeline" (Cyclone gives every participant of a domain in a process
+// the first one's permissions; the grant is the nodes' union).
+TEST(TachiRun, SecureRunAuthenticatesEveryNodeAndTheLauncherAsProcessesAndInOne) {
+  tachi::test::ScratchDir out("tachi_run_secure"), composed("tachi_run_secure_in_process");
+  const std::string pki = tachi::test::test_pki("ours");
+  ChildProcess composed_run(run_args("straight_cut", 138, composed.path() / "run", {"--secure", pki, "--in-process"}));
+  const auto r = tachi::test::run(run_args("straight_cut", 130, out.path() / "run", {"--secure", pki}), 120s);
   ASSERT_EQ(r.exit_code, 0) << r.err << logs(out.path() / "run");
   const auto s = read_json(out / "run" / "summary.json");
   EXPECT_EQ(s["frames"], depth_frames("straight_cut")) << "the launcher (identity monitor) read the sensor's heartbeats";
@@ -382,19 +386,12 @@ TEST(TachiRun, SecureRunAuthenticatesEveryNodeAndTheLauncher) {
   EXPECT_EQ(s["cuts"], 1);
   EXPECT_GT(s["cut_particles"].get<int>(), 5);
   EXPECT_NE(read_text(out / "run" / "sim.log").find("--secure"), std::string::npos);
+
+  ASSERT_EQ(composed_run.wait(120s), 0) << composed_run.err() << read_text(composed / "run" / "pipeline.log");
+  const auto c = read_json(composed / "run" / "summary.json");
+  EXPECT_EQ(c["frames"], depth_frames("straight_cut"));
+  EXPECT_EQ(c["cuts"], 1);
+  EXPECT_GT(c["cut_particles"].get<int>(), 5);
+  EXPECT_NE(read_text(composed / "run" / "pipeline.log").find("--identity pipeline"), std::string::npos);
 }
 
-// In one process each node keeps its own participant, all with the identity "pipeline" (Cyclone gives
-// every participant of a domain in a process the first one's permissions; the grant is the nodes' union):
-// the secure in-process run authenticates and cuts as the multi-process run does.
-TEST(TachiRun, SecureInProcessRunAuthenticatesEveryNode) {
-  tachi::test::ScratchDir out("tachi_run_secure_in_process");
-  const auto r = tachi::test::run(
-      run_args("straight_cut", 138, out.path() / "run", {"--secure", tachi::test::test_pki("ours"), "--in-process"}), 120s);
-  ASSERT_EQ(r.exit_code, 0) << r.err << read_text(out / "run" / "pipeline.log");
-  const auto s = read_json(out / "run" / "summary.json");
-  EXPECT_EQ(s["frames"], depth_frames("straight_cut"));
-  EXPECT_EQ(s["cuts"], 1);
-  EXPECT_GT(s["cut_particles"].get<int>(), 5);
-  EXPECT_NE(read_text(out / "run" / "pipeline.log").find("--identity pipeline"), std::string::npos);
-}

@@ -54,8 +54,8 @@ int run_composed(std::vector<ComposedNode> nodes, std::chrono::milliseconds grac
   install_stop_handlers();
   Board board;
   board.finished.assign(nodes.size(), false);
-  // Each node's own stop: the non-finite nodes are stopped once the finite ones are done, the others
-  // (and everything on SIGINT) by the process-wide stop flag.
+  // Each node's own stop, raised for all when the composition ends (the finite nodes done and the grace
+  // over, or a node failed); SIGINT/SIGTERM raise the process-wide flag, which every node sees as well.
   std::vector<std::unique_ptr<std::atomic<bool>>> stop;
   std::vector<int> codes(nodes.size(), kExitOk);
   for (std::size_t i = 0; i < nodes.size(); ++i) stop.push_back(std::make_unique<std::atomic<bool>>(false));

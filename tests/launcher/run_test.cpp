@@ -349,6 +349,14 @@ TEST(TachiRun, LiveWithoutAKinectStopsTheRunWithExitCode3) {
   EXPECT_NE(r.err.find("tachi-sensor cannot run (exit code 3)"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("no Kinect"), std::string::npos) << "the sensor's own words, from its log: " << r.err;
   EXPECT_TRUE(fs::exists(out / "summary.json"));
+
+  // In one process the pipeline answers for its sensor, with the same code and words.
+  const auto c = tachi::test::run({kBin + "/tachi", "run", "--live", "--grid", "16", "--domain", "129", "--out",
+                                   (out / "in-process").string(), "--headless", "--in-process"},
+                                  60s);
+  EXPECT_EQ(c.exit_code, 3) << c.err;
+  EXPECT_NE(c.err.find("tachi-pipeline cannot run (exit code 3)"), std::string::npos) << c.err;
+  EXPECT_NE(c.err.find("tachi-sensor: no Kinect"), std::string::npos) << c.err;
 }
 
 // `tachi run --lossy 100`: every node drops 10% of the packets it sends (data, heartbeats,

@@ -64,6 +64,9 @@ RunConfig with_lossy_link(const RunConfig& requested, const fs::path& out) {
   file << bus::lossy_config_xml(bus::dds_config_xml(requested.dds_config), requested.lossy_permille);
   if (!file.flush()) throw std::runtime_error("--lossy: cannot write " + config.dds_config);
   spdlog::info("lossy link: every node drops {} of 1000 packets it sends ({})", requested.lossy_permille, config.dds_config);
+  if (requested.in_process)
+    spdlog::warn("--lossy with --in-process: the nodes share one process, where samples never cross the network; "
+                 "only the launcher's monitor (and other hosts) see the loss");
   return config;
 }
 

@@ -13,6 +13,7 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <cstdlib>
 #include <cmath>
 #include <cstring>
 #include <csignal>
@@ -204,6 +205,11 @@ void draw_plots(Child* plotter) {
 fs::path plot_script(const fs::path& bin_dir) { return bin_dir.parent_path() / "share" / "tachi" / "plot_run.py"; }
 
 int run(const RunConfig& requested, const RunPaths& paths) {
+  // The nodes share the machine: a simulator on two threads waits for its other thread passively instead
+  // of spinning a core the other nodes need (libgomp reads this at start; a value the user set wins). On
+  // the loaded 2-core machine spinning made two threads 0.06x as fast as one, passive 0.70x
+  // (docs/benchmarks.md, "Threads").
+  ::setenv("OMP_WAIT_POLICY", "passive", 0);
   const fs::path out(requested.out);
   clear_outputs(out);
   ReservedFile summary_file(out / "summary.json");

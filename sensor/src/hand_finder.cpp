@@ -1141,8 +1141,15 @@ bool HandFinder::Impl::arm_end(cv::Point seed, std::uint16_t near_raw, ArmEnd& e
   if (arm_roots.empty()) return false;
   const cv::Point tip = geodesic_walk(arm_roots, std::numeric_limits<float>::max());
   const float reach_m = geodesic[grid_index(tip)], nearest_from_body_m = geodesic[grid_index(seed)];
-  geodesic_walk({tip}, std::numeric_limits<float>::max());
+  // The nearest reading a joint on the way from the body to the end (an elbow): its distances
+  // from both add up to the whole length, give or take the bend's corner. The end of another
+  // branch (the other arm hanging, reached across the torso of a user whose hand is near the
+  // body) is no hand of this arm: the nearest reading is then an end of its own. So the walk from
+  // the end need go no farther than this.
+  const float on_path_m = reach_m + kBendSlackM - nearest_from_body_m;
   end = ArmEnd{};
+  if (on_path_m < kJointFromTipM) return true;  // the nearest reading is at the end
+  geodesic_walk({tip}, on_path_m);
   end.near_raw = kNoReading;
   int x0 = kGridW, y0 = kGridH, x1 = -1, y1 = -1;
   for (const auto& c : arm_region) {
@@ -1158,16 +1165,13 @@ bool HandFinder::Impl::arm_end(cv::Point seed, std::uint16_t near_raw, ArmEnd& e
     y1 = std::max(y1, c.y);
   }
   end.cells = cv::Rect(x0, y0, x1 - x0 + 1, y1 - y0 + 1);
-  // The nearest reading a joint on the way from the body to the end (an elbow): its distances
-  // from both add up to the whole length, give or take the bend's corner. The end of another
-  // branch (the other arm hanging, reached across the torso of a user whose hand is near the
-  // body) is no hand of this arm: the nearest reading is then an end of its own.
+  // On that way, past a hand's length from the tip; and the end's hand (its nearest reading) well
+  // away from the joint along the surface: where the arm's nearest reading is just past a hand's
+  // length from the fingertips (a forearm pointing at the camera), the one-sided band from it
+  // holds the hand already.
+  const bool on_path = geodesic_pass[grid_index(seed)] == geodesic_generation;
   const float nearest_to_end_m = geodesic[grid_index(seed)];
-  // And the end's hand (its nearest reading) lies well away from the joint along the surface:
-  // where the arm's nearest reading is just past a hand's length from the fingertips (a forearm
-  // pointing at the camera), the one-sided band from it holds the hand already.
-  end.elsewhere = nearest_to_end_m >= kJointFromTipM && nearest_from_body_m + nearest_to_end_m <= reach_m + kBendSlackM &&
-                  nearest_to_end_m - geodesic[grid_index(end.seed)] >= kJointToHandM;
+  end.elsewhere = on_path && nearest_to_end_m >= kJointFromTipM && nearest_to_end_m - geodesic[grid_index(end.seed)] >= kJointToHandM;
   return true;
 }
 
@@ -1220,7 +1224,7 @@ bool HandFinder::Impl::find_arm_end(std::span<const std::uint16_t> raw, Palm& pa
     // (past the elbow, which came nearer: reaches_back's test of an arm's end, taken from the hand).
     // The joint itself is no candidate.
     ArmEnd end;
-    const bool to_end = params.arm_end_window_m >= 0 && arm_end(seed, near_raw, end) && end.elsewhere && is_joint(seed, near_raw);
+    const bool to_end = params.arm_end_window_m >= 0 && is_joint(seed, near_raw) && arm_end(seed, near_raw, end) && end.elsewhere;
     if (to_end) {
       cv::Rect end_box;
       band_cells_at(end.seed, end.near_raw, true, end_box);
@@ -1374,7 +1378,7 @@ HandObservation HandFinder::Impl::find(std::span<const std::uint16_t> raw) {
     // (seed 90: the elbow was followed while the hand rose out of the image).
     ArmEnd end;
     const bool at_end =
-        params.arm_end_window_m >= 0 && arm_end(seed, near_raw, end) && end.elsewhere && (continuing || is_joint(seed, near_raw));
+        params.arm_end_window_m >= 0 && (continuing || is_joint(seed, near_raw)) && arm_end(seed, near_raw, end) && end.elsewhere;
     if (at_end) {
       near_raw = end.near_raw;
       seed = end.seed;

@@ -306,6 +306,7 @@ struct HandFinder::Impl {
   std::vector<std::size_t> selected;   // select_near_plane's choice among them
 
   cv::Mat roi_hand_buffer = cv::Mat(kDepthHeight + 2, kDepthWidth + 2, CV_8U);
+  bool follow_component(std::span<const std::uint16_t> raw, int component, bool continuing, bool take_over, Palm& palm);
   bool find_arm_end(std::span<const std::uint16_t> raw, Palm& palm, cv::Point& seed);
   bool arm_end_candidate(std::span<const std::uint16_t> raw, cv::Point seed, std::uint16_t near_raw, const cv::Rect& box,
                          bool two_sided, Palm& palm);
@@ -1280,6 +1281,67 @@ bool HandFinder::Impl::palm_accepted(const Palm& palm) const {
   return inside && palm_sized(palm) && palm.valid_fraction >= 0.5 && !palm.cut_by_border;
 }
 
+/// Steps 2-4 for one foreground component: its hand (the part within the band of its nearest
+/// reading, or at its geodesic end), measured; whether it is the hand (a followed one when
+/// `continuing`, else a new track's tests). Sets the arm's cells (arm), previous_cell, tracking.
+/// `take_over`: a new track that is to replace a followed one: it must be an arm's end
+/// (reaches_back) at any depth, and it may appear anywhere (no max_jump_m).
+bool HandFinder::Impl::follow_component(std::span<const std::uint16_t> raw, int component, bool continuing, bool take_over,
+                                        Palm& palm) {
+  std::uint16_t near_raw = nearest[static_cast<std::size_t>(component)];
+  const cv::Point arm_nearest = nearest_at[static_cast<std::size_t>(component)];
+  cv::Point seed = arm_nearest;
+  const std::uint16_t far_raw = band_limit[near_raw];
+  // The hand's cells: the component within the depth band; their bounding box is the ROI.
+  int x0 = kGridW, y0 = kGridH, x1 = -1, y1 = -1;
+  for (int gy = 0; gy < kGridH; ++gy) {
+    const int* l = labels.ptr<int>(gy);
+    const auto* g = grid.ptr<std::uint16_t>(gy);
+    for (int gx = 0; gx < kGridW; ++gx)
+      if (l[gx] == component && g[gx] <= far_raw) {
+        x0 = std::min(x0, gx);
+        x1 = std::max(x1, gx);
+        y0 = std::min(y0, gy);
+        y1 = std::max(y1, gy);
+      }
+  }
+  cv::compare(labels, component, arm, cv::CMP_EQ);
+  cv::dilate(arm, arm, kernel3);
+  excluded = true;
+  cv::Rect cells(x0, y0, x1 - x0 + 1, y1 - y0 + 1);
+  // The arm's nearest reading is a joint (an elbow pointing at the camera) and the arm's
+  // geodesic end lies elsewhere: the hand is there, measured around its own nearest reading; the
+  // joint is not measured (where the end holds no palm, the hand has left the image, say). A
+  // new track asks is_joint as well; a followed arm does not: the geodesic test alone says the
+  // nearest reading lies between the body and the end, and is_joint flickers as an elbow turns
+  // (seed 90: the elbow was followed while the hand rose out of the image).
+  ArmEnd end;
+  const bool at_end =
+      params.arm_end_window_m >= 0 && (continuing || is_joint(seed, near_raw)) && arm_end(seed, near_raw, end) && end.elsewhere;
+  if (at_end) {
+    near_raw = end.near_raw;
+    seed = end.seed;
+    cells = end.cells;
+  }
+  const bool measured = measure(raw, cells, near_raw, seed, palm, at_end);
+  if (measured) {
+    previous_cell = {static_cast<int>(palm.u) / kStep, static_cast<int>(palm.v) / kStep};
+    tracking = palm_sized(palm);  // keep following an arm whose palm is at the edge
+    // A new track does not start on a person walking by behind the user.
+    const bool jump = !take_over && jumped(palm);
+    const bool found =
+        palm_accepted(palm) && !jump &&
+        (continuing || (palm.radius_m <= params.max_new_palm_radius_m && palm.ridge_m <= params.max_palm_ridge_m &&
+                        ((palm.z <= params.max_acquire_depth_m && !take_over) ||
+                         (palm.z <= params.max_track_depth_m && reaches_back(seed, near_raw, at_end))) &&
+                        !is_joint(seed, near_raw) && !nearest_at_border(arm_nearest)));
+    if (jump || (!found && !continuing)) tracking = false;
+    return found;
+  }
+  tracking = false;
+  return false;
+}
+
 HandObservation HandFinder::Impl::find(std::span<const std::uint16_t> raw) {
   HandObservation out;
   if (frames_since_seen < (1 << 20)) ++frames_since_seen;
@@ -1337,68 +1399,34 @@ HandObservation HandFinder::Impl::find(std::span<const std::uint16_t> raw) {
       }
     }
   }
-  if (chosen == 0) {
-    std::uint16_t best = kNoReading;
-    for (int c = 1; c < n; ++c)
-      if (area[static_cast<std::size_t>(c)] >= params.min_component_cells && nearest[static_cast<std::size_t>(c)] < best) {
-        best = nearest[static_cast<std::size_t>(c)];
-        chosen = c;
-      }
-  }
+  int reaching = 0;  // the big-enough component that reaches nearest
+  std::uint16_t best = kNoReading;
+  for (int c = 1; c < n; ++c)
+    if (area[static_cast<std::size_t>(c)] >= params.min_component_cells && nearest[static_cast<std::size_t>(c)] < best) {
+      best = nearest[static_cast<std::size_t>(c)];
+      reaching = c;
+    }
+  if (chosen == 0) chosen = reaching;
 
   Palm palm;
   bool found = false;
-  if (chosen != 0) {
-    std::uint16_t near_raw = nearest[static_cast<std::size_t>(chosen)];
-    const cv::Point arm_nearest = nearest_at[static_cast<std::size_t>(chosen)];
-    cv::Point seed = arm_nearest;
-    const std::uint16_t far_raw = band_limit[near_raw];
-    // The hand's cells: the chosen component within the depth band; their bounding box is the ROI.
-    int x0 = kGridW, y0 = kGridH, x1 = -1, y1 = -1;
-    for (int gy = 0; gy < kGridH; ++gy) {
-      const int* l = labels.ptr<int>(gy);
-      const auto* g = grid.ptr<std::uint16_t>(gy);
-      for (int gx = 0; gx < kGridW; ++gx)
-        if (l[gx] == chosen && g[gx] <= far_raw) {
-          x0 = std::min(x0, gx);
-          x1 = std::max(x1, gx);
-          y0 = std::min(y0, gy);
-          y1 = std::max(y1, gy);
-        }
-    }
-    cv::compare(labels, chosen, arm, cv::CMP_EQ);
-    cv::dilate(arm, arm, kernel3);
-    excluded = true;
-    cv::Rect cells(x0, y0, x1 - x0 + 1, y1 - y0 + 1);
-    // The arm's nearest reading is a joint (an elbow pointing at the camera) and the arm's
-    // geodesic end lies elsewhere: the hand is there, measured around its own nearest reading; the
-    // joint is not measured (where the end holds no palm, the hand has left the image, say). A
-    // new track asks is_joint as well; a followed arm does not: the geodesic test alone says the
-    // nearest reading lies between the body and the end, and is_joint flickers as an elbow turns
-    // (seed 90: the elbow was followed while the hand rose out of the image).
-    ArmEnd end;
-    const bool at_end =
-        params.arm_end_window_m >= 0 && (continuing || is_joint(seed, near_raw)) && arm_end(seed, near_raw, end) && end.elsewhere;
-    if (at_end) {
-      near_raw = end.near_raw;
-      seed = end.seed;
-      cells = end.cells;
-    }
-    const bool measured = measure(raw, cells, near_raw, seed, palm, at_end);
-    if (measured) {
-      previous_cell = {static_cast<int>(palm.u) / kStep, static_cast<int>(palm.v) / kStep};
-      tracking = palm_sized(palm);  // keep following an arm whose palm is at the edge
-      // A new track does not start on a person walking by behind the user.
-      const bool jump = jumped(palm);
-      found = palm_accepted(palm) && !jump &&
-              (continuing || (palm.radius_m <= params.max_new_palm_radius_m && palm.ridge_m <= params.max_palm_ridge_m &&
-                              (palm.z <= params.max_acquire_depth_m ||
-                               (palm.z <= params.max_track_depth_m && reaches_back(seed, near_raw, at_end))) &&
-                              !is_joint(seed, near_raw) && !nearest_at_border(arm_nearest)));
-      if (jump || (!found && !continuing)) tracking = false;
-    } else {
-      tracking = false;
-    }
+  // A followed track that is no arm's end (a second person's head, taken while the user's hand was
+  // down, seed 53) gives way to a component that reaches an arm's protrusion nearer than it, is an
+  // arm's end and passes a new track's tests (the user's hand, raised): the followed one would
+  // otherwise hold the track, and for reacquire_frames after it is lost, the jump test would
+  // refuse the hand. (A user's own elbow, a few cm nearer than a far hand, is not nearer by that.)
+  const auto nearer_by_protrusion = [&](int a, int b) {
+    return model.metres(nearest[static_cast<std::size_t>(a)]) + params.arm_protrusion_m <= model.metres(nearest[static_cast<std::size_t>(b)]);
+  };
+  const bool take_over = params.take_over_by_arm_end && continuing && chosen != 0 && reaching != 0 && reaching != chosen &&
+                         nearer_by_protrusion(reaching, chosen) &&
+                         !reaches_back(nearest_at[static_cast<std::size_t>(chosen)], nearest[static_cast<std::size_t>(chosen)]) &&
+                         follow_component(raw, reaching, false, true, palm);
+  if (take_over) {
+    found = true;
+    tracking = true;
+  } else if (chosen != 0) {
+    found = follow_component(raw, chosen, continuing, false, palm);
   } else {
     tracking = false;
   }

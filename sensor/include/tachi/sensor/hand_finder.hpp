@@ -91,6 +91,10 @@ struct HandFinderParams {
   /// 5-9 cm nearer than a hand raised high), the hand is measured at the end, in a depth band
   /// around its own nearest reading. Negative: the nearest reading is the hand, as before.
   double arm_end_window_m = 0.2;
+  /// A followed track that is no arm's end (the surface does not run back arm_protrusion_m from
+  /// it: a second person's head) gives way to a nearer foreground component that is one and passes
+  /// a new track's tests.
+  bool take_over_by_arm_end = true;
 };
 
 struct HandObservation {

@@ -5,8 +5,9 @@
 //     reading seen, so static things - furniture nearer than the hand included - are background
 //     and a moving arm reveals what is behind it) gives the foreground (nearer than the background
 //     by `foreground_m`); an opening removes the thin strips a swaying body leaves;
-//  2. the foreground component is chosen by temporal continuity (the one under the previous hand),
-//     else the one reaching nearest; its hand is the part within `hand_depth_band_m` of its
+//  2. the foreground component is chosen by temporal continuity (the one under the previous hand;
+//     one that is no arm's end gives way to an arm's end reaching 15 cm nearer), else the one
+//     reaching nearest; its hand is the part within `hand_depth_band_m` of its
 //     nearest point (the arm's far end), unless that point is a joint (an elbow pointing at the
 //     camera) on the way to the arm's geodesic end (the point farthest along the surface from
 //     the body): then the hand is at that end, in a depth band around its own nearest point;

@@ -45,6 +45,9 @@ constexpr double kPalmHalfLengthM = 0.045;   // the palm spans this either side 
 constexpr double kArmSearchM = 0.25;         // the forearm: the surface that runs on from the hand, this near it
 constexpr double kFrontSurfaceM = 0.02;     // a candidate's front surface (find_arm_end's border test): a palm is flat within ~1 cm
 constexpr double kSurfaceStepM = 0.03;       // a step between grid neighbours on one surface (as reaches_back)
+constexpr double kEndBandNearM = 0.02;       // a hand at an arm's geodesic end: its band starts this in front of its
+                                             // nearest grid reading (full resolution finds a little nearer), not at
+                                             // the forearm running on nearer to the elbow
 /// walk_surface: what to do with a neighbouring cell on the surface.
 enum class Step { kTake, kSkip, kAbort };
 constexpr int kMinArmCells = 3;              // fewer: which end is the wrist is not known, no estimate
@@ -226,20 +229,45 @@ struct HandFinder::Impl {
 
   HandObservation find(std::span<const std::uint16_t> raw);
   void update_background(const cv::Mat* exclude);
-  bool measure(std::span<const std::uint16_t> raw, const cv::Rect& cells, std::uint16_t near_raw, cv::Point seed_cell, Palm& palm);
+  /// `two_sided`: the band also stops kEndBandNearM in front of near_raw (a hand at an arm's
+  /// geodesic end, whose forearm runs on nearer to an elbow; see arm_end).
+  bool measure(std::span<const std::uint16_t> raw, const cv::Rect& cells, std::uint16_t near_raw, cv::Point seed_cell, Palm& palm,
+               bool two_sided = false);
   /// Sides of the ROI (for measure_in_band's `grow` and `touched`).
   enum Side : int { kLeft = 1, kTop = 2, kRight = 4, kBottom = 8 };
   /// Steps 3-4 in the depth band [near_raw, far_raw]: the ROI is the cells' box padded by a palm
   /// diameter, twice that on the sides in `grow`; `touched` says where the band's region met it.
   bool measure_in_band(std::span<const std::uint16_t> raw, const cv::Rect& cells, std::uint16_t near_raw, std::uint16_t far_raw,
-                       cv::Point seed_cell, Palm& palm, int grow);
+                       cv::Point seed_cell, Palm& palm, int grow, bool two_sided);
   int touched = 0;
   template <class OnCell, class OnStep>
   bool walk_surface(cv::Point seed, OnCell&& on_cell, OnStep&& on_step);
   static std::size_t grid_index(cv::Point p) { return static_cast<std::size_t>(p.y) * kGridW + static_cast<std::size_t>(p.x); }
-  bool reaches_back(cv::Point seed, std::uint16_t near_raw);
-  bool front_touches_border(cv::Point seed, std::uint16_t near_raw);
+  bool reaches_back(cv::Point seed, std::uint16_t near_raw, bool past_nearer = false);
+  bool front_touches_border(cv::Point seed, std::uint16_t near_raw, bool two_sided = false);
+  /// The grid cells of the depth band [near side, band_limit[near_raw]] connected to `seed` into
+  /// band_region (255), their box into `box`; `two_sided`: the near side is kEndBandNearM in front.
+  void band_cells_at(cv::Point seed, std::uint16_t near_raw, bool two_sided, cv::Rect& box);
+  /// The near side of a two-sided band around `near_raw` (kEndBandNearM in front of it).
+  std::uint16_t end_band_near(std::uint16_t near_raw) const { return raw_limit(model.metres(near_raw) - kEndBandNearM, false); }
   bool is_joint(cv::Point seed, std::uint16_t near_raw);
+  /// The end of an arm (arm_end): the hand at the arm's geodesic extremity.
+  struct ArmEnd {
+    cv::Point seed;              ///< the end's hand: its nearest grid cell ...
+    std::uint16_t near_raw = 0;  ///< ... and that reading
+    cv::Rect cells;              ///< the end's hand: its grid cells' bounding box
+    bool elsewhere = false;      ///< the end's hand does not hold the arm's nearest reading, which lies on the way to it
+  };
+  bool arm_end(cv::Point seed, std::uint16_t near_raw, ArmEnd& end);
+  std::vector<cv::Point> arm_region, arm_roots;  // arm_end's surface, and where it runs on toward the body
+  std::vector<std::uint32_t> in_arm_region = std::vector<std::uint32_t>(kGridCells, 0);  // generation marks
+  std::vector<std::uint32_t> geodesic_pass = std::vector<std::uint32_t>(kGridCells, 0);  // ... of geodesic's
+  std::vector<float> geodesic = std::vector<float>(kGridCells, 0.0f);  // metres along the surface
+  std::uint32_t arm_generation = 0, geodesic_generation = 0;
+  std::vector<std::pair<float, int>> geodesic_heap;
+  /// Dijkstra over arm_region from `sources` (distance 0), up to `limit_m`; the cell reached
+  /// farthest. Distances (3D, metres) land in `geodesic`, marked by geodesic_pass.
+  cv::Point geodesic_walk(const std::vector<cv::Point>& sources, float limit_m);
   std::vector<cv::Point> slab;  // is_joint's cells 5-10 cm behind the candidate
   /// A plane (camera frame, metres) through the readings under a mask.
   struct Plane {
@@ -278,7 +306,10 @@ struct HandFinder::Impl {
   std::vector<std::size_t> selected;   // select_near_plane's choice among them
 
   cv::Mat roi_hand_buffer = cv::Mat(kDepthHeight + 2, kDepthWidth + 2, CV_8U);
+  bool follow_component(std::span<const std::uint16_t> raw, int component, bool continuing, bool take_over, Palm& palm);
   bool find_arm_end(std::span<const std::uint16_t> raw, Palm& palm, cv::Point& seed);
+  bool arm_end_candidate(std::span<const std::uint16_t> raw, cv::Point seed, std::uint16_t near_raw, const cv::Rect& box,
+                         bool two_sided, Palm& palm);
   bool palm_accepted(const Palm& palm) const;
   bool jumped(const Palm& palm) const;
   /// Whether a candidate's hand cells (the band's region, on the grid) reach the image's border
@@ -367,14 +398,15 @@ void HandFinder::reset() {
 /// Steps 3-4 for one candidate hand: its grid cells `cells` (bounding box), the nearest reading
 /// `near_raw` at grid cell `seed_cell`. Fills `palm`; false when no palm-like region is there.
 bool HandFinder::Impl::measure(std::span<const std::uint16_t> raw, const cv::Rect& cells, std::uint16_t near_raw,
-                               cv::Point seed_cell, Palm& palm) {
-  if (!measure_in_band(raw, cells, near_raw, band_limit[near_raw], seed_cell, palm, 0)) return false;
+                               cv::Point seed_cell, Palm& palm, bool two_sided) {
+  if (!measure_in_band(raw, cells, near_raw, band_limit[near_raw], seed_cell, palm, 0, two_sided)) return false;
   // No palm, and the band's region was cut by the ROI (made from the foreground's cells, which may
   // hold only part of the hand: one rising through where the arm rested is less than foreground_m
   // in front of it there): measured again with the ROI grown by a palm diameter on those sides.
   if (!palm_sized(palm) && touched != 0) {
     Palm grown;
-    if (measure_in_band(raw, cells, near_raw, band_limit[near_raw], seed_cell, grown, touched) && palm_sized(grown)) palm = grown;
+    if (measure_in_band(raw, cells, near_raw, band_limit[near_raw], seed_cell, grown, touched, two_sided) && palm_sized(grown))
+      palm = grown;
   }
   // A circle much larger than a palm: the band reached something just behind the hand (a hand
   // against the chest, the torso 5-8 cm behind). A flat palm and its fingers lie within a few cm.
@@ -382,14 +414,14 @@ bool HandFinder::Impl::measure(std::span<const std::uint16_t> raw, const cv::Rec
   const double z_near = model.metres(near_raw);
   for (double band = params.narrow_band_m; palm.radius_m > params.narrow_band_above_m && band >= 0.015; band /= 2) {
     Palm narrow;
-    if (!measure_in_band(raw, cells, near_raw, raw_limit(z_near + band, true), seed_cell, narrow, 0)) break;
+    if (!measure_in_band(raw, cells, near_raw, raw_limit(z_near + band, true), seed_cell, narrow, 0, two_sided)) break;
     palm = narrow;
   }
   return true;
 }
 
 bool HandFinder::Impl::measure_in_band(std::span<const std::uint16_t> raw, const cv::Rect& cells, std::uint16_t near_raw,
-                                       std::uint16_t far_raw, cv::Point seed_cell, Palm& palm, int grow) {
+                                       std::uint16_t far_raw, cv::Point seed_cell, Palm& palm, int grow, bool two_sided) {
   // Near the body part of the palm may be less than foreground_m in front of what was there
   // before, so at full resolution the depth band and connectivity bound the hand, in a ROI
   // grown by a palm diameter.
@@ -409,7 +441,7 @@ bool HandFinder::Impl::measure_in_band(std::span<const std::uint16_t> raw, const
   // reading, 2047, is beyond any far_raw).
   roi_mask.row(0).setTo(0);
   roi_mask.row(roi_mask.rows - 1).setTo(0);
-  const std::uint16_t slack_raw = near_raw > 20 ? static_cast<std::uint16_t>(near_raw - 20) : 0;
+  const std::uint16_t slack_raw = two_sided ? end_band_near(near_raw) : near_raw > 20 ? static_cast<std::uint16_t>(near_raw - 20) : 0;
   const std::uint16_t band_far = std::min(far_raw, kMaxValidRaw);
   for (int y = ry0; y < ry1; ++y) {
     const std::uint16_t* row = raw.data() + static_cast<std::size_t>(y) * kDepthWidth + rx0;
@@ -930,7 +962,7 @@ bool HandFinder::Impl::make_plane_grid(const Roi& roi, const Plane& plane, Plane
 /// reading, less than kSurfaceStepM nearer or farther than the cell they are reached from (one
 /// surface: no depth jump). `on_cell(cell, z)` sees each cell taken, in order, and may end the walk
 /// (returns true: the walk returns true); `on_step(z)` decides for each neighbour: kTake, kSkip, or
-/// kAbort (the walk returns false). Shared by reaches_back and is_joint.
+/// kAbort (the walk returns false). Shared by reaches_back, is_joint and arm_end.
 template <class OnCell, class OnStep>
 bool HandFinder::Impl::walk_surface(cv::Point seed, OnCell&& on_cell, OnStep&& on_step) {
   if (++visit_generation == 0) {
@@ -966,7 +998,7 @@ bool HandFinder::Impl::walk_surface(cv::Point seed, OnCell&& on_cell, OnStep&& o
 /// least `arm_protrusion_m` behind `near_raw`, and nowhere nearer: an arm's end reaching out of a
 /// body. A head, a torso, a box or a person farther back has no such depth; the upper arm of a
 /// hand out of view has its forearm nearer.
-bool HandFinder::Impl::reaches_back(cv::Point seed, std::uint16_t near_raw) {
+bool HandFinder::Impl::reaches_back(cv::Point seed, std::uint16_t near_raw, bool past_nearer) {
   const float z0 = model.metres(near_raw);
   const double protrusion = z0 > params.max_acquire_depth_m ? params.far_arm_protrusion_m : params.arm_protrusion_m;
   const float goal = z0 + static_cast<float>(protrusion);
@@ -974,7 +1006,8 @@ bool HandFinder::Impl::reaches_back(cv::Point seed, std::uint16_t near_raw) {
   return walk_surface(
       seed, [&](cv::Point, float zc) { return zc >= goal; },
       // The surface goes on toward the sensor: a limb's middle, not its end.
-      [&](float zn) { return zn < nearer_floor ? Step::kAbort : Step::kTake; });
+      // `past_nearer`: a hand at an arm's geodesic end, whose forearm runs on nearer (an elbow).
+      [&](float zn) { return zn < nearer_floor && !past_nearer ? Step::kAbort : Step::kTake; });
 }
 
 /// Whether the candidate at grid cell `seed` (nearest reading `near_raw`) is a limb's joint rather
@@ -1019,14 +1052,144 @@ bool HandFinder::Impl::is_joint(cv::Point seed, std::uint16_t near_raw) {
   return false;
 }
 
+cv::Point HandFinder::Impl::geodesic_walk(const std::vector<cv::Point>& sources, float limit_m) {
+  if (++geodesic_generation == 0) {
+    std::fill(geodesic_pass.begin(), geodesic_pass.end(), 0u);
+    geodesic_generation = 1;
+  }
+  const auto& k = model.intrinsics();
+  const auto farther = [](const std::pair<float, int>& a, const std::pair<float, int>& b) { return a.first > b.first; };
+  geodesic_heap.clear();
+  for (const auto& c : sources) {
+    const auto i = grid_index(c);
+    geodesic_pass[i] = geodesic_generation;
+    geodesic[i] = 0.0f;
+    geodesic_heap.emplace_back(0.0f, static_cast<int>(i));
+  }
+  std::make_heap(geodesic_heap.begin(), geodesic_heap.end(), farther);
+  cv::Point tip = sources.empty() ? cv::Point(-1, -1) : sources.front();
+  float tip_m = 0.0f;
+  while (!geodesic_heap.empty()) {
+    std::pop_heap(geodesic_heap.begin(), geodesic_heap.end(), farther);
+    const auto [d, i] = geodesic_heap.back();
+    geodesic_heap.pop_back();
+    if (d > geodesic[static_cast<std::size_t>(i)]) continue;  // a stale entry
+    const cv::Point c{i % kGridW, i / kGridW};
+    if (d > tip_m) {
+      tip_m = d;
+      tip = c;
+    }
+    const float zc = model.metres(grid.at<std::uint16_t>(c));
+    const float cell_m = static_cast<float>(kStep) * zc / static_cast<float>(k.fx);
+    for (int dy = -1; dy <= 1; ++dy)
+      for (int dx = -1; dx <= 1; ++dx) {
+        const cv::Point n{c.x + dx, c.y + dy};
+        if ((dx == 0 && dy == 0) || n.x < 0 || n.y < 0 || n.x >= kGridW || n.y >= kGridH) continue;
+        const auto j = grid_index(n);
+        if (in_arm_region[j] != arm_generation) continue;
+        const float dz = model.metres(grid.at<std::uint16_t>(n)) - zc;
+        const float lateral = cell_m * ((dx != 0 && dy != 0) ? 1.41421356f : 1.0f);
+        const float dn = d + std::sqrt(lateral * lateral + dz * dz);
+        if (dn > limit_m || (geodesic_pass[j] == geodesic_generation && geodesic[j] <= dn)) continue;
+        geodesic_pass[j] = geodesic_generation;
+        geodesic[j] = dn;
+        geodesic_heap.emplace_back(dn, static_cast<int>(j));
+        std::push_heap(geodesic_heap.begin(), geodesic_heap.end(), farther);
+      }
+  }
+  return tip;
+}
+
+/// The arm's end as its geodesic extremity (the farthest point along the surface, not the nearest
+/// to the camera). The surface at grid cell `seed` (the arm's nearest reading `near_raw`) is
+/// walked without a depth jump (kSurfaceStepM between neighbours) up to arm_end_window_m behind
+/// it; where it runs on farther back is the body's side (the upper arm toward the shoulder, the
+/// forearm toward the elbow). The end is the point farthest along the surface from there; its
+/// hand, the cells within kEndHandM of it along the surface. An elbow pointing at the camera is
+/// the arm's nearest reading but a joint in the middle of this path; the hand is at its end.
+/// False when the surface never runs on farther back (no body side: nothing to measure from).
+bool HandFinder::Impl::arm_end(cv::Point seed, std::uint16_t near_raw, ArmEnd& end) {
+  constexpr float kEndHandM = 0.18f;    // a hand's length: fingertip to wrist ~19 cm
+  constexpr float kJointFromTipM = 0.25f;  // an elbow is a hand and a forearm (~45 cm) along the surface from the
+                                          // fingertips (0.28-0.57 m seen where the hand is partly out of view); a
+                                          // hand's own readings lie within ~21 cm (its heel, at 0.7 m)
+  constexpr float kJointToHandM = 0.10f;  // an elbow's to its hand's nearest reading: a forearm's length, ~26 cm
+  constexpr float kBendSlackM = 0.25f;  // a path across a bent elbow cuts its corner: up to ~2 arm diameters (21 cm seen)
+  const float z0 = model.metres(near_raw);
+  const float z_far = z0 + static_cast<float>(params.arm_end_window_m), z_near = z0 - static_cast<float>(kSurfaceStepM);
+  // The surface (walk_surface), each cell with a neighbour on it farther back than z_far a root.
+  arm_roots.clear();
+  cv::Point current;
+  walk_surface(
+      seed,
+      [&](cv::Point c, float) {
+        current = c;
+        return false;
+      },
+      [&](float zn) {
+        if (zn > z_far) {
+          if (arm_roots.empty() || arm_roots.back() != current) arm_roots.push_back(current);
+          return Step::kSkip;
+        }
+        return zn < z_near ? Step::kSkip : Step::kTake;
+      });
+  arm_region.assign(queue.begin(), queue.end());
+  if (++arm_generation == 0) {
+    std::fill(in_arm_region.begin(), in_arm_region.end(), 0u);
+    arm_generation = 1;
+  }
+  for (const auto& c : arm_region) in_arm_region[grid_index(c)] = arm_generation;
+  if (arm_roots.empty()) return false;
+  const cv::Point tip = geodesic_walk(arm_roots, std::numeric_limits<float>::max());
+  const float reach_m = geodesic[grid_index(tip)], nearest_from_body_m = geodesic[grid_index(seed)];
+  // The nearest reading a joint on the way from the body to the end (an elbow): its distances
+  // from both add up to the whole length, give or take the bend's corner. The end of another
+  // branch (the other arm hanging, reached across the torso of a user whose hand is near the
+  // body) is no hand of this arm: the nearest reading is then an end of its own. So the walk from
+  // the end need go no farther than this.
+  const float on_path_m = reach_m + kBendSlackM - nearest_from_body_m;
+  end = ArmEnd{};
+  if (on_path_m < kJointFromTipM) return true;  // the nearest reading is at the end
+  geodesic_walk({tip}, on_path_m);
+  end.near_raw = kNoReading;
+  int x0 = kGridW, y0 = kGridH, x1 = -1, y1 = -1;
+  for (const auto& c : arm_region) {
+    if (geodesic_pass[grid_index(c)] != geodesic_generation || geodesic[grid_index(c)] > kEndHandM) continue;
+    const std::uint16_t d = grid.at<std::uint16_t>(c);
+    if (d < end.near_raw) {
+      end.near_raw = d;
+      end.seed = c;
+    }
+    x0 = std::min(x0, c.x);
+    x1 = std::max(x1, c.x);
+    y0 = std::min(y0, c.y);
+    y1 = std::max(y1, c.y);
+  }
+  end.cells = cv::Rect(x0, y0, x1 - x0 + 1, y1 - y0 + 1);
+  // On that way, past a hand's length from the tip; and the end's hand (its nearest reading) well
+  // away from the joint along the surface: where the arm's nearest reading is just past a hand's
+  // length from the fingertips (a forearm pointing at the camera), the one-sided band from it
+  // holds the hand already.
+  const bool on_path = geodesic_pass[grid_index(seed)] == geodesic_generation;
+  const float nearest_to_end_m = geodesic[grid_index(seed)];
+  end.elsewhere = on_path && nearest_to_end_m >= kJointFromTipM && nearest_to_end_m - geodesic[grid_index(end.seed)] >= kJointToHandM;
+  return true;
+}
+
 /// Whether the candidate's front surface (the grid cells within kFrontSurfaceM of its nearest
 /// reading `near_raw`, connected to `seed`: a palm and its fingers, or the face of a box) reaches the
 /// image's border: what the border cuts may be anything, and a hand is reported only whole in view.
-bool HandFinder::Impl::front_touches_border(cv::Point seed, std::uint16_t near_raw) {
-  cv::compare(grid, front_limit[near_raw], front_cells, cv::CMP_LE);
+bool HandFinder::Impl::front_touches_border(cv::Point seed, std::uint16_t near_raw, bool two_sided) {
+  cv::inRange(grid, two_sided ? end_band_near(near_raw) : 0, front_limit[near_raw], front_cells);
   cv::Rect front;
   cv::floodFill(front_cells, seed, cv::Scalar(128), &front, cv::Scalar(0), cv::Scalar(0), 8);
   return touches_border(front);
+}
+
+void HandFinder::Impl::band_cells_at(cv::Point seed, std::uint16_t near_raw, bool two_sided, cv::Rect& box) {
+  cv::inRange(grid, two_sided ? end_band_near(near_raw) : 0, band_limit[near_raw], band_cells);
+  cv::floodFill(band_cells, seed, cv::Scalar(128), &box, cv::Scalar(0), cv::Scalar(0), 8);
+  cv::compare(band_cells, 128, band_region, cv::CMP_EQ);
 }
 
 /// Acquisition without a background: the nearest readings of the grid in turn (up to
@@ -1037,7 +1200,6 @@ bool HandFinder::Impl::find_arm_end(std::span<const std::uint16_t> raw, Palm& pa
   constexpr int kCandidates = 6;
   candidate_mask.create(kGridH, kGridW, CV_8U);
   candidate_mask.setTo(0);
-  const auto& k = model.intrinsics();
   for (int attempt = 0; attempt < kCandidates; ++attempt) {
     // The nearest reading not tried yet, the first in row order among equals: each row's minimum
     // by masks (it vectorises), then the place of the best one.
@@ -1055,31 +1217,54 @@ bool HandFinder::Impl::find_arm_end(std::span<const std::uint16_t> raw, Palm& pa
     for (const auto* g = grid.ptr<std::uint16_t>(seed_row); g[seed.x] != near_raw || candidate_mask.at<std::uint8_t>(seed); ++seed.x) {
     }
     // The candidate: the grid cells within the depth band connected to the seed.
-    const std::uint16_t far_raw = band_limit[near_raw];
-    cv::compare(grid, far_raw, band_cells, cv::CMP_LE);
     cv::Rect box;
-    cv::floodFill(band_cells, seed, cv::Scalar(128), &box, cv::Scalar(0), cv::Scalar(0), 8);
-    cv::compare(band_cells, 128, band_region, cv::CMP_EQ);
+    band_cells_at(seed, near_raw, false, box);
     candidate_mask.setTo(255, band_region);
-    // A hand with a stretch of forearm inside the band spans 5-35 cm; a box front or a torso more.
-    const double z = model.metres(near_raw);
-    const double w_m = box.width * kStep * z / k.fx, h_m = box.height * kStep * z / k.fy;
-    if (std::max(w_m, h_m) < 0.05 || std::min(w_m, h_m) > 0.35) continue;
-    if (z > params.max_track_depth_m) continue;  // nor here: beyond the room a user stands in
-    // What the border cuts is not taken: the candidate's front surface (within kFrontSurfaceM of
-    // its nearest reading: a palm and its fingers, or the face of a box) must be whole in view. A
-    // hand held against the chest keeps the torso out of it (4-8 cm behind).
-    // The grid test first: it is cheap, the full-resolution measure is not.
-    if (front_touches_border(seed, near_raw) || !reaches_back(seed, near_raw) ||
-        !measure(raw, box, near_raw, seed, palm) || !palm_accepted(palm) || palm.radius_m > params.max_new_palm_radius_m ||
-        palm.ridge_m > params.max_palm_ridge_m)
+    // The nearest reading is a joint (an elbow pointing at the camera) and the arm's geodesic end
+    // lies elsewhere: the candidate is the hand there, in a band around its own nearest reading
+    // (past the elbow, which came nearer: reaches_back's test of an arm's end, taken from the hand).
+    // The joint itself is no candidate.
+    ArmEnd end;
+    const bool to_end = params.arm_end_window_m >= 0 && is_joint(seed, near_raw) && arm_end(seed, near_raw, end) && end.elsewhere;
+    if (to_end) {
+      cv::Rect end_box;
+      band_cells_at(end.seed, end.near_raw, true, end_box);
+      candidate_mask.setTo(255, band_region);
+      if (arm_end_candidate(raw, end.seed, end.near_raw, end_box, true, palm)) {
+        seed_out = end.seed;
+        return true;
+      }
       continue;
-    band_region.copyTo(arm);
-    cv::dilate(arm, arm, kernel3);
-    seed_out = seed;
-    return true;
+    }
+    if (arm_end_candidate(raw, seed, near_raw, box, false, palm)) {
+      seed_out = seed;
+      return true;
+    }
   }
   return false;
+}
+
+/// find_arm_end's tests of one candidate (its nearest grid reading `near_raw` at `seed`, its band's
+/// cells in band_region, their box `box`); true: `palm` is the hand, `arm` its cells.
+bool HandFinder::Impl::arm_end_candidate(std::span<const std::uint16_t> raw, cv::Point seed, std::uint16_t near_raw,
+                                         const cv::Rect& box, bool two_sided, Palm& palm) {
+  const auto& k = model.intrinsics();
+  // A hand with a stretch of forearm inside the band spans 5-35 cm; a box front or a torso more.
+  const double z = model.metres(near_raw);
+  const double w_m = box.width * kStep * z / k.fx, h_m = box.height * kStep * z / k.fy;
+  if (std::max(w_m, h_m) < 0.05 || std::min(w_m, h_m) > 0.35) return false;
+  if (z > params.max_track_depth_m) return false;  // nor here: beyond the room a user stands in
+  // What the border cuts is not taken: the candidate's front surface (within kFrontSurfaceM of
+  // its nearest reading: a palm and its fingers, or the face of a box) must be whole in view. A
+  // hand held against the chest keeps the torso out of it (4-8 cm behind).
+  // The grid test first: it is cheap, the full-resolution measure is not.
+  if (front_touches_border(seed, near_raw, two_sided) || !reaches_back(seed, near_raw, two_sided) ||
+      !measure(raw, box, near_raw, seed, palm, two_sided) || !palm_accepted(palm) ||
+      palm.radius_m > params.max_new_palm_radius_m || palm.ridge_m > params.max_palm_ridge_m)
+    return false;
+  band_region.copyTo(arm);
+  cv::dilate(arm, arm, kernel3);
+  return true;
 }
 
 /// Continuity: a hand that has just left (across an edge, say) does not reappear far away at
@@ -1094,6 +1279,67 @@ bool HandFinder::Impl::palm_accepted(const Palm& palm) const {
   const bool inside = palm.u - expected_px >= params.invalid_left_columns && palm.u + expected_px <= kDepthWidth - 1 &&
                       palm.v - expected_px >= 0 && palm.v + expected_px <= kDepthHeight - 1;
   return inside && palm_sized(palm) && palm.valid_fraction >= 0.5 && !palm.cut_by_border;
+}
+
+/// Steps 2-4 for one foreground component: its hand (the part within the band of its nearest
+/// reading, or at its geodesic end), measured; whether it is the hand (a followed one when
+/// `continuing`, else a new track's tests). Sets the arm's cells (arm), previous_cell, tracking.
+/// `take_over`: a new track that is to replace a followed one: it must be an arm's end
+/// (reaches_back) at any depth, and it may appear anywhere (no max_jump_m).
+bool HandFinder::Impl::follow_component(std::span<const std::uint16_t> raw, int component, bool continuing, bool take_over,
+                                        Palm& palm) {
+  std::uint16_t near_raw = nearest[static_cast<std::size_t>(component)];
+  const cv::Point arm_nearest = nearest_at[static_cast<std::size_t>(component)];
+  cv::Point seed = arm_nearest;
+  const std::uint16_t far_raw = band_limit[near_raw];
+  // The hand's cells: the component within the depth band; their bounding box is the ROI.
+  int x0 = kGridW, y0 = kGridH, x1 = -1, y1 = -1;
+  for (int gy = 0; gy < kGridH; ++gy) {
+    const int* l = labels.ptr<int>(gy);
+    const auto* g = grid.ptr<std::uint16_t>(gy);
+    for (int gx = 0; gx < kGridW; ++gx)
+      if (l[gx] == component && g[gx] <= far_raw) {
+        x0 = std::min(x0, gx);
+        x1 = std::max(x1, gx);
+        y0 = std::min(y0, gy);
+        y1 = std::max(y1, gy);
+      }
+  }
+  cv::compare(labels, component, arm, cv::CMP_EQ);
+  cv::dilate(arm, arm, kernel3);
+  excluded = true;
+  cv::Rect cells(x0, y0, x1 - x0 + 1, y1 - y0 + 1);
+  // The arm's nearest reading is a joint (an elbow pointing at the camera) and the arm's
+  // geodesic end lies elsewhere: the hand is there, measured around its own nearest reading; the
+  // joint is not measured (where the end holds no palm, the hand has left the image, say). A
+  // new track asks is_joint as well; a followed arm does not: the geodesic test alone says the
+  // nearest reading lies between the body and the end, and is_joint flickers as an elbow turns
+  // (seed 90: the elbow was followed while the hand rose out of the image).
+  ArmEnd end;
+  const bool at_end =
+      params.arm_end_window_m >= 0 && (continuing || is_joint(seed, near_raw)) && arm_end(seed, near_raw, end) && end.elsewhere;
+  if (at_end) {
+    near_raw = end.near_raw;
+    seed = end.seed;
+    cells = end.cells;
+  }
+  const bool measured = measure(raw, cells, near_raw, seed, palm, at_end);
+  if (measured) {
+    previous_cell = {static_cast<int>(palm.u) / kStep, static_cast<int>(palm.v) / kStep};
+    tracking = palm_sized(palm);  // keep following an arm whose palm is at the edge
+    // A new track does not start on a person walking by behind the user.
+    const bool jump = !take_over && jumped(palm);
+    const bool found =
+        palm_accepted(palm) && !jump &&
+        (continuing || (palm.radius_m <= params.max_new_palm_radius_m && palm.ridge_m <= params.max_palm_ridge_m &&
+                        ((palm.z <= params.max_acquire_depth_m && !take_over) ||
+                         (palm.z <= params.max_track_depth_m && reaches_back(seed, near_raw, at_end))) &&
+                        !is_joint(seed, near_raw) && !nearest_at_border(arm_nearest)));
+    if (jump || (!found && !continuing)) tracking = false;
+    return found;
+  }
+  tracking = false;
+  return false;
 }
 
 HandObservation HandFinder::Impl::find(std::span<const std::uint16_t> raw) {
@@ -1153,52 +1399,34 @@ HandObservation HandFinder::Impl::find(std::span<const std::uint16_t> raw) {
       }
     }
   }
-  if (chosen == 0) {
-    std::uint16_t best = kNoReading;
-    for (int c = 1; c < n; ++c)
-      if (area[static_cast<std::size_t>(c)] >= params.min_component_cells && nearest[static_cast<std::size_t>(c)] < best) {
-        best = nearest[static_cast<std::size_t>(c)];
-        chosen = c;
-      }
-  }
+  int reaching = 0;  // the big-enough component that reaches nearest
+  std::uint16_t best = kNoReading;
+  for (int c = 1; c < n; ++c)
+    if (area[static_cast<std::size_t>(c)] >= params.min_component_cells && nearest[static_cast<std::size_t>(c)] < best) {
+      best = nearest[static_cast<std::size_t>(c)];
+      reaching = c;
+    }
+  if (chosen == 0) chosen = reaching;
 
   Palm palm;
   bool found = false;
-  if (chosen != 0) {
-    const std::uint16_t near_raw = nearest[static_cast<std::size_t>(chosen)];
-    const cv::Point seed = nearest_at[static_cast<std::size_t>(chosen)];
-    const std::uint16_t far_raw = band_limit[near_raw];
-    // The hand's cells: the chosen component within the depth band; their bounding box is the ROI.
-    int x0 = kGridW, y0 = kGridH, x1 = -1, y1 = -1;
-    for (int gy = 0; gy < kGridH; ++gy) {
-      const int* l = labels.ptr<int>(gy);
-      const auto* g = grid.ptr<std::uint16_t>(gy);
-      for (int gx = 0; gx < kGridW; ++gx)
-        if (l[gx] == chosen && g[gx] <= far_raw) {
-          x0 = std::min(x0, gx);
-          x1 = std::max(x1, gx);
-          y0 = std::min(y0, gy);
-          y1 = std::max(y1, gy);
-        }
-    }
-    cv::compare(labels, chosen, arm, cv::CMP_EQ);
-    cv::dilate(arm, arm, kernel3);
-    excluded = true;
-    const cv::Rect cells(x0, y0, x1 - x0 + 1, y1 - y0 + 1);
-    if (measure(raw, cells, near_raw, seed, palm)) {
-      previous_cell = {static_cast<int>(palm.u) / kStep, static_cast<int>(palm.v) / kStep};
-      tracking = palm_sized(palm);  // keep following an arm whose palm is at the edge
-      // A new track does not start on a person walking by behind the user.
-      const bool jump = jumped(palm);
-      found = palm_accepted(palm) && !jump &&
-              (continuing || (palm.radius_m <= params.max_new_palm_radius_m && palm.ridge_m <= params.max_palm_ridge_m &&
-                              (palm.z <= params.max_acquire_depth_m ||
-                               (palm.z <= params.max_track_depth_m && reaches_back(seed, near_raw))) &&
-                              !is_joint(seed, near_raw) && !nearest_at_border(seed)));
-      if (jump || (!found && !continuing)) tracking = false;
-    } else {
-      tracking = false;
-    }
+  // A followed track that is no arm's end (a second person's head, taken while the user's hand was
+  // down, seed 53) gives way to a component that reaches an arm's protrusion nearer than it, is an
+  // arm's end and passes a new track's tests (the user's hand, raised): the followed one would
+  // otherwise hold the track, and for reacquire_frames after it is lost, the jump test would
+  // refuse the hand. (A user's own elbow, a few cm nearer than a far hand, is not nearer by that.)
+  const auto nearer_by_protrusion = [&](int a, int b) {
+    return model.metres(nearest[static_cast<std::size_t>(a)]) + params.arm_protrusion_m <= model.metres(nearest[static_cast<std::size_t>(b)]);
+  };
+  const bool take_over = params.take_over_by_arm_end && continuing && chosen != 0 && reaching != 0 && reaching != chosen &&
+                         nearer_by_protrusion(reaching, chosen) &&
+                         !reaches_back(nearest_at[static_cast<std::size_t>(chosen)], nearest[static_cast<std::size_t>(chosen)]) &&
+                         follow_component(raw, reaching, false, true, palm);
+  if (take_over) {
+    found = true;
+    tracking = true;
+  } else if (chosen != 0) {
+    found = follow_component(raw, chosen, continuing, false, palm);
   } else {
     tracking = false;
   }

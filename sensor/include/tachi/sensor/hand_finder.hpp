@@ -5,9 +5,12 @@
 //     reading seen, so static things - furniture nearer than the hand included - are background
 //     and a moving arm reveals what is behind it) gives the foreground (nearer than the background
 //     by `foreground_m`); an opening removes the thin strips a swaying body leaves;
-//  2. the foreground component is chosen by temporal continuity (the one under the previous hand),
-//     else the one reaching nearest; its hand is the part within `hand_depth_band_m` of its
-//     nearest point (the arm's far end);
+//  2. the foreground component is chosen by temporal continuity (the one under the previous hand;
+//     one that is no arm's end gives way to an arm's end reaching 15 cm nearer), else the one
+//     reaching nearest; its hand is the part within `hand_depth_band_m` of its
+//     nearest point (the arm's far end), unless that point is a joint (an elbow pointing at the
+//     camera) on the way to the arm's geodesic end (the point farthest along the surface from
+//     the body): then the hand is at that end, in a depth band around its own nearest point;
 //  3. at full resolution, in that region only: the hand mask (dropouts inside it filled), its
 //     distance transform; the palm centre is the distance-transform maximum (the centre of the
 //     largest inscribed circle, i.e. the palm), back-projected at the median depth of the palm
@@ -82,6 +85,17 @@ struct HandFinderParams {
   /// arm leaving the image across a side shows a palm-sized place at its bend (chosen on seeds
   /// 1-100). Negative: no such test.
   int nearest_border_cells = 1;
+  /// The arm's end is its geodesic extremity: the surface reached from the arm's nearest reading
+  /// without a depth jump and no farther back than this is walked, from where it runs on farther
+  /// back (toward the body) to the point farthest along it. Where that end's hand does not hold the
+  /// nearest reading and the nearest reading is a limb's joint (an elbow pointing at the camera,
+  /// 5-9 cm nearer than a hand raised high), the hand is measured at the end, in a depth band
+  /// around its own nearest reading. Negative: the nearest reading is the hand, as before.
+  double arm_end_window_m = 0.2;
+  /// A followed track that is no arm's end (the surface does not run back arm_protrusion_m from
+  /// it: a second person's head) gives way to a nearer foreground component that is one and passes
+  /// a new track's tests.
+  bool take_over_by_arm_end = true;
 };
 
 struct HandObservation {

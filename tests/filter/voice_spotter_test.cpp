@@ -175,7 +175,9 @@ TEST(VoiceSpotter, ABritishVoiceSaysTheDefaultCommandsRightAndTheOldStartPhraseI
   // is: nothing said before 3 s is taken for a stop.
   const auto found = spot_commands(old, sequence("start cutting").samples());
   for (const auto& d : found) EXPECT_TRUE(d.command == VoiceCommand::Start || d.time_s > 3.0) << d.phrase << " at " << d.time_s;
-  if (!found.empty()) EXPECT_EQ(found.back().phrase, "stop cutting");
+  if (!found.empty()) {
+    EXPECT_EQ(found.back().phrase, "stop cutting");
+  }
   VoiceConfig no_margin = old;
   no_margin.verify_min_margin = 0.0;  // as before issue 22: the start was reported as a stop
   const auto before = spot_commands(no_margin, sequence("start cutting").samples());

@@ -222,6 +222,17 @@ Participant::~Participant() {
 
 namespace detail {
 
+// The sensor asks every frame whether its filter is there: the matched readers are listed (an allocation
+// and a discovery lookup each) only when the writer's publication-matched status moved since the last
+// answer. A match raises total_count and an unmatch lowers current_count, so any change moves the pair.
+struct ConsumerCount {
+  std::uint32_t total = 0, current = 0, consumers = 0;
+};
+std::mutex g_consumer_counts_mutex;
+std::map<dds_entity_t, ConsumerCount> g_consumer_counts;  // by writer; erased in delete_entity
+
+std::uint32_t count_consumers(dds_entity_t writer);
+
 dds_entity_t create_topic(const Participant& participant, const dds_topic_descriptor_t* descriptor,
                           const char* name) {
   return check(dds_create_topic(participant.handle(), descriptor, name, nullptr, nullptr),
@@ -248,9 +259,31 @@ dds_entity_t create_reader(const Participant& participant, dds_entity_t topic, Q
                std::string("create reader on topic ") + name + ": dds_create_reader");
 }
 
-void delete_entity(dds_entity_t entity) noexcept { dds_delete(entity); }
+void delete_entity(dds_entity_t entity) noexcept {
+  {
+    std::lock_guard lock(g_consumer_counts_mutex);
+    g_consumer_counts.erase(entity);
+  }
+  dds_delete(entity);
+}
+
 
 std::uint32_t matched_consumers(dds_entity_t writer) {
+  dds_publication_matched_status_t status{};
+  check(dds_get_publication_matched_status(writer, &status), "dds_get_publication_matched_status");
+  {
+    std::lock_guard lock(g_consumer_counts_mutex);
+    const auto it = g_consumer_counts.find(writer);
+    if (it != g_consumer_counts.end() && it->second.total == status.total_count && it->second.current == status.current_count)
+      return it->second.consumers;
+  }
+  const std::uint32_t consumers = status.current_count == 0 ? 0 : count_consumers(writer);
+  std::lock_guard lock(g_consumer_counts_mutex);
+  g_consumer_counts[writer] = {status.total_count, status.current_count, consumers};
+  return consumers;
+}
+
+std::uint32_t count_consumers(dds_entity_t writer) {
   std::vector<dds_instance_handle_t> readers(8);
   dds_return_t n = 0;
   while ((n = check(dds_get_matched_subscriptions(writer, readers.data(), readers.size()), "dds_get_matched_subscriptions")) >

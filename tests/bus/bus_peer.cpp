@@ -60,7 +60,8 @@ int subscribe_strokes(const Options& o, bus::Participant& dds) {
   std::map<std::uint32_t, std::uint64_t> next_frame;
   unsigned received = 0, out_of_order = 0, corrupt = 0;
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(o.timeout_s);
-  while (received < o.keys * o.count && std::chrono::steady_clock::now() < deadline) {
+  // Until the count, the timeout, or SIGINT/SIGTERM (a test that listens for the length of a run stops it).
+  while (received < o.keys * o.count && std::chrono::steady_clock::now() < deadline && !tachi::common::stop_requested()) {
     reader.wait_for_data(100ms);
     for (const auto& s : reader.take()) {
       auto& expected = next_frame[s->sensor_id];

@@ -30,10 +30,12 @@ ip -n "$host" route add 224.0.0.0/4 dev "veth-h$$"  # give multicast a way out, 
 
 ip netns exec "$host" tcpdump -i "veth-h$$" -n -U -w "$pcap" 2>/dev/null &
 capture_pid=$!
-sleep 1
+# tcpdump writes the pcap file header once it captures (-U: unbuffered); up to 5 s on a loaded machine.
+for _ in $(seq 100); do [ -s "$pcap" ] && break; sleep 0.05; done
+[ -s "$pcap" ] || { echo "FAIL: tcpdump did not start capturing on veth-h$$"; exit 1; }
 ip netns exec "$host" "$@"
 status=$?
-sleep 1
+sleep 1  # a packet sent as the command ended still reaches the capture
 kill "$capture_pid" 2>/dev/null; wait "$capture_pid" 2>/dev/null; capture_pid=
 packets=$(tcpdump -r "$pcap" -n 2>/dev/null | grep -vE 'ICMP6|IP6 fe80|ARP' )
 count=$(printf '%s' "$packets" | grep -c . || true)

@@ -2,6 +2,7 @@
 # The pipeline across two hosts: tachi-sensor on host A; tachi-filter, tachi-sim and tachi-viewer on
 # host B. The hosts are network namespaces this test makes (a veth pair, TEST-NET-2 addresses,
 # nothing routed anywhere else), each running config/cyclonedds-multihost.xml filled in for it.
+# The sensor plays at twice the recorded pace: nothing here measures it.
 # Usage: multihost_test.sh BIN_DIR RECORDING CONFIG_TEMPLATE    (exit 77 = skipped: needs root + ip netns)
 set -u
 bin=$1 recording=$2 template=$3
@@ -14,7 +15,7 @@ on_b() { exec ip netns exec "$b" "$@" --domain $dom --dds-config "$work/$if_b.xm
 on_b "$bin/tachi-sim" --grid 32 --pin top-edge --exit-when-idle 2 --export "$work/out" 2>"$work/sim.log" & sim=$!; pids+=("$sim")
 on_b "$bin/tachi-viewer" --headless --snapshot "$work/final.png" --fps 10 --exit-when-idle 3 2>"$work/viewer.log" & viewer=$!; pids+=("$viewer")
 on_b "$bin/tachi-filter" --gate threshold 2>"$work/filter.log" & filter=$!; pids+=("$filter")
-ip netns exec "$a" timeout 120 "$bin/tachi-sensor" --recording "$recording" --rate 1 --domain $dom \
+ip netns exec "$a" timeout 120 "$bin/tachi-sensor" --recording "$recording" --rate 2 --domain $dom \
   --dds-config "$work/$if_a.xml" --wait-readers 1 2>"$work/sensor.log"
 sensor_status=$?
 wait "$sim"; sim_status=$?

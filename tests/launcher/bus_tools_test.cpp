@@ -28,8 +28,11 @@ double last_number_after(const std::string& text, const std::string& label) {
 TEST(TachiHzAndBw, ASensorPlayingA30HzRecordingIs30Hz) {
   // The recording's depth frames are 1/30 s apart; the sensor publishes one raw hand sample per frame.
   ChildProcess sensor({kBin + "/tachi-sensor", "--recording", kRecordings + "/straight_cut", "--loop", "--domain", "143"});
+  // hz and bw listen side by side, as two terminals would; then topics, with the sensor surely discovered.
+  ChildProcess bw_run({kBin + "/tachi", "bw", "tachi/hand/raw", "--domain", "143", "--duration", "3"});
   const auto hz = tachi::test::run({kBin + "/tachi", "hz", "tachi/hand/raw", "--domain", "143", "--duration", "6"}, 60s);
-  const auto bw = tachi::test::run({kBin + "/tachi", "bw", "tachi/hand/raw", "--domain", "143", "--duration", "3"}, 60s);
+  const int bw_exit = bw_run.wait(60s);
+  const tachi::test::RunResult bw{bw_exit, bw_run.out(), bw_run.err()};
   const auto topics = tachi::test::run({kBin + "/tachi", "topics", "--verbose", "--domain", "143"}, 60s);
   sensor.signal(SIGINT);
   EXPECT_EQ(sensor.wait(10s), 0) << sensor.err();

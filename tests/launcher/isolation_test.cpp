@@ -24,7 +24,7 @@ const std::string kRecordings = tachi::test::recordings_dir();
 
 std::vector<std::string> run_args(const fs::path& out, const std::string& domain) {
   return {kBin + "/tachi", "run", "--recording", kRecordings + "/straight_cut", "--grid", "32", "--domain", domain, "--out",
-          out.string(), "--headless", "--settle", "1.5", "--rate", "0.5"};
+          out.string(), "--headless", "--settle", "1.5"};
 }
 
 std::string host_name() {
@@ -40,14 +40,14 @@ TEST(TwoRunsOnOneDomain, TheSecondIsRefusedNamingTheLivePipelineAndTheFirstCutsA
   // its own domain (146), alongside the runs above: a run mostly waits on the recording's real time.
   auto split = std::async(std::launch::async, [&dir] {
     tachi::test::ChildProcess producers({kBin + "/tachi", "run", "--nodes", "sim", "--recording", kRecordings + "/straight_cut",
-                                         "--grid", "16", "--domain", "146", "--out", (dir / "b").string(), "--headless"});
+                                         "--grid", "16", "--domain", "146", "--out", (dir / "b").string(), "--headless", "--rate", "2"});
     bool sim_up = false;
     for (int i = 0; i < 30 && !sim_up; ++i)
       sim_up = tachi::test::run({kBin + "/tachi", "status", "--domain", "146", "--listen", "1"}, 30s).out.find("tachi-sim") !=
                std::string::npos;
     ASSERT_TRUE(sim_up) << producers.err();
     tachi::test::ChildProcess consumers({kBin + "/tachi", "run", "--nodes", "sensor,filter", "--recording",
-                                         kRecordings + "/straight_cut", "--domain", "146", "--out", (dir / "a").string(), "--headless"});
+                                         kRecordings + "/straight_cut", "--domain", "146", "--out", (dir / "a").string(), "--headless", "--rate", "2"});
     EXPECT_EQ(consumers.wait(120s), 0) << consumers.err();
     EXPECT_EQ(consumers.err().find("already has a live tachi pipeline"), std::string::npos) << consumers.err();
     EXPECT_EQ(producers.wait(120s), 0) << producers.err();

@@ -33,7 +33,9 @@ const std::string kSource = tachi::test::source_dir();
 std::vector<std::string> run_args(const std::string& recording, unsigned domain, const fs::path& out,
                                   std::vector<std::string> extra = {}) {
   std::vector<std::string> args{kBin + "/tachi", "run",   "--recording", recording, "--domain", std::to_string(domain),
-                                "--out",         out.string(), "--headless", "--settle",  "1.5"};
+                                "--out",         out.string(), "--headless", "--settle",  "1.5",
+                                // Twice the recorded pace: no test here measures it, and each run waits on the recording's clock.
+                                "--rate",        "2"};
   args.insert(args.end(), extra.begin(), extra.end());
   return args;
 }

@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <csignal>
 #include <filesystem>
 #include <fstream>
@@ -39,6 +40,9 @@ std::vector<std::string> run_args(unsigned domain, const fs::path& out, std::vec
   std::vector<std::string> args{kBin + "/tachi", "run", "--recording", kRecordings + "/straight_cut", "--grid", "32",
                                 "--domain", std::to_string(domain), "--out", out.string(), "--headless", "--settle", "1.5",
                                 "--set", "sim.cut-mode=grid"};
+  // Twice the recorded pace unless a test sets its own: no test here measures the pace, and each run
+  // waits on the recording's clock (halves ~4.7 s of straight_cut's playback).
+  if (std::find(extra.begin(), extra.end(), "--rate") == extra.end()) args.insert(args.end(), {"--rate", "2"});
   args.insert(args.end(), extra.begin(), extra.end());
   return args;
 }
@@ -77,11 +81,11 @@ TEST_F(RecordedRun, PlayingTheRawHandIntoAFreshFilterAndSimulatorReproducesTheCu
   ASSERT_EQ(result_->exit_code, 0) << result_->err;
   const auto recorded = read_json(out() / "summary.json");
   ASSERT_EQ(recorded["cuts"], 1) << recorded.dump();
-  // A fresh filter and simulator (no sensor), fed only the recorded tachi/hand/raw.
+  // A fresh filter and simulator (no sensor), fed only the recorded tachi/hand/raw at the pace it was recorded.
   const fs::path b = dir_->path() / "b";
   tachi::test::ChildProcess replay(run_args(141, b, {"--nodes", "filter,sim"}));
   const auto play = tachi::test::run({kBin + "/tachi", "play", (out() / "run.mcap").string(), "--topics", "tachi/hand/raw",
-                                      "--domain", "141", "--wait", "60"},
+                                      "--domain", "141", "--wait", "60", "--rate", "2"},
                                      120s);
   ASSERT_EQ(play.exit_code, 0) << play.err;
   EXPECT_EQ(json::parse(play.out)["published"]["tachi/hand/raw"], depth_frames("straight_cut")) << play.out;
@@ -207,7 +211,7 @@ TEST(TachiRecord, StopsAtItsDurationOrSizeAndPlaysFromAStartAtARate) {
   tachi::test::ScratchDir dir("tachi_record_limits");
   tachi::test::ChildProcess sensor({kBin + "/tachi-sensor", "--recording", kRecordings + "/straight_cut", "--loop", "--domain", "142"});
   const auto timed = tachi::test::run({kBin + "/tachi", "record", (dir / "timed.mcap").string(), "--topics", "tachi/hand/raw",
-                                       "--duration", "3", "--domain", "142"},
+                                       "--duration", "2", "--domain", "142"},
                                       60s);
   // The schemas alone (tachi.idl, ~8 KB per type, in the data section and the summary) take ~90 KB.
   const auto sized = tachi::test::run({kBin + "/tachi", "record", (dir / "sized.mcap").string(), "--max-bytes", "100000",

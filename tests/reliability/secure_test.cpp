@@ -117,16 +117,18 @@ TEST(SecurePipeline, CutsTheRecordingLikeThePlainOne) {
   ChildProcess viewer({kBin + "/tachi-viewer", "--headless", "--domain", d, "--snapshot", (out / "final.png").string(),
                        "--fps", "10", "--exit-when-idle", "3", "--secure", pki});
   ChildProcess filter({kBin + "/tachi-filter", "--domain", d, "--gate", "threshold", "--secure", pki});
-  // An intruder without credentials listens to the strokes the whole time.
-  ChildProcess intruder(peer("strokes-sub", 177, "", "", {"--count", "1", "--timeout", "15"}));
-  ChildProcess sensor({kBin + "/tachi-sensor", "--recording", kRecordings + "/straight_cut", "--rate", "1", "--domain", d,
+  // An intruder without credentials listens to the strokes the whole time (stopped once the run ended).
+  ChildProcess intruder(peer("strokes-sub", 177, "", "", {"--count", "1", "--timeout", "120"}));
+  // Twice the recorded pace: nothing here measures it, and the run waits on the recording's clock.
+  ChildProcess sensor({kBin + "/tachi-sensor", "--recording", kRecordings + "/straight_cut", "--rate", "2", "--domain", d,
                        "--wait-readers", "1", "--secure", pki});
   const int sensor_exit = sensor.wait(120s);
   const int sim_exit = sim.wait(60s);
   const int viewer_exit = viewer.wait(30s);
   filter.signal(SIGINT);
   const int filter_exit = filter.wait(20s);
-  intruder.wait(30s);
+  intruder.signal(SIGINT);
+  EXPECT_EQ(intruder.wait(10s), 1) << "the intruder received nothing, and says so: " << intruder.out();
   const std::string logs =
       "sensor: " + sensor.err() + "\nfilter: " + filter.err() + "\nsim: " + sim.err() + "\nviewer: " + viewer.err();
   EXPECT_EQ(sensor_exit, 0) << logs;

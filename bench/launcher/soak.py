@@ -75,7 +75,10 @@ def main():
         cmd = [os.path.join(bin_dir, "tachi"), "run", "--recording", recording, "--domain", DOMAIN, "--out", out,
                "--headless", "--set", "sensor.loop=true"] + extra
         print(f"soak: {' '.join(cmd)} for {minutes:g} min")
-        run = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+        # The launcher's log goes to a file: a pipe nobody drains fills after ~64 KiB (~26 minutes of status
+        # lines), and the launcher then blocks writing its next line (it did, twice: the trace stopped at minute 26).
+        err_file = open(os.path.join(out, "launcher.err"), "w+")
+        run = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=err_file, text=True)
         start = time.monotonic()
         samples = []  # (minute, node, rss_kb, fds)
         while time.monotonic() - start < minutes * 60.0 and run.poll() is None:
@@ -89,10 +92,13 @@ def main():
         ended_early = run.poll() is not None
         run.send_signal(signal.SIGINT)
         try:
-            _, err = run.communicate(timeout=30)
+            run.wait(timeout=30)
         except subprocess.TimeoutExpired:
             run.kill()
             sys.exit("soak: the run did not stop within 30 s of SIGINT")
+        err_file.seek(0)
+        err = err_file.read()
+        err_file.close()
         if ended_early:
             sys.exit(f"soak: the run ended by itself after {time.monotonic() - start:.0f} s (exit {run.returncode}):\n{err[-2000:]}")
         if os.environ.get("TACHI_SOAK_KEEP"):

@@ -109,7 +109,7 @@ void add_offline_flags(CLI::App& app, OfflineOptions& o) {
   app.add_option("--iterations", o.solver.iterations, "Structural Gauss-Seidel passes per sub-step")
       ->check(CLI::Range(1, 200))
       ->capture_default_str();
-  // The solver's threads (issue 25): by default one core is left to the other nodes sharing the machine.
+  // The solver's threads (docs/sim.md "Threads"): by default one core is left to the other nodes sharing the machine.
   o.solver.threads = default_solver_threads();
   app.add_option("--threads", o.solver.threads,
                  "Threads of the pbd solver's sweeps (default: the cores but one, at least 1); the positions are the "

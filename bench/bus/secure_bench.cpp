@@ -1,4 +1,4 @@
-// Latency cost of DDS Security (docs/benchmarks.md, "DDS Security (issue 13)"): round trips between
+// Latency cost of DDS Security (docs/benchmarks.md, "DDS Security"): round trips between
 // two processes on loopback, plain and then authenticated + access-controlled + encrypted, in the
 // same run. The ping is a StrokeSample written as the filter; the echo a ClothState written as the
 // simulator (small: 12 B of positions; large: a 128x128 cloth, 196 KB), read back by the "filter".

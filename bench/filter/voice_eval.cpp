@@ -131,7 +131,7 @@ double rms(const std::vector<std::int16_t>& s) {
 
 std::string snr_label(double snr) { return snr >= 99 ? "clean" : std::to_string(static_cast<int>(snr)) + " dB"; }
 
-// ---- Across speakers (issue 22) --------------------------------------------------------------------
+// ---- Across speakers -------------------------------------------------------------------------------
 // Every English voice the machine synthesises (espeak-ng en and en-us with their +m1..m7 / +f1..f5
 // variants, flite kal kal16 awb rms slt, festival kal and slt), each also pitch-shifted and
 // tempo-changed with sox, in six conditions (clean, white noise and LibriVox babble at 20 and 10 dB,

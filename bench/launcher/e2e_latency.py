@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """End-to-end latency of the live pipeline: depth frame capture -> the published cloth state that
-reflects it, at two grid sizes, on one host (docs/benchmarks.md "End-to-end latency (issue 9)").
+reflects it, at two grid sizes, on one host (docs/benchmarks.md "End-to-end latency").
 
 Each run is `tachi run` on a bundled recording (all nodes, loopback, headless). The capture stamp is
 taken when the depth frame reaches tachi-sensor, after the recording's pacing sleep, so pacing is

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""What `tachi run --record` costs the pipeline it records (issue 23): the same 128 x 128 run with and
+"""What `tachi run --record` costs the pipeline it records: the same 128 x 128 run with and
 without the recorder, alternately (so both see the same machine load), its end-to-end p50 (depth
 frame capture -> the cloth state reflecting it, the simulator's `latency_ms` over the run's frames),
 and whether the recording dropped anything: DDS-reported lost samples (SAMPLE_LOST on the

@@ -1,4 +1,4 @@
-// Cutting benchmark (issue 4): time to apply a 64-segment stroke to a 128 x 128 cloth, target <= 0.5 ms.
+// Cutting benchmark: time to apply a 64-segment stroke to a 128 x 128 cloth, target <= 0.5 ms.
 // Baseline in the same process: Bullet 3.24's btSoftBody::cutLink on a 128 x 128 patch, which splits ONE
 // link per call (~0.5 ms each at that size, FIELD_NOTES). Figures are medians of thread CPU time over repetitions,
 // each on a fresh copy of the cloth (the copy is not timed).
@@ -101,7 +101,7 @@ StrokeRun time_stroke(const Cloth& prototype, const std::vector<tachi::sim::Stro
   return run;
 }
 
-/// Exact mode (issue 11): the stroke cut at once on a cloth whose solver is warm, then the steps after it.
+/// Exact mode: the stroke cut at once on a cloth whose solver is warm, then the steps after it.
 struct ExactRun {
   double stroke_ms = 0.0;      ///< median: locate, simplify, split triangles, separate, springs
   double update_ms = 0.0;      ///< median: the solver's update after the cut (Solver::update_topology)
@@ -255,8 +255,7 @@ LiveRun time_long_stroke(int n, tachi::sim::CutMode mode, const tachi::sim::Solv
 int main(int argc, char** argv) {
   // cut_bench [reps] [repair_per_step] [threads] [substeps]: the second argument sets the long strokes'
   // attachment repair budget (SolverParams::repair_per_step) for the measurements in docs/sim.md ("Limits");
-  // the third and fourth their solver's threads (given: the frames are timed in wall time) and sub-steps
-  // (issue 25).
+  // the third and fourth their solver's threads (given: the frames are timed in wall time) and sub-steps.
   const int reps = argc > 1 ? std::max(1, std::atoi(argv[1])) : 30;
   tachi::sim::SolverParams long_stroke_params;
   if (argc > 2) long_stroke_params.repair_per_step = std::max(1, std::atoi(argv[2]));
@@ -326,8 +325,8 @@ int main(int argc, char** argv) {
               bullet_median / (cut_median / static_cast<double>(std::max<std::size_t>(edges, 1))), edges, edges,
               bullet_median * static_cast<double>(edges) / stroke_median);
 
-  // Issue 11: exact mode, with the solver's incremental update, against the grid mode in the same process.
-  std::printf("exact cut (issue 11), %dx%d, wavy 64-segment stroke cut at once after a first step, %d reps:\n", n, n, reps);
+  // Exact mode, with the solver's incremental update, against the grid mode in the same process.
+  std::printf("exact cut, %dx%d, wavy 64-segment stroke cut at once after a first step, %d reps:\n", n, n, reps);
   for (const auto mode : {tachi::sim::CutMode::Exact, tachi::sim::CutMode::Grid, tachi::sim::CutMode::Delete}) {
     const ExactRun e = time_exact(prototype, wavy_stroke(), mode, reps);
     std::printf("  %-6s stroke %.3f ms + solver update %.3f ms = %.3f ms (target <= 0.5 ms); step after cut %.3f ms / "

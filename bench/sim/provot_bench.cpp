@@ -1,4 +1,4 @@
-// provot_bench (issue 12): Provot's explicit mass-spring scheme (--solver provot) against the default
+// provot_bench: Provot's explicit mass-spring scheme (--solver provot) against the default
 // position-based solver on the same grid and material, in one process: cost per step (median, and the
 // ratio to PBD measured alongside), strain and sag after settling, stability over the sub-step count and
 // time step, and what one cut does. Figures and the command: docs/sim.md and docs/benchmarks.md.

@@ -230,7 +230,7 @@ std::vector<int> parse_list(const std::string& text) {
   return out;
 }
 
-/// The second anchor (issue 25): a textbook XPBD cloth with small steps (Macklin et al. 2019, "Small steps in
+/// The second anchor: a textbook XPBD cloth with small steps (Macklin et al. 2019, "Small steps in
 /// physics simulation": n sub-steps of one Gauss-Seidel iteration each, lambda starting at 0 in each, so each
 /// projection is eq. 18 of Macklin et al. 2016 with compliance alpha / h^2). The same springs (structural hard,
 /// shear and bend with tachi's compliances), masses, pins and air damping as tachi's step; no tethers, no

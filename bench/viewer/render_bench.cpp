@@ -1,4 +1,4 @@
-// render_bench: how fast the viewer draws an N x N cloth (issue 10: 128^2 >= 30 fps, 256^2 >= 10 fps
+// render_bench: how fast the viewer draws an N x N cloth (targets: 128^2 >= 30 fps, 256^2 >= 10 fps
 // on one core). Draws a hanging, gently folded cloth with the HUD into an 800 x 800 image, the
 // window's default size, from the front and from an orbited camera; prints the median frame time and
 // the ratio to a 32 x 32 cloth drawn in the same process (the baseline), so a noisy machine still

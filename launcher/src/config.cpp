@@ -236,7 +236,7 @@ std::vector<ChildSpec> plan(const RunConfig& c) {
     auto& a = child.args;
     if (node == "sim") {
       a.insert(a.end(), {"--grid", std::to_string(c.grid), "--export", (out / kSimExportDir).string()});
-      // No lost cuts (issue 13): a simulator the launcher restarts replays this run's journal.
+      // No lost cuts (docs/reliability.md): a simulator the launcher restarts replays this run's journal.
       a.insert(a.end(), {"--journal", (out / "sim.journal").string()});
       if (!c.blade.empty()) a.insert(a.end(), {"--blade", c.blade});
       // An object taken from the recording lands where the hand does: the simulator maps the scene with the

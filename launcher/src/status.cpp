@@ -49,7 +49,7 @@ std::optional<double> StatusBoard::metric(const std::string& node, const std::st
 }
 
 std::optional<double> StatusBoard::stage_latency(const std::string& stage, const char* percentile) const {
-  // The viewer reports the age of the state it shows (capture -> image) under its own name (issue 10).
+  // The viewer reports the age of the state it shows (capture -> image) under its own name.
   if (const auto v = metric(stage, std::string("latency_") + percentile + "_ms")) return v;
   return metric(stage, std::string("state_age_") + percentile + "_ms");
 }

@@ -312,7 +312,7 @@ std::vector<VoiceDetection> KeywordSpotter::process(std::span<const std::int16_t
     if (hyp == nullptr || hyp[0] == '\0') break;
     // Restart, or the same hit is reported with every later block; then replay the audio after the
     // hit's end, which the decoder held and a restart alone drops: in "go forward ten meters" the
-    // second phrase follows the first at once and was never found that way (issue 14).
+    // second phrase follows the first at once and was never found that way.
     struct Hit {
       std::string words;
       long begin, end;  // samples from stream start
@@ -369,8 +369,8 @@ void KeywordSpotter::Impl::verify_pending(long ended_by, std::vector<VoiceDetect
     pending.erase(pending.begin());
     // Every phrase competes for the hit's audio, not only those the keyword search hit: the search
     // reports the first phrase whose last state scores well enough, and "start cutting" and "stop
-    // cutting" share most of their phones, so it named the wrong one for espeak-ng's British voices
-    // (issue 22). Hits overlapping this one are the same utterance, judged once.
+    // cutting" share most of their phones, so it named the wrong one for espeak-ng's British voices.
+    // Hits overlapping this one are the same utterance, judged once.
     long end = hit.end;
     while (!pending.empty() && pending.front().begin < hit.end) {
       end = std::max(end, pending.front().end);

@@ -107,7 +107,7 @@ struct SimNode::Impl {
   }
 
   // Topology changes and closed strokes go out before the state that indexes the new topology, the changes as
-  // deltas at the bounded rate of TopologyRate (issue 11). False while a change waits for a token: a state
+  // deltas at the bounded rate of TopologyRate. False while a change waits for a token: a state
   // published then would index a topology no reader has yet.
   bool publish_changes() {
     const auto now = Clock::now();

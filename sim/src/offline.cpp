@@ -33,7 +33,7 @@ Summary run_offline(const OfflineOptions& options) {
   }
   session.set_shapes(options.spheres, options.ground);
 
-  // The stroke is cut while stepping, each sample at its own time (issue 4), through the session's
+  // The stroke is cut while stepping, each sample at its own time, through the session's
   // blade (it cuts only once its contact force reaches the blade's sharpness force).
   StrokeFile stroke;
   std::size_t stroke_outliers = 0;

@@ -1,4 +1,4 @@
-// TopologyAssembler (issue 11): keyframes + deltas -> the current topology, as every reader builds it.
+// TopologyAssembler: keyframes + deltas -> the current topology, as every reader builds it.
 #include "tachi/bus/topology_assembler.hpp"
 
 #include <gtest/gtest.h>

@@ -73,7 +73,7 @@ TEST_F(FilterCli, OfflinePushWritesOneStrokeInTheWorldFrame) {
   EXPECT_NEAR(std::stod(rows[1][4]), 0.30, 0.03);
 }
 
-// Issue 22: through the executable, a row 50 m away mid-stroke is counted as an outlier, written as a row
+// Through the executable, a row 50 m away mid-stroke is counted as an outlier, written as a row
 // without a hand (nan), and the stroke stays one.
 TEST_F(FilterCli, AnImpossiblyFarRowIsACountedOutlierOffline) {
   auto hands = tachi::filter::testing::push_and_back(3);

@@ -125,7 +125,7 @@ TEST_F(RecordingGate, AJitteryCutIsOneStroke) {
 
 // recordings/jitter through tachi-sensor and tachi-filter's default smoother (One Euro as published):
 // against the path without tremor, on the stroke itself (intended speed < 0.5 m/s), it halves the raw
-// error once its lag is removed, and that lag is at most one frame (docs/filter.md, issue 14).
+// error once its lag is removed, and that lag is at most one frame (docs/filter.md, "Smoothing").
 TEST_F(RecordingGate, TheDefaultSmootherHalvesTheTremorWithinAFrameOfLag) {
   const auto [truth, out] = run("jitter", {"--camera-frame"});
   const auto hands = read_csv(dir_ / "hands.csv");

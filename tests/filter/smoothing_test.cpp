@@ -155,9 +155,9 @@ TEST(SmootherParams, ValidationNamesTheBadKey) {
 }  // namespace
 }  // namespace tachi::filter
 
-// Issue 22: the Wiener smoother on randomized trembling hands it was not fitted on (held-out seeds
+// The Wiener smoother on randomized trembling hands it was not fitted on (held-out seeds
 // 100001-100040; the taps were fitted on 1-1000), against the best offline zero-lag smoother of each clip.
-// The full table (100001-100300) is in docs/filter.md. The issue's target is 1.15x; what the default reaches
+// The full table (100001-100300) is in docs/filter.md. The target is 1.15x; what the default reaches
 // is 1.46x (mean per clip over 300 clips); this test holds it there (1.55x on the smaller range; One Euro as
 // configured by default measures 1.75x over the 300 and fails here), and the
 // lag within one frame: it fails if the smoother regresses toward One Euro's 1.75x or starts to lag.

@@ -143,7 +143,7 @@ TEST(StrokeFilter, VoiceGatingProducesOneStrokePerStartStop) {
   EXPECT_EQ(s.stroke_id, 1U);
 }
 
-// Issue 22: one stroke row 2-100 m away (a hand cannot get there in 1/30 s) is an outlier: counted, not
+// One stroke row 2-100 m away (a hand cannot get there in 1/30 s) is an outlier: counted, not
 // published as a hand, and the stroke neither jumps to it nor comes back from it: it stays one stroke
 // and no published position is more than a few cm from the push's path.
 TEST(StrokeFilter, ARowMetresAwayIsAnOutlierAndNeverCutAlong) {

@@ -33,7 +33,7 @@ TEST(VoiceSpotter, RealSpeechGoForwardIsSpotted) {
 
 TEST(VoiceSpotter, RealSpeechAPhraseRightAfterAnotherIsSpottedToo) {
   // "go forward ten meters": the stop phrase starts as the start phrase ends. Restarting the
-  // decoder after the first hit without replaying the audio it held lost the second (issue 14).
+  // decoder after the first hit without replaying the audio it held lost the second.
   VoiceConfig c;
   set_phrase(c, VoiceCommand::Start, "go forward");
   set_phrase(c, VoiceCommand::Stop, "ten meters");
@@ -152,9 +152,9 @@ TEST(VoiceSpotter, TwoPassesFindCommandsInWhiteNoiseThatOnePassMissesWithoutFals
 }
 
 TEST(VoiceSpotter, ABritishVoiceSaysTheDefaultCommandsRightAndTheOldStartPhraseIsMissedNotHeardAsStop) {
-  // espeak-ng's en voices say "start" without its R, and the en-us model heard "stop cutting" for it
-  // (issue 22). The default "begin cutting" is told apart; with the old phrase the second pass's
-  // margin (the two commands score within 2.5 of each other there) makes it a miss, never a stop.
+  // espeak-ng's en voices say "start" without its R, and the en-us model heard "stop cutting" for it.
+  // The default "begin cutting" is told apart; with the old phrase the second pass's margin (the two
+  // commands score within 2.5 of each other there) makes it a miss, never a stop.
   const std::string cache = (std::filesystem::temp_directory_path() / "tachi_voice_test_cache").string();
   const testing::Speaker british{"espeak-ng", "en+m1"};
   const auto sequence = [&](const std::string& start) {
@@ -179,7 +179,7 @@ TEST(VoiceSpotter, ABritishVoiceSaysTheDefaultCommandsRightAndTheOldStartPhraseI
     EXPECT_EQ(found.back().phrase, "stop cutting");
   }
   VoiceConfig no_margin = old;
-  no_margin.verify_min_margin = 0.0;  // as before issue 22: the start was reported as a stop
+  no_margin.verify_min_margin = 0.0;  // as before the second pass's margin check: the start was reported as a stop
   const auto before = spot_commands(no_margin, sequence("start cutting").samples());
   ASSERT_FALSE(before.empty());
   EXPECT_EQ(before.front().command, VoiceCommand::Stop);

@@ -1,4 +1,4 @@
-// The filter's side of grabbing (issue 12): voice grab / release beside the cutting gate's phases.
+// The filter's side of grabbing: voice grab / release beside the cutting gate's phases.
 #include "tachi/filter/gate.hpp"
 #include "tachi/sensor/voice_commands.hpp"
 

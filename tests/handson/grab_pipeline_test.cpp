@@ -1,4 +1,4 @@
-// Grabbing by hand through the processes (issue 12): tachi-filter and tachi-sim on one DDS domain; the
+// Grabbing by hand through the processes: tachi-filter and tachi-sim on one DDS domain; the
 // test plays the sensor (raw hand samples in the camera frame) and the voice (commands on the bus).
 // Voice "grab", the hand moves, voice "release": the cloth moved with the hand, and let go.
 #include "paths.hpp"

@@ -1,4 +1,4 @@
-// Issue 12: the hand on the cloth. Blade sharpness decides the cut, grabbing, objects as point clouds
+// The hand on the cloth: blade sharpness deciding the cut, grabbing, objects as point clouds
 // (PLY via assimp), Provot's own solver and the material presets, through the tachi_sim library.
 #include "tachi/sim/blade_contact.hpp"
 #include "tachi/sim/cloth_solver.hpp"

@@ -1,4 +1,4 @@
-// Issue 12: "The viewer draws the object's points." tachi-sim live with a PLY table under the cloth and
+// The viewer draws the object's points: tachi-sim live with a PLY table under the cloth and
 // a headless tachi-viewer on the same domain (202): the viewer's snapshot shows the table's dots in
 // the object colour, where a run without an object shows none. Domain ids 202-203 belong to this file.
 #include "paths.hpp"

@@ -1,4 +1,4 @@
-// Two `tachi run`s on one DDS domain would mix their samples (issue 23: the second run's hand cut the
+// Two `tachi run`s on one DDS domain would mix their samples (the second run's hand would cut the
 // first run's cloth): the second is refused, naming the live pipeline's nodes, hosts and pids; and a
 // run's nodes read only their run's DDS partition, so a sensor outside the run never reaches them. Domains 145 and 146 (tests/launcher owns 120-149, docs/testing.md).
 #include "paths.hpp"

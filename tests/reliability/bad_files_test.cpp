@@ -1,4 +1,4 @@
-// Corrupt or odd input files (issue 13): one clear error naming the file and what is wrong, or a
+// Corrupt or odd input files: one clear error naming the file and what is wrong, or a
 // counted, reported skip; never a silent drop or a misleading message.
 #include "tachi/sensor/depth_source.hpp"
 #include "tachi/sensor/fakenect_recording.hpp"

@@ -139,7 +139,7 @@ TEST(Boundary, TheSimulatorRefusesAndCountsBadStrokeSamples) {
   EXPECT_EQ(sim.wait(10s), 0);
 }
 
-// Issue 26: the filter trusted cloth states (the viewer refused them). A NaN, a 1e30 m and a ragged
+// The filter used to trust cloth states (the viewer refused them). A NaN, a 1e30 m and a ragged
 // state are refused and counted under their reasons.
 TEST(Boundary, TheFilterRefusesAndCountsBadClothStates) {
   ChildProcess filter({kBin + "/tachi-filter", "--domain", "184"});
@@ -185,7 +185,7 @@ TEST(Boundary, TheFilterRefusesAndCountsBadClothStates) {
   EXPECT_EQ(filter.wait(10s), 0);
 }
 
-// Issue 26: one stroke sample stamped INT64_MAX under the live session's id used to make the
+// One stroke sample stamped INT64_MAX under the live session's id used to make the
 // simulator refuse every later sample of that session as time_backwards (0 cuts). Now it is refused
 // as time_ahead, and the stroke right after it cuts the cloth as it would without it.
 TEST(Boundary, AFarFutureStrokeSampleLeavesTheNextStrokeCutting) {

@@ -1,4 +1,4 @@
-// Bad configs, bad flags and signals through the real executables (issue 13, docs/reliability.md):
+// Bad configs, bad flags and signals through the real executables (docs/reliability.md):
 // an unreadable or empty DDS config is an error naming the file, never Cyclone's network defaults;
 // a non-finite flag value is refused naming the flag; every long-running process stops within 1 s
 // of SIGINT/SIGTERM whatever it is doing.

@@ -63,7 +63,7 @@ constexpr std::int64_t kSecond = 1'000'000'000;
 TEST(InputGuard, RefusesATimeFurtherAheadThanTheSkewAndTheSourceGoesOn) {
   Counted c;
   EXPECT_TRUE(c.guard.time(1, 10 * kSecond, 100 * kSecond));
-  // The poisoning sample of issue 26: same source, stamped INT64_MAX.
+  // The sample that once poisoned a live session (boundary_test.cpp): same source, stamped INT64_MAX.
   EXPECT_FALSE(c.guard.time(1, std::numeric_limits<std::int64_t>::max(), 100 * kSecond));
   EXPECT_EQ(c.reasons["time_ahead"], 1);
   EXPECT_TRUE(c.guard.time(1, 10 * kSecond + 33'000'000, 100 * kSecond + 33'000'000)) << "the next sample is taken";

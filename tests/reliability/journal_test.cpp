@@ -28,7 +28,7 @@ HandInput sample(int i) {
   h.position_m = {-0.6F + 0.03F * static_cast<float>(i), 0.02F * std::sin(0.3F * static_cast<float>(i)), 0.0F};
   h.tracked = true;
   h.cutting = i < 40;
-  h.sensor_id = 3;  // as journaled below: the Session tells hand sources apart by it (issue 10)
+  h.sensor_id = 3;  // as journaled below: the Session tells hand sources apart by it
   return h;
 }
 

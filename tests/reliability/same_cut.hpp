@@ -24,8 +24,8 @@ inline std::pair<int, int> entry_and_exit_columns(const nlohmann::json& cut_line
 /// The same pieces, the slit from the same entry to the same exit within a cell, about as many cut
 /// particles (25 %) and as long a cut (10 %). Two live runs differ by a frame or two in when each sample
 /// meets the swaying cloth, so where the gate opens and the cells in between may differ (measured:
-/// undisturbed runs enter at u 5 or u 6, 19-21 particles); issue 13's failure was 4 of 56 particles
-/// over 0.079 of 0.968 m.
+/// undisturbed runs enter at u 5 or u 6, 19-21 particles); a lost cut (before the nodes
+/// journaled) was 4 of 56 particles over 0.079 of 0.968 m.
 inline void expect_same_cut(const nlohmann::json& killed, const nlohmann::json& undisturbed, const std::string& logs) {
   EXPECT_EQ(killed["pieces"], undisturbed["pieces"]) << logs;
   const auto [entry, exit] = entry_and_exit_columns(undisturbed["cut_line"]);

@@ -39,7 +39,7 @@ ScenarioRun run_scenario(const std::string& name) {
   return run;
 }
 
-/// The targets (issue 14), for every bundled scenario: RMS <= 1 cm, >= 99% of the visible frames
+/// The accuracy targets, for every bundled scenario: RMS <= 1 cm, >= 99% of the visible frames
 /// tracked, no phantom frame.
 class ScenarioAccuracy : public ::testing::TestWithParam<std::string> {};
 

@@ -22,8 +22,8 @@ TEST(RandomScene, SameSeedSameSceneOtherSeedOtherScene) {
   EXPECT_NE(a.user_offset, c.user_offset);
 }
 
-// The distributions cover what issue 22 asks for (over the tuning range's first 300 seeds: only
-// the specs are drawn, nothing is rendered).
+// The distributions cover every kind of scene docs/sensor.md's "Randomized world" lists (over the tuning
+// range's first 300 seeds: only the specs are drawn, nothing is rendered).
 TEST(RandomScene, DrawsEveryKindOfSceneTheIssueNames) {
   int starts[3] = {0, 0, 0}, left = 0, near_objects = 0, moved_in = 0, walking = 0, standing = 0, turned = 0, tremor = 0;
   double nearest_user = 10, farthest_user = 0;

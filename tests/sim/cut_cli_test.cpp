@@ -138,7 +138,7 @@ TEST_F(CutCli, ExactModeFollowsTheStrokeAndExportsPiecesAndThePattern) {
 }
 
 TEST_F(CutCli, ASlitRestsWithinTenPercentStrainInEveryModeWithTheDefaultJitter) {
-  // Issue 11: "max strain at rest <= 10 % after cuts in every mode", through the CLI as a user runs it, with
+  // The target "max strain at rest <= 10 % after cuts in every mode", through the CLI as a user runs it, with
   // tachi-sim's default 0.1 mm out-of-plane jitter: a 0.65 m slit a little below the middle of a 64 x 64 cloth
   // pinned along its top edge. The piece below the slit swings out of the plane and hangs from the slit's two
   // tips. Before the attachments held it from both tips and anchored only where a path can bend, this rested at

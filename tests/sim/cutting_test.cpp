@@ -39,7 +39,7 @@ int cut_degree(const ClothCutter& cutter, GridCoord g) {
   return n;
 }
 
-/// The invariants every cut must keep (issue 4): springs and triangles name existing particles and are
+/// The invariants every cut must keep: springs and triangles name existing particles and are
 /// in the incidence lists; mass is conserved; particle count grows by exactly the duplicates; no
 /// triangle or spring bridges the cut.
 void expect_invariants(const Cloth& cloth, const ClothCutter& cutter, std::size_t particles_before,

@@ -1,4 +1,4 @@
-// Exact cutting (issue 11): the cut follows the stroke within the snap distance, keeps its length, separates
+// Exact cutting: the cut follows the stroke within the snap distance, keeps its length, separates
 // what it should, and keeps the cloth's invariants; the three cut modes keep the cloth within Provot's
 // 10 % stretch at rest.
 #include "tachi/sim/exact_cut.hpp"

@@ -1,6 +1,6 @@
 // The bundled straight_cut recording through the real sensor and filter (offline, no DDS), then its strokes
 // through the simulator's Session sample by sample with the filter's gate, as the live simulator takes
-// them: every cut mode must leave what grid mode leaves, one slit (issue 11: exact mode cut the recorded
+// them: every cut mode must leave what grid mode leaves, one slit (exact mode used to cut the recorded
 // hand's stroke into 3-10 pieces, because the hand wobbles at the end of its stroke and the nearest
 // particle sometimes lies on another layer of the moving cloth).
 #include "paths.hpp"

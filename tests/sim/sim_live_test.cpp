@@ -86,7 +86,7 @@ TEST(SimLive, CutsOffTheLowerPieceFromStrokesOverDdsAndReportsIt) {
   EXPECT_TRUE(std::filesystem::exists(out / "pattern.svg"));
   EXPECT_EQ(summary["cut_mode"], "exact");
 
-  // Issue 11: the deltas (<= 30 Hz) applied to the first keyframe give exactly the last keyframe.
+  // The deltas (<= 30 Hz) applied to the first keyframe give exactly the last keyframe.
   bus::TopologyAssembler assembled;
   ASSERT_TRUE(assembled.on_keyframe(*initial.back()));
   std::size_t delta_count = 0;

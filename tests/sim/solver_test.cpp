@@ -363,7 +363,7 @@ TEST(Solver, RejectsBadParameters) {
 
 }  // namespace
 
-// Issue 11: the update after a cut touches only what the cut changed (the attachments' shortest paths are
+// The update after a cut touches only what the cut changed (the attachments' shortest paths are
 // repaired decrementally, within each step's budget). Whatever the cuts and however they interleave with
 // the repair, once it settles every particle must reach the same pin groups as a full build on the same
 // cloth finds, at the same path length, or a little longer where an exact cut's new edges made a shortcut

@@ -46,12 +46,12 @@ TEST(SceneState, AnOlderTopologyArrivingLateIsIgnored) {
   EXPECT_EQ(state.scene().mesh.triangles.size(), 2u);
 }
 
-// Issue 13: a restarted simulator counts versions from 1 again; its new session is followed.
+// A restarted simulator counts versions from 1 again; its new session is followed.
 TEST(SceneState, ARestartedSimulatorsNewSessionIsFollowedWhateverItsVersion) {
   SceneState state;
   state.on_topology(in_session(triangles(30, {{0, 1, 2}, {1, 2, 3}}), 111));
   state.on_topology(in_session(triangles(1, {{0, 1, 2}}), 222));
-  // Taken once the new run's first state confirms it (issue 10: a stray publisher of another session
+  // Taken once the new run's first state confirms it (a stray publisher of another session
   // must not take the view).
   StateUpdate first_state;
   first_state.topology_version = 1;

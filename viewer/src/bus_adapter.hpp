@@ -12,7 +12,7 @@
 
 namespace tachi::viewer {
 TopologyUpdate from_msg(const tachi_msg_ClothTopology& msg);
-/// The topology a TopologyAssembler built from keyframes and deltas (issue 11); takes its split-off list.
+/// The topology a TopologyAssembler built from keyframes and deltas; takes its split-off list.
 TopologyUpdate from_assembler(bus::TopologyAssembler& topology);
 StateUpdate from_msg(const tachi_msg_ClothState& msg);
 HandUpdate from_msg(const tachi_msg_StrokeSample& msg);
@@ -34,11 +34,11 @@ tachi_msg_StrokeSample to_msg(const BladeSample& sample, const MouseSource& sour
 
 /// A topology whose arrays disagree (a triangle naming a particle that does not exist, pinned flags
 /// for another particle count, more particles than any cloth tachi-sim builds) is refused before it
-/// reaches the scene, with its reason counted in `guard` (issue 13).
+/// reaches the scene, with its reason counted in `guard`.
 bool plausible(const tachi_msg_ClothTopology& msg, bus::InputGuard& guard);
 bool plausible(const tachi_msg_ClothState& msg, bus::InputGuard& guard);
 
-/// An object's points (issue 12: what the cloth drapes over), thinned to at most `max_drawn` evenly
+/// An object's points (what the cloth drapes over), thinned to at most `max_drawn` evenly
 /// spread ones (a depth frame's scene is ~300,000 points; dots beyond a few thousand add nothing to the
 /// view and cost every frame). Refused, counted in `guard`, when the sequence is not xyz triples or
 /// larger than any cloud tachi-sim loads (`oversized`), or a point is non-finite (`nonfinite`) or

@@ -1,5 +1,5 @@
 // An append-only journal of text lines, the file layer under the simulator's and the filter's journals
-// (no lost cuts, issue 13, docs/reliability.md): a header line names the configuration it belongs to,
+// (no lost cuts, docs/reliability.md): a header line names the configuration it belongs to,
 // then one record a line. A process killed mid-write leaves at most a torn last line, which reading
 // drops; any other bad line is an error naming the file and the line. Bounded: once full it stops
 // appending (the caller logs it) instead of filling the disk. Flushed by the caller (one write per

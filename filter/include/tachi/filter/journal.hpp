@@ -1,4 +1,4 @@
-// No lost cuts (issue 13, docs/reliability.md): the filter's journal. A tachi-filter killed mid-stroke
+// No lost cuts (docs/reliability.md): the filter's journal. A tachi-filter killed mid-stroke
 // and started again with the same journal replays what it had been given (every hand sample with the
 // hand-to-cloth proximity it measured then, every voice command) into a fresh StrokeFilter, which (the
 // smoother and the gate being deterministic) reaches the killed filter's state: the same smoothed hand,

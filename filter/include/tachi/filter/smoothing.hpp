@@ -94,7 +94,7 @@ class OneEuroFilter {
   OneEuroScalar x_, y_, z_;
 };
 
-/// A causal FIR whose taps are the Wiener solution for trembling hands (issue 22): the least-squares
+/// A causal FIR whose taps are the Wiener solution for trembling hands: the least-squares
 /// filter (Wiener-Hopf normal equations, Wiener 1949; Haykin, Adaptive Filter Theory, ch. 2)
 ///   x_hat_n = sum_k h_k y_{n-k},  h = argmin sum (x_hat_n - x_{n-d})^2,  sum_k h_k = 1,
 /// fitted over the randomized tremor clips of seeds 1-1000 (tremor_clips.hpp; `tachi-filter-bench
@@ -122,7 +122,7 @@ std::optional<SmootherKind> smoother_kind_from_string(const std::string& name);
 std::string to_string(SmootherKind kind);
 
 struct SmootherParams {
-  /// One Euro stays the default: `wiener` (issue 22: 0.40x raw on recordings/jitter, 1.46x the ceiling on
+  /// One Euro stays the default: `wiener` (0.40x raw on recordings/jitter, 1.46x the ceiling on
   /// held-out tremor, against 0.49x and 1.75x) turns recordings/straight_cut's exact cut at 128 x 128 into
   /// 2 pieces (sim_recording_cut_test) until the exact cut stops flipping on small input changes.
   SmootherKind kind = SmootherKind::OneEuro;

@@ -1,4 +1,4 @@
-// Randomized trembling-hand clips for tuning and judging the smoother (issue 22), and the offline
+// Randomized trembling-hand clips for tuning and judging the smoother, and the offline
 // ceiling a causal smoother is measured against.
 //
 // A clip is drawn from a seed: a hand path of random shape (sweep, arc, zig-zag, loop) and speed

@@ -57,9 +57,9 @@ std::uint64_t new_session_id();
 /// Named QoS profiles. A topic's writers and readers use the same profile, so offered and
 /// requested QoS always match (a mismatch in Cyclone is silent: nothing arrives).
 enum class QosProfile {
-  SensorData,  ///< reliable, transient-local, keep last 64 (~2 s of hand): a restarted filter catches up (issue 13)
+  SensorData,  ///< reliable, transient-local, keep last 64 (~2 s of hand): a restarted filter catches up
   Commands,    ///< reliable, keep last 1024: voice commands, cut events must all arrive
-  Strokes,     ///< Commands, and transient-local: a restarted tachi-sim gets the samples it missed (issue 13)
+  Strokes,     ///< Commands, and transient-local: a restarted tachi-sim gets the samples it missed
   Topology,    ///< reliable, transient-local, keep last 1 per key: late joiners get the current mesh
   State,       ///< reliable, keep last 2: the newest cloth positions, never a queue of stale ones
   Status,      ///< reliable, transient-local, keep last 1 per node, 3 s liveliness lease

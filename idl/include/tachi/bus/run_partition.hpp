@@ -1,4 +1,4 @@
-// Isolation of the runs on one domain (issue 23): every writer and reader of a process joins the DDS
+// Isolation of the runs on one domain: every writer and reader of a process joins the DDS
 // partition named by its run id, which `tachi run` passes to its nodes in the environment variable
 // TACHI_RUN_ID. Writers and readers match only within one partition, so a node never receives another
 // run's samples and needs no per-sample check. Bus tools read every run (partition "*", which matches

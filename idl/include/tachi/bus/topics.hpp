@@ -35,7 +35,7 @@ inline constexpr TopicSpec<tachi_msg_RawHandSample> raw_hand{"tachi/hand/raw", Q
 inline constexpr TopicSpec<tachi_msg_VoiceCommand> voice_command{"tachi/voice/command", QosProfile::Commands};
 inline constexpr TopicSpec<tachi_msg_StrokeSample> stroke{"tachi/hand/stroke", QosProfile::Strokes};
 inline constexpr TopicSpec<tachi_msg_ClothTopology> cloth_topology{"tachi/cloth/topology", QosProfile::Topology};
-/// Issue 11: reliable and volatile, 1024 kept for a slow reader; a late joiner starts from the keyframe above.
+/// The deltas: reliable and volatile, 1024 kept for a slow reader; a late joiner starts from the keyframe above.
 inline constexpr TopicSpec<tachi_msg_ClothTopologyDelta> cloth_topology_delta{"tachi/cloth/topology_delta",
                                                                                 QosProfile::Commands};
 inline constexpr TopicSpec<tachi_msg_ClothState> cloth_state{"tachi/cloth/state", QosProfile::State};

@@ -1,5 +1,5 @@
 // The cloth's current topology on the reader's side, from a ClothTopology keyframe and the
-// ClothTopologyDelta messages since (issue 11). The one place every reader (viewer, tests, tools) turns the
+// ClothTopologyDelta messages since. The one place every reader (viewer, tests, tools) turns the
 // simulator's topology messages back into triangles: pure logic over the message types, no DDS calls.
 // Rules: a keyframe of a new session, or a newer version of the same session, replaces everything; a delta
 // applies when its base_version is the version held; one from the future (a delta was missed) is kept

@@ -1,4 +1,4 @@
-// No lost cuts (issue 13, docs/reliability.md): how far a recording's playback got, kept in a small
+// No lost cuts (docs/reliability.md): how far a recording's playback got, kept in a small
 // file, so a sensor killed mid-run and started again (tachi run restarts it) continues after the last
 // frame it published instead of playing the recording from the top, which would cut the stroke twice.
 //

@@ -31,11 +31,11 @@ struct VoicePhrase {
 struct VoiceConfig {
   std::string model_dir = "/usr/share/pocketsphinx/model/en-us/en-us";
   std::string dictionary = "/usr/share/pocketsphinx/model/en-us/cmudict-en-us.dict";
-  // The defaults are the two-pass spotter of issue 14 (docs/voice.md, "Two passes"): a sensitive
-  // keyword search, each hit verified. One pass as before: thresholds 1e-20, phone loop 0.1, no
-  // verify_min_log_ratio.
-  // "begin cutting", not "start cutting" (issue 22): in non-rhotic voices (espeak-ng en) "start" has
-  // no R and the en-us model hears "stop"; "begin" differs from "stop" in every phone and a syllable.
+  // The defaults are the two-pass spotter (docs/voice.md, "Two passes"): a sensitive keyword search,
+  // each hit verified. One pass as before: thresholds 1e-20, phone loop 0.1, no verify_min_log_ratio.
+  // "begin cutting", not "start cutting" (docs/voice.md, "Why the start phrase changed"): in non-rhotic
+  // voices (espeak-ng en) "start" has no R and the en-us model hears "stop"; "begin" differs from "stop"
+  // in every phone and a syllable.
   // "start cutting" stays selectable (--start-phrase "start cutting" or the config).
   std::vector<VoicePhrase> phrases{{"begin cutting", VoiceCommand::Start, 1e-15},
                                    {"stop cutting", VoiceCommand::Stop, 1e-15}};
@@ -52,7 +52,7 @@ struct VoiceConfig {
   /// Second pass: every phrase is scored on the hit's audio, and the best becomes a command only when
   /// its score beats the best phrase of every other command by at least this (log-likelihood ratio per
   /// frame). A hit that could be either command is dropped: a missed command is a repeat, a wrong one
-  /// starts or stops a cut the user did not ask for (issue 22).
+  /// starts or stops a cut the user did not ask for.
   /// 8: chosen with the level check below on tachi-voice-eval --speakers tune --dump (docs/voice.md;
   /// 4 before: 16 WRONG commands on the tune set, 3 now).
   double verify_min_margin = 8.0;

@@ -8,7 +8,8 @@
 // its structural and shear spring tensions, F = | sum_k k_k max(0, |x_j - x_i| - L_k) u_k |, with the
 // material's spring constants (material.hpp), measured after the blade has moved it to the hand. A taut
 // region answers a small motion with a large force (a razor cuts at once); a loose flap follows the hand
-// and never reaches a worn blade's 8.5 N. docs/cutting.md, "Blade sharpness decides the cut (issue 12)".
+// and never reaches a worn blade's 8.5 N.
+// docs/cutting.md, "Blade sharpness decides the cut (`--blade NAME`, `--blade-force N`)".
 #pragma once
 
 #include "tachi/sim/cloth.hpp"

@@ -1,4 +1,4 @@
-// No lost cuts (issue 13, docs/reliability.md): the live simulator's journal. Every hand sample the
+// No lost cuts (docs/reliability.md): the live simulator's journal. Every hand sample the
 // Session applied is appended with the step it was applied at, flushed with each batch, so a
 // simulator killed mid-run and started again with the same journal replays the same samples at the
 // same steps into a new Session, which (the solver and the cutter being deterministic) reaches the

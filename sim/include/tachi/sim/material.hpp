@@ -1,7 +1,7 @@
 // Cloth materials: the physical quantities a fabric brings to the mass-spring model (Provot 1995; seed 001
 // section 2.1 uses stiffness k and mass m per particle). Values per unit area and width, so one material
 // means the same cloth on every grid; spring_stiffness() turns them into the springs of a given grid.
-// Preset values and their sources: docs/sim.md, "Materials (issue 12)".
+// Preset values and their sources: docs/sim.md, "Materials".
 #pragma once
 
 #include "tachi/sim/cloth.hpp"

@@ -69,7 +69,7 @@ struct Scene {
   std::vector<std::uint32_t> cut_particles;
   float flash = 0.0f;
   int held_particle = -1;                   // the particle a grabbing hand holds (ClothState.held_particle)
-  /// Points of other objects in the scene (issue 12's point clouds), drawn as dots.
+  /// Points of other objects in the scene (the point clouds the cloth drapes over), drawn as dots.
   std::vector<Eigen::Vector3f> object_points;
   std::optional<Hud> hud;                   // no HUD when empty (tests of the bare drawing)
   std::optional<BladeCursor> blade;

@@ -339,7 +339,7 @@ TEST(WaitingForPeers, ANodeWhosePeerDoesNotComeSaysSoEveryFewSeconds) {
   filter.signal(SIGINT);
   EXPECT_EQ(viewer.wait(10s), 0);
   EXPECT_EQ(filter.wait(10s), 0);
-  // The viewer has its own, stronger check (no cloth state, whether or not a simulator is there; issue 10).
+  // The viewer has its own, stronger check (no cloth state, whether or not a simulator is there).
   EXPECT_NE(viewer.err().find("is tachi-sim running on domain 128"), std::string::npos) << viewer.err();
   EXPECT_NE(filter.err().find("waiting for tachi-sensor on domain 128"), std::string::npos) << filter.err();
 }

@@ -46,4 +46,44 @@ double LatencyWindow::percentile(double p) const {
   return sorted[k];
 }
 
+namespace {
+constexpr double kFloorMs = 1e-3;      // 1 us
+constexpr double kCeilingMs = 60'000;  // a minute
+const double kLogGrowth = std::log1p(0.01);  // each bucket 1 % wider than the one below
+}  // namespace
+
+DurationHistogram::DurationHistogram()
+    : counts_(static_cast<std::size_t>(std::ceil(std::log(kCeilingMs / kFloorMs) / kLogGrowth)) + 1, 0) {}
+
+std::size_t DurationHistogram::bucket_of(double ms) const {
+  const double clamped = std::clamp(ms, kFloorMs, kCeilingMs);
+  const auto b = static_cast<std::size_t>(std::log(clamped / kFloorMs) / kLogGrowth);
+  return std::min(b, counts_.size() - 1);
+}
+
+void DurationHistogram::add_ms(double ms) {
+  if (!std::isfinite(ms) || ms < 0.0) return;
+  ++counts_[bucket_of(ms)];
+  min_ = count_ == 0 ? ms : std::min(min_, ms);
+  max_ = count_ == 0 ? ms : std::max(max_, ms);
+  ++count_;
+}
+
+double DurationHistogram::quantile(double q) const {
+  if (count_ == 0) return 0.0;
+  const auto rank = static_cast<std::uint64_t>(std::clamp(q, 0.0, 1.0) * static_cast<double>(count_ - 1) + 0.5);
+  if (rank == 0) return min_;
+  if (rank == count_ - 1) return max_;
+  std::uint64_t seen = 0;
+  for (std::size_t b = 0; b < counts_.size(); ++b) {
+    seen += counts_[b];
+    if (seen > rank) {
+      // The bucket's geometric middle, never outside what was seen.
+      const double mid = kFloorMs * std::exp((static_cast<double>(b) + 0.5) * kLogGrowth);
+      return std::clamp(mid, min_, max_);
+    }
+  }
+  return max_;
+}
+
 }  // namespace tachi::common

@@ -226,7 +226,7 @@ struct SimNode::Impl {
     if (schedule.due(Clock::now())) {
       const auto before = Clock::now();
       session.step();
-      step_ms.push_back(std::chrono::duration<double, std::milli>(Clock::now() - before).count());
+      step_ms.add_ms(std::chrono::duration<double, std::milli>(Clock::now() - before).count());
       schedule.stepped(Clock::now());
       const bool in_sync = publish_changes();
       if (in_sync && session.steps() % static_cast<std::uint64_t>(live.state_every) == 0) {
@@ -332,7 +332,7 @@ struct SimNode::Impl {
   std::uint64_t topology_updates = 0;
   std::size_t topology_bytes = 0;
   double cut_length_m = 0.0;
-  std::vector<double> step_ms;
+  common::DurationHistogram step_ms;  // every step of the run, in constant memory
   // acquired_ns of the newest applied hand sample: every state published from then on reflects it.
   std::int64_t newest_acquired_ns = 0;
   std::int64_t pending_latency_ns = 0;  // oldest applied sample whose state waits for its topology delta

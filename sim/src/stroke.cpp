@@ -321,7 +321,9 @@ void StrokeCutter::commit(GridCoord g, const Eigen::Vector2d& uv, const Eigen::V
   const std::optional<Eigen::Vector2d> from = path_end_;
   path_end_ = to;
   if (!from) {
-    tracks_.emplace_back(1, to.cast<float>());
+    tracks_.emplace_back();
+    track_boxes_.emplace_back();  // empty
+    extend_track(to.cast<float>());
     recent_.clear();
     arrived_on_cut_ = true;
   }
@@ -331,8 +333,8 @@ void StrokeCutter::commit(GridCoord g, const Eigen::Vector2d& uv, const Eigen::V
   if (from && moved) {
     // Whether this segment ends along a cut (the next one then goes on along it).
     arrived_on_cut_ = parts.empty() || (parts.back().second - to).norm() > 1e-9;
-    tracks_.back().insert(tracks_.back().end(), recent_.begin(), recent_.end());
-    tracks_.back().push_back(to.cast<float>());
+    for (const auto& sample : recent_) extend_track(sample);
+    extend_track(to.cast<float>());
     recent_.clear();
   }
   if (follows_path()) {
@@ -382,9 +384,16 @@ void StrokeCutter::commit(GridCoord g, const Eigen::Vector2d& uv, const Eigen::V
   change.merge(cut);
 }
 
-double StrokeCutter::distance_to_track(const Eigen::Vector2d& p, double tail_cells) const {
-  double best = std::numeric_limits<double>::infinity();
+void StrokeCutter::extend_track(const Eigen::Vector2f& sample) {
+  tracks_.back().push_back(sample);
+  track_boxes_.back().extend(sample);
+}
+
+bool StrokeCutter::near_track(const Eigen::Vector2d& p, double radius, double tail_cells) const {
+  const Eigen::Vector2f pf = p.cast<float>();
   for (std::size_t i = 0; i < tracks_.size(); ++i) {
+    // A track whose box is farther than the radius has no sample near enough (the box holds every segment).
+    if (static_cast<double>(track_boxes_[i].exteriorDistance(pf)) > radius + 1e-4) continue;
     const auto& track = tracks_[i];
     // The current line's track ends where the segment being cut starts; its last `tail_cells` are left out,
     // or a segment going straight on would be "along" the track it continues.
@@ -396,12 +405,12 @@ double StrokeCutter::distance_to_track(const Eigen::Vector2d& p, double tail_cel
         if (end > 0) walked += (track[end].cast<double>() - track[end - 1].cast<double>()).norm();
       }
     }
-    if (end == 1) best = std::min(best, (track[0].cast<double>() - p).norm());
+    if (end == 1 && (track[0].cast<double>() - p).norm() <= radius) return true;
     for (std::size_t k = 1; k < end; ++k) {
-      best = std::min(best, closest_points(p, p, track[k - 1].cast<double>(), track[k].cast<double>()).distance);
+      if (closest_points(p, p, track[k - 1].cast<double>(), track[k].cast<double>()).distance <= radius) return true;
     }
   }
-  return best;
+  return false;
 }
 
 Eigen::Vector2d StrokeCutter::nearest_on_cut(const Eigen::Vector2d& p) const {
@@ -439,7 +448,7 @@ std::vector<std::pair<Eigen::Vector2d, Eigen::Vector2d>> StrokeCutter::recut_par
   const double near = kRecutCells + options_.tolerance_cells;
   const auto at = [&](int i) -> Eigen::Vector2d { return from + (static_cast<double>(i) / n) * d; };
   std::vector<char> on_cut(static_cast<std::size_t>(n) + 1);
-  for (int i = 0; i <= n; ++i) on_cut[static_cast<std::size_t>(i)] = distance_to_track(at(i), near) <= near;
+  for (int i = 0; i <= n; ++i) on_cut[static_cast<std::size_t>(i)] = near_track(at(i), near, near);
   std::vector<char> skip(on_cut.size(), 0);
   for (int i = 0; i <= n;) {
     if (!on_cut[static_cast<std::size_t>(i)]) {

@@ -112,4 +112,10 @@ void add_step_times(Summary& summary, const std::vector<double>& step_ms) {
   summary.step_ms_max = step_ms.empty() ? 0.0 : *std::max_element(step_ms.begin(), step_ms.end());
 }
 
+void add_step_times(Summary& summary, const common::DurationHistogram& step_ms) {
+  summary.step_ms_median = step_ms.quantile(0.5);
+  summary.step_ms_p95 = step_ms.quantile(0.95);
+  summary.step_ms_max = step_ms.max_ms();
+}
+
 }  // namespace tachi::sim

@@ -204,9 +204,13 @@ class StrokeCutter {
   /// changes nothing.
   [[nodiscard]] std::vector<std::pair<Eigen::Vector2d, Eigen::Vector2d>> recut_parts(const Eigen::Vector2d& from,
                                                                                    const Eigen::Vector2d& to) const;
-  /// Distance (cells) from `p` to the samples of the cut so far (tracks_), without the current line's last
-  /// `tail_cells`.
-  [[nodiscard]] double distance_to_track(const Eigen::Vector2d& p, double tail_cells) const;
+  /// Whether `p` lies within `radius` cells of the samples of the cut so far (tracks_), without the current
+  /// line's last `tail_cells`. Tracks whose box is farther are skipped and the search stops at the first
+  /// segment near enough: a session's cut history grows with every pass (an hour of the same stroke looped
+  /// is ~800 tracks), and this runs for every sample.
+  [[nodiscard]] bool near_track(const Eigen::Vector2d& p, double radius, double tail_cells) const;
+  /// Appends samples to the current line's track, growing its box.
+  void extend_track(const Eigen::Vector2f& sample);
   /// The nearest point of the cut paths so far (paths_, without the segment being cut).
   [[nodiscard]] Eigen::Vector2d nearest_on_cut(const Eigen::Vector2d& p) const;
   /// A length in cells: `cells`, or `metres` on this cloth if that is more.
@@ -225,6 +229,7 @@ class StrokeCutter {
   std::optional<Eigen::Vector2d> path_end_;  // exact/delete: where the open line's cut ends
   std::vector<std::vector<Eigen::Vector2f>> paths_;
   std::vector<std::vector<Eigen::Vector2f>> tracks_;  // exact/delete: the samples (uv) the cuts so far were made along
+  std::vector<Eigen::AlignedBox2f> track_boxes_;       // ... the box of each track's samples
   std::vector<Eigen::Vector2f> recent_;               // ... and those since the last point that joined the cut
   bool ending_ = false;          // end_stroke's commit: the last step joins however short
   bool arrived_on_cut_ = false;  // the current line's path got to its end along an earlier cut (or starts there)

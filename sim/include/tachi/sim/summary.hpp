@@ -2,6 +2,7 @@
 // cutting and the session did. The offline and live modes fill the same keys.
 #pragma once
 
+#include "tachi/common/latency.hpp"
 #include "tachi/sim/cloth.hpp"
 #include "tachi/sim/session.hpp"
 #include "tachi/sim/stroke.hpp"
@@ -44,4 +45,6 @@ void add_cut_summary(Summary& summary, const Cloth& cloth, const StrokeCutter& c
 void add_session_summary(Summary& summary, const Session& session);
 /// Sets step_ms_median, step_ms_p95 and step_ms_max from the step times of a run.
 void add_step_times(Summary& summary, const std::vector<double>& step_ms);
+/// The same from a live run's histogram (its figures within 1 %, its memory constant however long the run).
+void add_step_times(Summary& summary, const common::DurationHistogram& step_ms);
 }  // namespace tachi::sim

@@ -46,6 +46,12 @@ void join_bus(std::optional<bus::Participant>& dds, const common::BusOptions& b,
   dds.emplace(b.domain, b.dds_config, bus::Security{b.secure_dir, identity});
 }
 
+// A stage's mode without the bus (an offline run, a file view) has no place in the composed pipeline.
+int runs_alone(const char* stage_and_flag, const char* why) {
+  std::cerr << "tachi-pipeline: " << stage_and_flag << ' ' << why << "; run it alone\n";
+  return common::kExitUsage;
+}
+
 // Each builder parses one stage's command line (argv[0] is its program's name) and appends its node.
 // The `finite` each gives is the launcher's (config.cpp `plan`): what ends by itself with these flags.
 using Builder = int (*)(std::span<char*> argv, Composition& out);
@@ -54,10 +60,7 @@ int build_sim(std::span<char*> argv, Composition& out) {
   auto stage = std::make_shared<Stage<sim::SimNode, sim::Flags>>();
   const auto& flags = stage->flags;
   if (const int rc = sim::parse_flags(static_cast<int>(argv.size()), argv.data(), stage->flags); rc >= 0) return rc;
-  if (flags.offline) {
-    std::cerr << "tachi-pipeline: tachi-sim --offline runs without the bus; run it alone\n";
-    return common::kExitUsage;
-  }
+  if (flags.offline) return runs_alone("tachi-sim --offline", "runs without the bus");
   join_bus(stage->dds, flags.bus, flags.bus.identity);
   stage->node.emplace(flags.options, flags.live, *stage->dds);
   out.nodes.push_back(composed("sim", flags.live.exit_when_idle_s > 0.0, stage));
@@ -68,10 +71,7 @@ int build_filter(std::span<char*> argv, Composition& out) {
   auto stage = std::make_shared<Stage<filter::FilterNode, filter::Flags>>();
   const auto& flags = stage->flags;
   if (const int rc = filter::parse_flags(static_cast<int>(argv.size()), argv.data(), stage->flags); rc >= 0) return rc;
-  if (flags.offline) {
-    std::cerr << "tachi-pipeline: tachi-filter --offline runs without the bus; run it alone\n";
-    return common::kExitUsage;
-  }
+  if (flags.offline) return runs_alone("tachi-filter --offline", "runs without the bus");
   join_bus(stage->dds, flags.bus, flags.bus.identity);
   stage->node.emplace(flags.config, flags.journal, *stage->dds);
   out.nodes.push_back(composed("filter", false, stage));
@@ -113,10 +113,7 @@ int build_viewer(std::span<char*> argv, Composition& out) {
   auto stage = std::make_shared<Stage<viewer::ViewerNode, viewer::ViewerOptions>>();
   const auto& options = stage->flags;
   if (const int rc = viewer::parse_flags(static_cast<int>(argv.size()), argv.data(), stage->flags); rc >= 0) return rc;
-  if (!options.mesh.empty()) {
-    std::cerr << "tachi-pipeline: tachi-viewer --mesh shows a file, not the bus; run it alone\n";
-    return common::kExitUsage;
-  }
+  if (!options.mesh.empty()) return runs_alone("tachi-viewer --mesh", "shows a file, not the bus");
   stage->window = viewer::open_window(options);  // none with --headless
   join_bus(stage->dds, options.bus, viewer::participant_identity(options));
   stage->node.emplace(options, *stage->dds, stage->window.get());

@@ -121,3 +121,26 @@ TEST(Pipeline, AStraightHandStrokeCutsTheClothAlongItsPathAsProcessesAndInOne) {
   expect_the_cut_along_the_stroke(composed);
   EXPECT_NE(composed.logs.find("[tachi-pipeline:filter] [info] stopping"), std::string::npos) << "the filter was stopped: " << composed.logs;
 }
+
+// tachi-pipeline's command line, as `tachi run --in-process` or a user writes it: a stage mode without the
+// bus, an unknown program and no stage at all are usage errors (exit 2) that name what is wrong.
+TEST(Pipeline, StagesThatCannotJoinTheBusAreRefusedNamingThem) {
+  tachi::test::ScratchDir dir("e2e_refused");
+  std::ofstream(dir / "cloth.obj") << "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
+  std::ofstream(dir / "hand.csv") << "frame,stamp_ns,x,y,z,u,v,tracked,confidence\n";
+  const auto pipeline = [](std::vector<std::string> args) {
+    args.insert(args.begin(), kBin + "/tachi-pipeline");
+    return tachi::test::run(args, 30s);
+  };
+  const std::vector<std::pair<std::vector<std::string>, std::string>> refused{
+      {{"--", "tachi-sim", "--offline", "--grid", "8"}, "tachi-sim --offline runs without the bus; run it alone"},
+      {{"--", "tachi-filter", "--offline", "--hands", (dir / "hand.csv").string(), "--out", (dir / "s.csv").string()}, "tachi-filter --offline runs without the bus"},
+      {{"--", "tachi-viewer", "--mesh", (dir / "cloth.obj").string()}, "tachi-viewer --mesh shows a file, not the bus"},
+      {{"--", "tachi-simulator"}, "tachi-simulator: not a stage"},
+      {{}, "no stage given"}};
+  for (const auto& [args, words] : refused) {
+    const auto r = pipeline(args);
+    EXPECT_EQ(r.exit_code, 2) << words << "\n" << r.err;
+    EXPECT_NE(r.err.find(words), std::string::npos) << r.err;
+  }
+}

@@ -209,7 +209,7 @@ class StrokeCutter {
   /// segment near enough: a session's cut history grows with every pass (an hour of the same stroke looped
   /// is ~800 tracks), and this runs for every sample.
   [[nodiscard]] bool near_track(const Eigen::Vector2d& p, double radius, double tail_cells) const;
-  /// Appends samples to the current line's track, growing its box.
+  /// Appends a sample to the current line's track and grows the track's box.
   void extend_track(const Eigen::Vector2f& sample);
   /// The nearest point of the cut paths so far (paths_, without the segment being cut).
   [[nodiscard]] Eigen::Vector2d nearest_on_cut(const Eigen::Vector2d& p) const;

@@ -24,7 +24,7 @@ const std::string kRecordings = tachi::test::recordings_dir();
 
 std::vector<std::string> run_args(const fs::path& out, const std::string& domain) {
   return {kBin + "/tachi", "run", "--recording", kRecordings + "/straight_cut", "--grid", "32", "--domain", domain, "--out",
-          out.string(), "--headless", "--settle", "1.5"};
+          out.string(), "--headless", "--settle", "1"};
 }
 
 std::string host_name() {

@@ -38,7 +38,7 @@ std::size_t depth_frames(const std::string& recording) {
 
 std::vector<std::string> run_args(unsigned domain, const fs::path& out, std::vector<std::string> extra) {
   std::vector<std::string> args{kBin + "/tachi", "run", "--recording", kRecordings + "/straight_cut", "--grid", "32",
-                                "--domain", std::to_string(domain), "--out", out.string(), "--headless", "--settle", "1.5",
+                                "--domain", std::to_string(domain), "--out", out.string(), "--headless", "--settle", "1",
                                 "--set", "sim.cut-mode=grid"};
   // Twice the recorded pace unless a test sets its own: no test here measures the pace, and each run
   // waits on the recording's clock (halves ~4.7 s of straight_cut's playback).

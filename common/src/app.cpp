@@ -1,5 +1,7 @@
 #include "tachi/common/app.hpp"
 
+#include "tachi/common/log_sink.hpp"
+
 #include <spdlog/sinks/stdout_color_sinks.h>  // declares stderr_color_mt too
 #include <spdlog/spdlog.h>
 
@@ -67,8 +69,9 @@ void add_bus_flags(CLI::App& app, BusOptions& options) {
 }
 
 int parse(CLI::App& app, int argc, char** argv) {
-  // Logs go to stderr, named after the program: stdout carries CSV/JSON output.
-  if (spdlog::get(app.get_name()) == nullptr) spdlog::set_default_logger(spdlog::stderr_color_mt(app.get_name()));
+  // Logs go to stderr, named after the program: stdout carries CSV/JSON output. Never blocking on it
+  // (log_sink.hpp): a process must not stop because nobody reads its log.
+  if (spdlog::get(app.get_name()) == nullptr) spdlog::set_default_logger(stderr_logger(app.get_name()));
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp&) {

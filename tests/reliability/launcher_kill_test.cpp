@@ -21,10 +21,15 @@
 #include <nlohmann/json.hpp>
 
 #include <csignal>
+#include <fcntl.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
 #include <future>
 #include <fstream>
 #include <map>
 #include <regex>
+#include <thread>
 
 using namespace std::chrono_literals;
 using tachi::test::ChildProcess;
@@ -206,4 +211,53 @@ TEST(ChildrenDieWithTheLauncher, NoNodeOutlivesASigkilledLauncherByASecond) {
     EXPECT_LT(took_ms[node], 1000) << "tachi-" << node;
   }
   launcher.wait(5s);
+}
+
+// A launcher whose log nobody reads: its stderr is a pipe already full when it starts (a harness that reads
+// only at the end, `tachi run 2>&1 | less` scrolled back). It used to block on its first log line and stop
+// supervising; it must run the recording to its end, write the summary and exit 0, its log lines dropped.
+// Domain id 224.
+TEST(UnreadLog, ALauncherWhoseStderrIsAFullPipeStillRunsTheRecordingToItsEnd) {
+  tachi::test::ScratchDir out("tachi_unread_log");
+  int fds[2];
+  ASSERT_EQ(::pipe(fds), 0);
+  const int flags = ::fcntl(fds[1], F_GETFL);
+  ::fcntl(fds[1], F_SETFL, flags | O_NONBLOCK);
+  const std::string block(4096, 'x');
+  while (::write(fds[1], block.data(), block.size()) > 0) {
+  }
+  ::fcntl(fds[1], F_SETFL, flags);  // blocking again, as a terminal's or a pipe's stderr is
+
+  const std::vector<std::string> args{kBin + "/tachi", "run", "--recording", kRecordings + "/straight_cut", "--grid", "32",
+                                      "--domain", "224", "--out", out.path().string(), "--headless", "--rate", "2"};
+  std::vector<char*> argv;
+  for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+  argv.push_back(nullptr);
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_adddup2(&actions, fds[1], STDERR_FILENO);
+  posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, "/dev/null", O_WRONLY, 0);
+  posix_spawn_file_actions_addclose(&actions, fds[0]);
+  pid_t pid = 0;
+  ASSERT_EQ(::posix_spawn(&pid, argv[0], &actions, nullptr, argv.data(), environ), 0);
+  posix_spawn_file_actions_destroy(&actions);
+  ::close(fds[1]);
+
+  int status = 0;
+  const auto deadline = std::chrono::steady_clock::now() + 90s;
+  while (::waitpid(pid, &status, WNOHANG) == 0 && std::chrono::steady_clock::now() < deadline) std::this_thread::sleep_for(50ms);
+  const bool ended = std::chrono::steady_clock::now() < deadline;
+  if (!ended) {
+    ::kill(pid, SIGKILL);  // a launcher blocked on its log: unblock the test, then fail it
+    ::waitpid(pid, &status, 0);
+  }
+  ::close(fds[0]);
+  ASSERT_TRUE(ended) << "tachi run did not end: blocked on its unread stderr?";
+  ASSERT_TRUE(WIFEXITED(status)) << status;
+  EXPECT_EQ(WEXITSTATUS(status), 0);
+  std::ifstream in(out / "summary.json");
+  const auto summary = nlohmann::json::parse(in, nullptr, false);
+  ASSERT_TRUE(summary.is_object());
+  EXPECT_EQ(summary["cuts"], 1) << summary.dump();
+  EXPECT_EQ(summary["restarts"], 0);
 }

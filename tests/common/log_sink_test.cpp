@@ -1,4 +1,5 @@
 // A log nobody reads never stops the process writing it (common/log_sink.hpp).
+#include "process.hpp"
 #include "tachi/common/log_sink.hpp"
 
 #include <gtest/gtest.h>
@@ -27,15 +28,7 @@ std::string drain(int fd) {
 }  // namespace
 
 TEST(NonBlockingFdSink, AFullPipeDropsAndCountsLinesInsteadOfBlockingAndSaysSoOnceItDrains) {
-  int fds[2];
-  ASSERT_EQ(::pipe(fds), 0);
-  // Fill the pipe as a reader that went away would leave it (the write end stays blocking, as stderr is).
-  const int flags = ::fcntl(fds[1], F_GETFL);
-  ::fcntl(fds[1], F_SETFL, flags | O_NONBLOCK);
-  const std::string block(4096, 'x');
-  while (::write(fds[1], block.data(), block.size()) > 0) {
-  }
-  ::fcntl(fds[1], F_SETFL, flags);
+  const auto fds = tachi::test::full_pipe();
 
   auto sink = std::make_shared<tachi::common::NonBlockingFdSink>(fds[1]);
   spdlog::logger logger("test", sink);

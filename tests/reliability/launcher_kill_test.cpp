@@ -219,14 +219,7 @@ TEST(ChildrenDieWithTheLauncher, NoNodeOutlivesASigkilledLauncherByASecond) {
 // Domain id 224.
 TEST(UnreadLog, ALauncherWhoseStderrIsAFullPipeStillRunsTheRecordingToItsEnd) {
   tachi::test::ScratchDir out("tachi_unread_log");
-  int fds[2];
-  ASSERT_EQ(::pipe(fds), 0);
-  const int flags = ::fcntl(fds[1], F_GETFL);
-  ::fcntl(fds[1], F_SETFL, flags | O_NONBLOCK);
-  const std::string block(4096, 'x');
-  while (::write(fds[1], block.data(), block.size()) > 0) {
-  }
-  ::fcntl(fds[1], F_SETFL, flags);  // blocking again, as a terminal's or a pipe's stderr is
+  const auto fds = tachi::test::full_pipe();
 
   const std::vector<std::string> args{kBin + "/tachi", "run", "--recording", kRecordings + "/straight_cut", "--grid", "32",
                                       "--domain", "224", "--out", out.path().string(), "--headless", "--rate", "2"};

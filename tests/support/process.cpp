@@ -129,4 +129,16 @@ RunResult run(std::vector<std::string> argv, std::chrono::milliseconds timeout,
   return {code, child.out(), child.err()};
 }
 
+std::array<int, 2> full_pipe() {
+  std::array<int, 2> fds{};
+  if (::pipe(fds.data()) != 0) throw std::runtime_error(std::string("pipe: ") + std::strerror(errno));
+  const int flags = ::fcntl(fds[1], F_GETFL);
+  ::fcntl(fds[1], F_SETFL, flags | O_NONBLOCK);
+  const std::string page(4096, 'x');
+  while (::write(fds[1], page.data(), page.size()) > 0) {
+  }
+  ::fcntl(fds[1], F_SETFL, flags);
+  return fds;
+}
+
 }  // namespace tachi::test

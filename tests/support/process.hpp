@@ -5,6 +5,7 @@
 
 #include <sys/types.h>
 
+#include <array>
 #include <chrono>
 #include <map>
 #include <string>
@@ -53,5 +54,9 @@ struct RunResult {
 };
 RunResult run(std::vector<std::string> argv, std::chrono::milliseconds timeout,
               const std::map<std::string, std::string>& env = {});
+
+/// A pipe whose buffer is full, as a reader that went away leaves it: {read end, write end}, the write end
+/// blocking (as a process's stderr is), so the next write() to it would wait for a reader.
+std::array<int, 2> full_pipe();
 
 }  // namespace tachi::test

@@ -291,10 +291,13 @@ int run(const RunConfig& requested, const RunPaths& paths) {
           if ((spec.node == "viewer" || spec.node == "pipeline") && !recording) viewer_closed = true;
           break;
         case ExitMeaning::DiskFull:
-          // The node logged "<file>: no space left on device" itself: that line once, no restart.
-          spdlog::error("{} stopped the run: {}", spec.program, c.child->last_log_lines(1));
+          // The node logged "<file>: no space left on device" itself: that line once for the run (nodes writing
+          // to one full disk often stop in the same moment; the first names it), no restart.
+          if (exit_code != kRunDiskFull) {
+            spdlog::error("{} stopped the run: {}", spec.program, c.child->last_log_lines(1));
+            ended = "disk full (" + spec.program + ")";
+          }
           exit_code = kRunDiskFull;
-          ended = "disk full (" + spec.program + ")";
           failed = true;
           break;
         case ExitMeaning::Usage:

@@ -76,7 +76,8 @@ def main():
                "--headless", "--set", "sensor.loop=true"] + extra
         print(f"soak: {' '.join(cmd)} for {minutes:g} min")
         # The launcher's log goes to a file: a pipe nobody drains fills after ~64 KiB (~26 minutes of status
-        # lines), and the launcher then blocks writing its next line (it did, twice: the trace stopped at minute 26).
+        # lines). The launcher blocked on it then (twice: the trace stopped at minute 26); it now drops the
+        # lines it cannot write (common/log_sink.hpp), and the file keeps them.
         err_file = open(os.path.join(out, "launcher.err"), "w+")
         run = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=err_file, text=True)
         start = time.monotonic()

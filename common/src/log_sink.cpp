@@ -32,7 +32,7 @@ void NonBlockingFdSink::sink_it_(const spdlog::details::log_msg& msg) {
   if (dropped_since_ > 0) {
     text += '[';
     text += std::to_string(dropped_since_);
-    text += " log lines dropped: nothing was reading this output]\n";
+    text += " log lines dropped: the output could not take them (unread, or full)]\n";
   }
   text.append(formatted.data(), formatted.size());
   if (write_now(text)) {

@@ -49,7 +49,7 @@ TEST(NonBlockingFdSink, AFullPipeDropsAndCountsLinesInsteadOfBlockingAndSaysSoOn
   EXPECT_EQ(backlog.find("status line"), std::string::npos) << "the dropped lines were not written";
   logger.info("status line 3");
   const std::string out = drain(fds[0]);
-  EXPECT_EQ(out, "[2 log lines dropped: nothing was reading this output]\nstatus line 3\n");
+  EXPECT_EQ(out, "[2 log lines dropped: the output could not take them (unread, or full)]\nstatus line 3\n");
   EXPECT_EQ(sink->dropped(), 2u);
   ::close(fds[0]);
   ::close(fds[1]);

@@ -18,7 +18,7 @@ namespace tachi::common {
 class NonBlockingFdSink final : public spdlog::sinks::base_sink<std::mutex> {
  public:
   explicit NonBlockingFdSink(int fd) : fd_(fd) {}
-  /// Lines dropped because the descriptor could not take them (total since start).
+  /// Lines dropped because the descriptor could not take them (total since start; read it while no thread logs).
   [[nodiscard]] std::uint64_t dropped() const { return dropped_total_; }
 
  protected:

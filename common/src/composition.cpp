@@ -2,9 +2,9 @@
 
 #include "tachi/common/app.hpp"
 #include "tachi/common/disk_full.hpp"
+#include "tachi/common/log_sink.hpp"
 
 #include <spdlog/pattern_formatter.h>
-#include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 
 #include <atomic>
@@ -43,7 +43,7 @@ struct Board {
 void log_node_names(const std::string& logger_name) {
   // Each stage's flag parsing made its own logger the default (spdlog drops the one it replaces).
   auto logger = spdlog::get(logger_name);
-  if (!logger) logger = spdlog::stderr_color_mt(logger_name);
+  if (!logger) logger = stderr_logger(logger_name);  // never blocking on an unread stderr (log_sink.hpp)
   auto formatter = std::make_unique<spdlog::pattern_formatter>();
   formatter->add_flag<NodeNameFlag>('*').set_pattern("[%Y-%m-%d %H:%M:%S.%e] [%n%*] [%^%l%$] %v");
   logger->set_formatter(std::move(formatter));

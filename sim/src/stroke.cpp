@@ -360,6 +360,7 @@ void StrokeCutter::commit(GridCoord g, const Eigen::Vector2d& uv, const Eigen::V
           std::hypot((b.x() - a.x()) * cloth_->spacing_x(), (b.y() - a.y()) * cloth_->spacing_y()));
       report_.cut_length_m += length;
       total_.cut_length_m += length;
+      line_changed_ = line_changed_ || !cut.empty();
       change.merge(cut);
     }
     return;
@@ -381,6 +382,7 @@ void StrokeCutter::commit(GridCoord g, const Eigen::Vector2d& uv, const Eigen::V
   apply_blade_drag(*cloth_, cutter_, added, direction, options_.blade, options_.drag, drag_scratch_);
   report_.particles_duplicated += cut.duplicated_from.size();
   total_.particles_duplicated += cut.duplicated_from.size();
+  line_changed_ = line_changed_ || !cut.empty();
   change.merge(cut);
 }
 
@@ -510,6 +512,9 @@ void StrokeCutter::start_line(GridCoord g, const Eigen::Vector2d& uv, const Eige
                               TopologyChange& change) {
   line_.emplace(cloth_->columns, cloth_->rows);
   path_end_.reset();
+  line_start_ = {tracks_.size(),        paths_.size(),  report_.cut_line.size(), total_.cut_line.size(),
+                 report_.lines,         total_.lines,   report_.cut_length_m,    total_.cut_length_m};
+  line_changed_ = false;
   commit(g, uv, direction, change);
   pending_.clear();
 }
@@ -520,6 +525,20 @@ void StrokeCutter::close_line() {
   if (!follows_path()) add_line_to_report(line_->finish());
   line_.reset();
   pending_.clear();
+  if (!line_changed_) forget_line();
+}
+
+void StrokeCutter::forget_line() {
+  tracks_.resize(std::min(tracks_.size(), line_start_.tracks));
+  track_boxes_.resize(tracks_.size());
+  paths_.resize(std::min(paths_.size(), line_start_.paths));
+  report_.cut_line.resize(std::min(report_.cut_line.size(), line_start_.report_cells));
+  total_.cut_line.resize(std::min(total_.cut_line.size(), line_start_.total_cells));
+  report_.lines = line_start_.report_lines;
+  total_.lines = line_start_.total_lines;
+  report_.cut_length_m = line_start_.report_length_m;
+  total_.cut_length_m = line_start_.total_length_m;
+  recent_.clear();
 }
 
 void StrokeCutter::add_line_to_report(const std::vector<GridCoord>& line) {

@@ -271,6 +271,52 @@ TEST(StrokeCutter, GoingOverACutAgainChangesNothing) {
   }
 }
 
+// A session that goes over its cuts for hours (the soak loops one stroke ~13 times a minute): a pass that changes
+// nothing leaves no history behind (no track, path, cut-line cell, line or length), so memory stays flat and
+// `cuts` counts what cut. And the zone that counts as "along a cut" is the cuts made, not the passes: passes
+// that each creep 0.08 cell further aside (each within reach of the last) cut again once they are off the cut.
+TEST(StrokeCutter, PassesOverACutLeaveNoHistory) {
+  constexpr int n = 33;
+  for (const CutMode mode : {CutMode::Exact, CutMode::Grid, CutMode::Delete}) {
+    SCOPED_TRACE(to_string(mode));
+    Cloth cloth = flat_cloth(n, PinMode::None);
+    StrokeOptions options;
+    options.mode = mode;
+    options.grid_hysteresis_cells = kGridHysteresisCells;
+    StrokeCutter cutter{cloth, options};
+    const std::vector<Eigen::Vector2d> path{{6.0, 16.2}, {16.0, 14.2}, {26.0, 16.2}};
+    stroke_through(cutter, n, path, 0.3);
+    const StrokeReport first = cutter.total();
+    const std::size_t paths = cutter.paths().size();
+    const std::size_t particles = cloth.particle_count();
+    const std::size_t triangles = live_triangles(cloth);
+    ASSERT_EQ(first.lines, 1U);
+    ASSERT_GT(first.cut_length_m, 0.0F);
+    for (int pass = 0; pass < 40; ++pass) {
+      std::vector<Eigen::Vector2d> again = path;
+      if (pass % 2 == 1) std::reverse(again.begin(), again.end());
+      stroke_through(cutter, n, again, 0.3, 0.04, static_cast<std::uint32_t>(pass + 7));
+      EXPECT_EQ(cutter.report().lines, 0U) << "pass " << pass;
+      EXPECT_FLOAT_EQ(cutter.report().cut_length_m, 0.0F) << "pass " << pass;
+    }
+    EXPECT_EQ(cloth.particle_count(), particles);
+    EXPECT_EQ(live_triangles(cloth), triangles);
+    EXPECT_EQ(cutter.total().lines, first.lines);
+    EXPECT_EQ(cutter.total().cut_line.size(), first.cut_line.size());
+    EXPECT_FLOAT_EQ(cutter.total().cut_length_m, first.cut_length_m);
+    EXPECT_EQ(cutter.paths().size(), paths);
+    if (mode == CutMode::Grid) continue;  // grid mode snaps every pass to the same grid line: no creeping aside
+    bool cut_again = false;
+    for (int pass = 1; pass <= 25 && !cut_again; ++pass) {
+      std::vector<Eigen::Vector2d> aside = path;
+      for (Eigen::Vector2d& p : aside) p.y() += 0.08 * pass;
+      stroke_through(cutter, n, aside, 0.3);
+      cut_again = cloth.particle_count() > particles || live_triangles(cloth) < triangles;  // delete mode deletes
+    }
+    EXPECT_TRUE(cut_again) << "passes creeping 2 cells aside never cut";
+  }
+}
+
 TEST(Blade, TableIsSeed001Figure4) {
   EXPECT_FLOAT_EQ(sharpness(Blade::Razor).min_n, 0.3F);
   EXPECT_FLOAT_EQ(sharpness(Blade::Scalpel).max_n, 0.6F);

@@ -155,8 +155,9 @@ inline constexpr double kRecutStepCells = 0.05;
 /// What a stroke did so far.
 struct StrokeReport {
   std::vector<GridCoord> cut_line;   ///< every cut line of the stroke, concatenated (an exit and re-entry starts a new one);
-                                     ///< exact/delete modes: the grid points nearest the points of the path
-  std::size_t lines = 0;             ///< how many separate cut lines
+                                     ///< exact/delete modes: the grid points nearest the points of the path.
+                                     ///< A line that changed nothing (it went over cuts already made) is not kept
+  std::size_t lines = 0;             ///< how many separate cut lines (that changed the cloth)
   std::size_t particles_duplicated = 0;
   float cut_length_m = 0.0F;         ///< rest length of the cut lines
 };
@@ -196,6 +197,9 @@ class StrokeCutter {
   void commit(GridCoord g, const Eigen::Vector2d& uv, const Eigen::Vector3f& direction, TopologyChange& change);
   void start_line(GridCoord g, const Eigen::Vector2d& uv, const Eigen::Vector3f& direction, TopologyChange& change);
   void close_line();
+  /// A closed line that changed nothing leaves no history: its track, path, cut-line cells, count and length
+  /// are taken back (see line_start_).
+  void forget_line();
   /// Whether the cut from `from` to `to` would meet the current line's path and close a loop shorter than
   /// the options' minimum.
   [[nodiscard]] bool closes_small_loop(const Eigen::Vector2d& from, const Eigen::Vector2d& to) const;
@@ -231,6 +235,16 @@ class StrokeCutter {
   std::vector<std::vector<Eigen::Vector2f>> tracks_;  // exact/delete: the samples (uv) the cuts so far were made along
   std::vector<Eigen::AlignedBox2f> track_boxes_;       // ... the box of each track's samples
   std::vector<Eigen::Vector2f> recent_;               // ... and those since the last point that joined the cut
+  // Where the open line's history begins, and whether its cuts changed the cloth. A pass over cuts already made
+  // changes nothing, and keeping its samples would let the going-over-a-cut zone creep sideways pass by pass (each
+  // pass within kRecutCells of the last) and grow without bound in a long session (the soak: a stroke looped for
+  // an hour, ~1.2 KB of history a pass).
+  struct LineStart {
+    std::size_t tracks = 0, paths = 0, report_cells = 0, total_cells = 0, report_lines = 0, total_lines = 0;
+    float report_length_m = 0.0F, total_length_m = 0.0F;
+  };
+  LineStart line_start_;
+  bool line_changed_ = false;
   bool ending_ = false;          // end_stroke's commit: the last step joins however short
   bool arrived_on_cut_ = false;  // the current line's path got to its end along an earlier cut (or starts there)
   ClothLocator locator_;

@@ -3,6 +3,7 @@
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 
+#include <limits.h>
 #include <poll.h>
 #include <unistd.h>
 
@@ -11,18 +12,16 @@
 namespace tachi::common {
 
 bool NonBlockingFdSink::write_now(const std::string& text) {
-  // POLLOUT on a pipe means a whole page is free, so a line shorter than that goes out in one write() that
-  // does not wait (PIPE_BUF atomicity); a regular file is always ready.
+  // POLLOUT on a pipe means at least a page (PIPE_BUF) is free, and a write() of at most PIPE_BUF bytes then goes
+  // out whole without waiting (POSIX atomicity); sink_it_ keeps every line within that. A regular file is always
+  // ready. A partial write (a file system filling up) is a failure: the rest is not waited for.
   pollfd p{fd_, POLLOUT, 0};
   if (::poll(&p, 1, 0) != 1 || (p.revents & POLLOUT) == 0) return false;
-  std::size_t written = 0;
-  while (written < text.size()) {
-    const ssize_t n = ::write(fd_, text.data() + written, text.size() - written);
+  for (;;) {
+    const ssize_t n = ::write(fd_, text.data(), text.size());
     if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) return false;
-    written += static_cast<std::size_t>(n);
+    return n == static_cast<ssize_t>(text.size());
   }
-  return true;
 }
 
 void NonBlockingFdSink::sink_it_(const spdlog::details::log_msg& msg) {
@@ -35,6 +34,13 @@ void NonBlockingFdSink::sink_it_(const spdlog::details::log_msg& msg) {
     text += " log lines dropped: the output could not take them (unread, or full)]\n";
   }
   text.append(formatted.data(), formatted.size());
+  // A line longer than a pipe's atomic write would be written in parts, and a blocking write() waits for the
+  // reader between them: such a line (a dumped message, a long path list) is cut to fit, and says so.
+  static constexpr char kCut[] = " [line cut: longer than PIPE_BUF]\n";
+  if (text.size() > PIPE_BUF) {
+    text.resize(PIPE_BUF - (sizeof kCut - 1));
+    text += kCut;
+  }
   if (write_now(text)) {
     dropped_since_ = 0;
   } else {

@@ -6,6 +6,7 @@
 #include <spdlog/spdlog.h>
 
 #include <fcntl.h>
+#include <limits.h>
 #include <unistd.h>
 
 #include <chrono>
@@ -51,6 +52,36 @@ TEST(NonBlockingFdSink, AFullPipeDropsAndCountsLinesInsteadOfBlockingAndSaysSoOn
   const std::string out = drain(fds[0]);
   EXPECT_EQ(out, "[2 log lines dropped: the output could not take them (unread, or full)]\nstatus line 3\n");
   EXPECT_EQ(sink->dropped(), 2u);
+  ::close(fds[0]);
+  ::close(fds[1]);
+}
+
+// A line longer than a pipe's atomic write (4 KiB) with one page free: a plain write() would put out the first
+// part and wait for the reader for the rest. The line goes out cut to fit, at once, and says it was cut.
+TEST(NonBlockingFdSink, ALineLongerThanAPipePageIsCutToFitInsteadOfWaitingForTheReader) {
+  const auto fds = tachi::test::full_pipe();
+  std::string page(PIPE_BUF, 'x');
+  ASSERT_EQ(::read(fds[0], page.data(), page.size()), static_cast<ssize_t>(page.size()));  // one page free
+
+  auto sink = std::make_shared<tachi::common::NonBlockingFdSink>(fds[1]);
+  spdlog::logger logger("test", sink);
+  logger.set_pattern("%v");
+  const std::string long_line(3 * PIPE_BUF, 'a');
+  auto logged = std::async(std::launch::async, [&] { logger.info(long_line); });
+  const bool returned = logged.wait_for(5s) == std::future_status::ready;
+  std::string out;
+  if (!returned) {
+    for (int i = 0; i < 20 && logged.wait_for(100ms) != std::future_status::ready; ++i) out += drain(fds[0]);
+  }
+  logged.wait();
+  ASSERT_TRUE(returned) << "logging a long line waited for the reader";
+  out = drain(fds[0]);
+  const std::size_t at = out.find('a');
+  ASSERT_NE(at, std::string::npos) << "the long line was dropped, though a page was free";
+  const std::string written = out.substr(at);
+  EXPECT_LE(written.size(), static_cast<std::size_t>(PIPE_BUF));
+  EXPECT_NE(written.find("[line cut: longer than PIPE_BUF]\n"), std::string::npos) << written.substr(written.size() - 60);
+  EXPECT_EQ(sink->dropped(), 0u);
   ::close(fds[0]);
   ::close(fds[1]);
 }

@@ -16,8 +16,9 @@ packages=(
   cyclonedds-dev cyclonedds-tools
   # Kinect v1 (live driver + fakenect playback library)
   libfreenect-dev libfreenect-bin
-  # maths, vision (libopencv-dev carries the CMake package config the module -dev packages lack)
-  libeigen3-dev libopencv-dev
+  # maths, vision (libopencv-dev carries the CMake package config the module -dev packages lack); FFmpeg's
+  # libraries for the viewer's fragmented MP4 video (viewer/include/tachi/viewer/video_writer.hpp)
+  libeigen3-dev libopencv-dev libavformat-dev libavcodec-dev libswscale-dev libavutil-dev
   # objects to drape the cloth over: PLY point clouds (assimp) and nearest-point queries (nanoflann)
   libassimp-dev libnanoflann-dev
   # conventions shared by every executable

@@ -1,6 +1,6 @@
 // tachi-viewer as a process, headless: flags refused by name, the offline mesh view, the warnings of a
-// viewer that writes nothing or sees no cloth, a video of a live simulator, and bad inputs replayed
-// over DDS while the real cloth stays on screen. Domain ids 150-154 (docs/testing.md).
+// viewer that writes nothing or sees no cloth, a video of a live simulator, a killed viewer's video, and
+// bad inputs replayed over DDS while the real cloth stays on screen. Domain ids 150-154 (docs/testing.md).
 #include "viewer_process.hpp"
 #include "node_status.hpp"
 #include "process.hpp"
@@ -205,6 +205,29 @@ TEST(ViewerCli, StopsWithinASecondOfSigintEvenAtOneFramePerSecond) {
   viewer.signal(SIGINT);
   EXPECT_EQ(viewer.wait(3s), 0) << viewer.err();
   EXPECT_LT(std::chrono::steady_clock::now() - sent, 1s);
+}
+
+// The user's path of a viewer that never got to close its video: SIGKILLed (as the launcher's death or
+// a power loss ends it) after 4 s of --video. Its MP4 is fragmented, so what it wrote plays: at least
+// the fragments before the last second (a keyframe every second; the encoder holds up to ~20 frames).
+TEST(ViewerCli, AKilledViewersVideoPlaysUpToItsLastFragment) {
+  constexpr unsigned kDomain = 154;
+  const tachi::test::ScratchDir dir{"viewer_killed_video"};
+  const auto video = (dir / "run.mp4").string();
+  ChildProcess viewer({kViewer, "--headless", "--domain", std::to_string(kDomain), "--video", video, "--size", "240", "--fps",
+                       "30", "--duration", "60"});
+  bus::Participant dds{kDomain};
+  bus::Reader<tachi_msg_NodeStatus> status{dds, bus::topics::node_status};
+  ASSERT_TRUE(tachi::test::wait_for_metric(status, "tachi-viewer", "frames", 120, 30s)) << viewer.err();
+  viewer.signal(SIGKILL);
+  viewer.wait(5s);
+
+  cv::VideoCapture capture(video);
+  ASSERT_TRUE(capture.isOpened()) << "a killed viewer's video opens\n" << viewer.err();
+  EXPECT_DOUBLE_EQ(capture.get(cv::CAP_PROP_FPS), 30.0);
+  int frames = 0;
+  for (cv::Mat frame; capture.read(frame); ++frames) ASSERT_EQ(frame.size(), cv::Size(240, 240));
+  EXPECT_GE(frames, 60) << "at least 2 s of the 4 s it ran\n" << viewer.err();
 }
 
 TEST(ViewerCli, FollowsASimulatorRestart) {

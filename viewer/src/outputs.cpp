@@ -1,5 +1,7 @@
 #include "tachi/viewer/outputs.hpp"
 
+#include "tachi/common/disk_full.hpp"
+
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <spdlog/spdlog.h>
@@ -10,16 +12,9 @@
 
 namespace tachi::viewer {
 namespace {
-// .mp4 as H.264 (what browsers and phones play) when this FFmpeg can encode it, else MPEG-4 part 2;
-// .avi as Motion JPEG.
-cv::VideoWriter open_video(const std::string& path, double fps, cv::Size size) {
-  cv::VideoWriter writer;
-  if (std::filesystem::path(path).extension() == ".avi") {
-    writer.open(path, cv::VideoWriter::fourcc('M', 'J', 'P', 'G'), fps, size);
-  } else {
-    for (const auto& codec : {"avc1", "mp4v"})
-      if (writer.open(path, cv::VideoWriter::fourcc(codec[0], codec[1], codec[2], codec[3]), fps, size)) break;
-  }
+// .avi as Motion JPEG through OpenCV; .mp4 goes through FragmentedMp4Writer (see there why not OpenCV).
+cv::VideoWriter open_avi(const std::string& path, double fps, cv::Size size) {
+  cv::VideoWriter writer(path, cv::VideoWriter::fourcc('M', 'J', 'P', 'G'), fps, size);
   if (!writer.isOpened()) throw std::runtime_error("--video: cannot open " + path + " for writing");
   return writer;
 }
@@ -31,7 +26,17 @@ void write_image(const std::string& path, const cv::Mat& image) {
 
 Outputs::Outputs(const ViewerOptions& o, cv::Size size) : options_(o) {
   if (!o.frames_dir.empty()) std::filesystem::create_directories(o.frames_dir);
-  if (!o.video.empty()) video_ = open_video(o.video, o.fps, size);
+  if (std::filesystem::path(o.video).extension() == ".avi") {
+    avi_ = open_avi(o.video, o.fps, size);
+  } else if (!o.video.empty()) {
+    try {
+      mp4_.emplace(o.video, o.fps, size);
+    } catch (const common::DiskFull&) {
+      throw;
+    } catch (const std::runtime_error& e) {
+      throw std::runtime_error(std::string("--video: ") + e.what());
+    }
+  }
   video_size_ = size;
 }
 
@@ -42,7 +47,7 @@ void Outputs::frame(const cv::Mat& image, Clock::time_point now) {
     std::snprintf(name, sizeof name, "frame_%05llu.png", static_cast<unsigned long long>(frames_));
     write_image((std::filesystem::path(options_.frames_dir) / name).string(), image);
   }
-  if (video_.isOpened()) {
+  if (video_open()) {
     if (!video_start_) video_start_ = now;
     const auto due = video_frames_due(std::chrono::duration<double>(now - *video_start_).count(), options_.fps);
     if (due > video_frames_) {
@@ -50,7 +55,12 @@ void Outputs::frame(const cv::Mat& image, Clock::time_point now) {
       cv::Mat scaled;
       if (image.size() != video_size_) cv::resize(image, scaled, video_size_, 0, 0, cv::INTER_AREA);
       const cv::Mat& written = scaled.empty() ? image : scaled;
-      for (; video_frames_ < due; ++video_frames_) video_.write(written);
+      for (; video_frames_ < due; ++video_frames_) {
+        if (mp4_)
+          mp4_->write(written);
+        else
+          avi_.write(written);
+      }
     }
   }
   ++frames_;
@@ -66,8 +76,10 @@ void Outputs::snapshot_now() {
 
 void Outputs::finish(const cv::Mat& last) {
   if (!options_.snapshot.empty()) write_image(options_.snapshot, last);
-  if (video_.isOpened()) {
-    video_.release();
+  if (video_open()) {
+    if (mp4_) mp4_->finish();
+    mp4_.reset();
+    avi_.release();
     spdlog::info("tachi-viewer: {} frames rendered, {} video frames at {} fps written to {}", frames_, video_frames_,
                  options_.fps, options_.video);
   }

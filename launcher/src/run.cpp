@@ -37,7 +37,7 @@ struct Supervised {
   std::optional<Clock::time_point> died_at;  ///< until its restarted process reports for the first time
 };
 
-// A killed viewer's unfinished video (no index: unplayable) is kept aside, not overwritten by the
+// A killed viewer's unfinished video (it plays up to its last fragment) is kept aside, not overwritten by the
 // restarted viewer's, which starts where the run is now.
 void keep_aside_partial_video(const RunConfig& config, int restart) {
   if (config.video.empty()) return;

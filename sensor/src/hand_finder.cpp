@@ -1192,15 +1192,63 @@ void HandFinder::Impl::band_cells_at(cv::Point seed, std::uint16_t near_raw, boo
   cv::compare(band_cells, 128, band_region, cv::CMP_EQ);
 }
 
-/// Acquisition without a background: the nearest readings of the grid in turn (up to
-/// kCandidates regions), each taken with its depth band as a hand if it is palm-shaped, clear of the
+/// Acquisition without a background: first where a hand held still was last frame, then the nearest
+/// readings of the grid in turn (up to `candidates` regions, `start_candidates` before any hand was seen), each taken with its depth band as a hand if it is palm-shaped, clear of the
 /// border, and an arm's end (reaches_back). Finds a hand held still since the first frame, which
 /// the background holds; a box, a head or a torso fail the shape or the depth test.
 bool HandFinder::Impl::find_arm_end(std::span<const std::uint16_t> raw, Palm& palm, cv::Point& seed_out) {
-  constexpr int kCandidates = 6;
   candidate_mask.create(kGridH, kGridW, CV_8U);
   candidate_mask.setTo(0);
-  for (int attempt = 0; attempt < kCandidates; ++attempt) {
+  // One candidate: the grid cells within the depth band connected to the seed (masked as tried).
+  const auto try_seed = [&](cv::Point seed, std::uint16_t near_raw) {
+    cv::Rect box;
+    band_cells_at(seed, near_raw, false, box);
+    candidate_mask.setTo(255, band_region);
+    // The nearest reading is a joint (an elbow pointing at the camera) and the arm's geodesic end
+    // lies elsewhere: the candidate is the hand there, in a band around its own nearest reading
+    // (past the elbow, which came nearer: reaches_back's test of an arm's end, taken from the hand).
+    // The joint itself is no candidate.
+    ArmEnd end;
+    const bool to_end = params.arm_end_window_m >= 0 && is_joint(seed, near_raw) && arm_end(seed, near_raw, end) && end.elsewhere;
+    if (to_end) {
+      cv::Rect end_box;
+      band_cells_at(end.seed, end.near_raw, true, end_box);
+      candidate_mask.setTo(255, band_region);
+      if (!arm_end_candidate(raw, end.seed, end.near_raw, end_box, true, palm)) return false;
+      seed_out = end.seed;
+      return true;
+    }
+    if (!arm_end_candidate(raw, seed, near_raw, box, false, palm)) return false;
+    seed_out = seed;
+    return true;
+  };
+  // A hand found here last frame and held still since (so part of the background): tried first where it
+  // was, whatever lies nearer to the camera elsewhere. Found by the nearest-first search below only, it
+  // was lost again behind the nearer objects of the room (a box, a table edge, a side wall running back
+  // give one candidate per depth band each), until it moved (measured on seeds 1-100: the hand held up
+  // from the first frame untracked for its first 30 frames in 5 clips).
+  if (params.still_hand_m > 0 && frames_since_seen == 1 && previous_cell.x >= 0) {
+    constexpr int kNear = 3;  // grid cells (12 px): a still hand's nearest reading stays within its palm
+    std::uint16_t near_raw = kNoReading;
+    cv::Point seed{-1, -1};
+    for (int gy = std::max(0, previous_cell.y - kNear); gy <= std::min(kGridH - 1, previous_cell.y + kNear); ++gy) {
+      const auto* g = grid.ptr<std::uint16_t>(gy);
+      for (int gx = std::max(0, previous_cell.x - kNear); gx <= std::min(kGridW - 1, previous_cell.x + kNear); ++gx)
+        if (g[gx] < near_raw) {
+          near_raw = g[gx];
+          seed = {gx, gy};
+        }
+    }
+    // Held still: the palm within still_hand_m of where it was (a hand that moves is foreground, followed as such).
+    if (seed.x >= 0 && try_seed(seed, near_raw) &&
+        (model.back_project(palm.u, palm.v, palm.z) - last_seen).norm() <= params.still_hand_m)
+      return true;
+    candidate_mask.setTo(0);  // not there: the search below as if it had not been tried
+  }
+  // Otherwise the nearest readings first; before any hand was seen (a hand held up and still from the
+  // first frame is part of the background), more of them.
+  const int candidates = frames_since_seen >= (1 << 20) ? params.start_candidates : params.candidates;
+  for (int attempt = 0; attempt < candidates; ++attempt) {
     // The nearest reading not tried yet, the first in row order among equals: each row's minimum
     // by masks (it vectorises), then the place of the best one.
     std::uint16_t near_raw = kNoReading;
@@ -1216,30 +1264,7 @@ bool HandFinder::Impl::find_arm_end(std::span<const std::uint16_t> raw, Palm& pa
     cv::Point seed{0, seed_row};
     for (const auto* g = grid.ptr<std::uint16_t>(seed_row); g[seed.x] != near_raw || candidate_mask.at<std::uint8_t>(seed); ++seed.x) {
     }
-    // The candidate: the grid cells within the depth band connected to the seed.
-    cv::Rect box;
-    band_cells_at(seed, near_raw, false, box);
-    candidate_mask.setTo(255, band_region);
-    // The nearest reading is a joint (an elbow pointing at the camera) and the arm's geodesic end
-    // lies elsewhere: the candidate is the hand there, in a band around its own nearest reading
-    // (past the elbow, which came nearer: reaches_back's test of an arm's end, taken from the hand).
-    // The joint itself is no candidate.
-    ArmEnd end;
-    const bool to_end = params.arm_end_window_m >= 0 && is_joint(seed, near_raw) && arm_end(seed, near_raw, end) && end.elsewhere;
-    if (to_end) {
-      cv::Rect end_box;
-      band_cells_at(end.seed, end.near_raw, true, end_box);
-      candidate_mask.setTo(255, band_region);
-      if (arm_end_candidate(raw, end.seed, end.near_raw, end_box, true, palm)) {
-        seed_out = end.seed;
-        return true;
-      }
-      continue;
-    }
-    if (arm_end_candidate(raw, seed, near_raw, box, false, palm)) {
-      seed_out = seed;
-      return true;
-    }
+    if (try_seed(seed, near_raw)) return true;
   }
   return false;
 }

@@ -96,6 +96,16 @@ struct HandFinderParams {
   /// it: a second person's head) gives way to a nearer foreground component that is one and passes
   /// a new track's tests.
   bool take_over_by_arm_end = true;
+  /// No hand where the background says (find_arm_end): the nearest readings tried as new hands, a frame...
+  int candidates = 6;
+  /// ... and before any hand was seen: a hand held up and still from the first frame is part of the
+  /// background, and a room's nearer things (a box, a table edge, a side wall running back: one candidate
+  /// per depth band each) used up the 6 before it (tuning seeds 1-100: 5 clips untracked ~30 frames).
+  int start_candidates = 12;
+  /// A hand found last frame and held still since (part of the background) is tried first where it was,
+  /// taken if its palm moved less than this (0.45 m/s at 30 Hz); 0: off (the nearest-first search only,
+  /// which lost it behind nearer things until it moved).
+  double still_hand_m = 0.015;
 };
 
 struct HandObservation {

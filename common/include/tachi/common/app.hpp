@@ -48,8 +48,9 @@ void request_stop();
 /// a long wait never outlasts SIGINT/SIGTERM by more than that. False when a stop ended it.
 bool sleep_unless_stopped(std::chrono::steady_clock::time_point until);
 
-/// Calls `tick` until it returns false or a stop is requested.
-/// `tick` is expected to block briefly (e.g. on a DDS waitset) so this does not spin.
+/// Calls `tick` until it returns false or a stop is requested, and every 10 s gives the allocator's free
+/// pages back to the system (malloc_trim). `tick` is expected to block briefly (e.g. on a DDS waitset) so
+/// this does not spin.
 void run_until_stopped(const std::function<bool()>& tick);
 
 }  // namespace tachi::common

@@ -5,9 +5,11 @@
 filtered stroke sample received by the launcher, the path every cut takes). At the end it sends the
 run SIGINT, as a user's Ctrl-C, and reads summary.json for restarts.
 
-Per minute: each node's median RSS and descriptors, the latency p50/p99. The verdict compares the
-last minute with the end of the warm-up, minute max(1, MINUTES / 6) (10 for an hour): RSS and
-descriptors within 2 %, latency p99 within 2x, no restart. Exit 0 when all hold, 1 if not. The
+Per minute: each node's median RSS, anonymous memory (RssAnon: its own heap, arenas and stacks; RSS adds
+the shared libraries' resident pages, which come and go with the code run and the page cache) and
+descriptors, the latency p50/p99. The verdict compares the last minute with the end of the warm-up, minute
+max(1, MINUTES / 6) (10 for an hour): RSS, anonymous memory and descriptors within 2 %, latency p99 within
+2x, no restart. Exit 0 when all hold, 1 if not. The
 growth from minute 1 is printed too. Why a warm-up: a node's heap is flat after ~40 s (heaptrack on
 tachi-filter: 6.8 MB from 40 s to 200 s), but its RSS still grows for minutes as the pages of
 buffers allocated at the start (Cyclone's receive buffers, the writers' history caches) are touched
@@ -54,12 +56,18 @@ def children_of(pid):
     return found
 
 
-def rss_kb(pid):
+def memory_kb(pid):
+    """(VmRSS, RssAnon) in kB. RSS counts the shared libraries' pages too (RssFile: half of a small node's
+    RSS), which come and go with the code a node runs and the page cache, not with its own memory;
+    RssAnon is its own (heap, arenas, stacks): what a leak grows."""
+    rss = anon = 0
     with open(f"/proc/{pid}/status") as f:
         for line in f:
             if line.startswith("VmRSS:"):
-                return int(line.split()[1])
-    return 0
+                rss = int(line.split()[1])
+            elif line.startswith("RssAnon:"):
+                anon = int(line.split()[1])
+    return rss, anon
 
 
 def open_fds(pid):
@@ -81,13 +89,13 @@ def main():
         err_file = open(os.path.join(out, "launcher.err"), "w+")
         run = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=err_file, text=True)
         start = time.monotonic()
-        samples = []  # (minute, node, rss_kb, fds)
+        samples = []  # (minute, node, rss_kb, anon_kb, fds)
         while time.monotonic() - start < minutes * 60.0 and run.poll() is None:
             time.sleep(SAMPLE_S)
             minute = int((time.monotonic() - start) // 60)
             for pid, name in children_of(run.pid).items():
                 try:
-                    samples.append((minute, name, rss_kb(pid), open_fds(pid)))
+                    samples.append((minute, name, *memory_kb(pid), open_fds(pid)))
                 except OSError:
                     pass  # restarted or ending: the summary's restarts say which
         ended_early = run.poll() is not None
@@ -117,15 +125,17 @@ def main():
 
     nodes = sorted({s[1] for s in samples})
     minutes_seen = sorted({s[0] for s in samples})
-    per = {}  # (minute, node) -> (median rss MB, median fds)
+    per = {}  # (minute, node) -> (median rss MB, median anonymous MB, median fds)
     for m in minutes_seen:
         for n in nodes:
             rows = [s for s in samples if s[0] == m and s[1] == n]
             if rows:
-                per[m, n] = (statistics.median(r[2] for r in rows) / 1024.0, statistics.median(r[3] for r in rows))
-    print("minute  " + "  ".join(f"{n[:14]:>14s} MB/fd" for n in nodes) + "  latency p50/p99 ms (samples)")
+                per[m, n] = (statistics.median(r[2] for r in rows) / 1024.0, statistics.median(r[3] for r in rows) / 1024.0,
+                             statistics.median(r[4] for r in rows))
+    print("minute  " + "  ".join(f"{n[:14]:>14s} RSS/anon MB/fd" for n in nodes) + "  latency p50/p99 ms (samples)")
     for m in minutes_seen:
-        cells = "  ".join(f"{per[m, n][0]:10.1f}/{per[m, n][1]:4.0f}" if (m, n) in per else f"{'-':>15s}" for n in nodes)
+        cells = "  ".join(f"{per[m, n][0]:9.1f}/{per[m, n][1]:6.1f}/{per[m, n][2]:3.0f}" if (m, n) in per else f"{'-':>20s}"
+                          for n in nodes)
         lat = latency.get(m, [])
         lat_text = f"{pct(lat, 50):6.2f} / {pct(lat, 99):6.2f} ({len(lat)})" if lat else "-"
         print(f"{m:6d}  {cells}  {lat_text}")
@@ -142,13 +152,18 @@ def main():
             if (base, n) not in per or (last, n) not in per:
                 failures.append(f"{n}: not sampled in minutes {base} and {last}")
                 continue
-            (r0, f0), (r1, f1) = per[base, n], per[last, n]
+            (r0, a0, f0), (r1, a1, f1) = per[base, n], per[last, n]
             growth = (r1 - r0) / r0 * 100.0
+            anon_growth = (a1 - a0) / a0 * 100.0 if a0 > 0 else 0.0
             first = per.get((full[1], n), per[base, n])[0]
-            print(f"{n}: RSS {r0:.1f} -> {r1:.1f} MB ({growth:+.1f} %), descriptors {f0:.0f} -> {f1:.0f} (minute {base} -> {last}); "
-                  f"from minute {full[1]}: {first:.1f} MB ({(r1 - first) / first * 100.0:+.1f} %)")
+            print(f"{n}: RSS {r0:.1f} -> {r1:.1f} MB ({growth:+.1f} %), anonymous {a0:.1f} -> {a1:.1f} MB ({anon_growth:+.1f} %), "
+                  f"descriptors {f0:.0f} -> {f1:.0f} (minute {base} -> {last}); "
+                  f"RSS from minute {full[1]}: {first:.1f} MB ({(r1 - first) / first * 100.0:+.1f} %)")
+            # The target is on RSS; anonymous memory (a leak's measure) is judged and reported beside it.
             if growth > 2.0:
                 failures.append(f"{n}: RSS grew {growth:.1f} % (> 2 %)")
+            if anon_growth > 2.0:
+                failures.append(f"{n}: anonymous memory grew {anon_growth:.1f} % (> 2 %)")
             if f1 > f0 * 1.02:
                 failures.append(f"{n}: descriptors {f0:.0f} -> {f1:.0f} (> 2 %)")
         p0, p1 = pct(latency[base], 99), pct(latency[last], 99)

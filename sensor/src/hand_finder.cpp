@@ -130,7 +130,7 @@ void learn_background_row(const std::uint16_t* __restrict grid_row, const std::u
 std::uint16_t untried_row_minimum(const std::uint16_t* __restrict grid_row, const std::uint8_t* __restrict tried) {
   std::uint16_t best = kNoReading;
   for (int gx = 0; gx < kGridW; ++gx) {
-    const std::uint16_t candidate = (tried[gx] != 0) | (grid_row[gx] == 0) ? kNoReading : grid_row[gx];
+    const std::uint16_t candidate = ((tried[gx] != 0) | (grid_row[gx] == 0)) ? kNoReading : grid_row[gx];
     best = std::min(best, candidate);
   }
   return best;

@@ -1193,8 +1193,9 @@ void HandFinder::Impl::band_cells_at(cv::Point seed, std::uint16_t near_raw, boo
 }
 
 /// Acquisition without a background: first where a hand held still was last frame, then the nearest
-/// readings of the grid in turn (up to `candidates` regions, `start_candidates` before any hand was seen), each taken with its depth band as a hand if it is palm-shaped, clear of the
-/// border, and an arm's end (reaches_back). Finds a hand held still since the first frame, which
+/// readings of the grid in turn (up to `candidates` regions, `start_candidates` before any hand was
+/// seen), each taken with its depth band as a hand if it is palm-shaped, clear of the border, and an
+/// arm's end (reaches_back). Finds a hand held still since the first frame, which
 /// the background holds; a box, a head or a torso fail the shape or the depth test.
 bool HandFinder::Impl::find_arm_end(std::span<const std::uint16_t> raw, Palm& palm, cv::Point& seed_out) {
   candidate_mask.create(kGridH, kGridW, CV_8U);
@@ -1234,7 +1235,7 @@ bool HandFinder::Impl::find_arm_end(std::span<const std::uint16_t> raw, Palm& pa
     for (int gy = std::max(0, previous_cell.y - kNear); gy <= std::min(kGridH - 1, previous_cell.y + kNear); ++gy) {
       const auto* g = grid.ptr<std::uint16_t>(gy);
       for (int gx = std::max(0, previous_cell.x - kNear); gx <= std::min(kGridW - 1, previous_cell.x + kNear); ++gx)
-        if (g[gx] < near_raw) {
+        if (g[gx] != 0 && g[gx] < near_raw) {  // 0: no reading (as untried_row_minimum skips it)
           near_raw = g[gx];
           seed = {gx, gy};
         }

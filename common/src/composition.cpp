@@ -52,6 +52,7 @@ void log_node_names(const std::string& logger_name) {
 
 int run_composed(std::vector<ComposedNode> nodes, std::chrono::milliseconds grace) {
   install_stop_handlers();
+  keep_large_blocks_mapped();  // a long run, as run_until_stopped's
   Board board;
   board.finished.assign(nodes.size(), false);
   // Each node's own stop, raised for all when the composition ends (the finite nodes done and the grace

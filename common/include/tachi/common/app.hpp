@@ -50,7 +50,13 @@ bool sleep_unless_stopped(std::chrono::steady_clock::time_point until);
 
 /// Calls `tick` until it returns false or a stop is requested, and every 10 s gives the allocator's free
 /// pages back to the system (malloc_trim). `tick` is expected to block briefly (e.g. on a DDS waitset) so
-/// this does not spin.
+/// this does not spin. Sets the allocator up for a long run first (keep_large_blocks_mapped).
 void run_until_stopped(const std::function<bool()>& tick);
+
+/// Every block of 128 KiB or more gets its own mapping, given back to the system when it is freed, for
+/// the rest of the process: glibc's threshold otherwise rises to the size of each mapped block freed, so
+/// after the first of Cyclone's receive buffers was freed the later ones came from a thread's heap, whose
+/// freed pages stay resident until a trim (docs/benchmarks.md, "Soak"). Called by the long-running loops.
+void keep_large_blocks_mapped();
 
 }  // namespace tachi::common

@@ -145,9 +145,12 @@ void run_until_stopped(const std::function<bool()>& tick) {
 }
 
 void keep_large_blocks_mapped() {
-  // 128 KiB is glibc's starting threshold; setting it also turns the rise off. What it costs: an mmap and
-  // munmap per large block (the receive buffers, a 128 x 128 cloth state), whose page faults a fresh heap
-  // block would pay too; tachi-sensor's time per frame did not move (0.71-0.74 ms against 0.70-0.83 ms,
+  // 128 KiB is glibc's starting threshold; setting it also turns the rise off. The threshold applies to a
+  // block the heap has no free room for (a free chunk that fits is used first); with the rise off the
+  // heap's free top is trimmed at 128 KiB too, so in a node the large blocks are mapped (malloc_info in a
+  // looped filter: both receive buffers mapped). What it costs: an mmap and munmap per large block (the
+  // receive buffers, a 128 x 128 cloth state), whose page faults a fresh heap block would pay too;
+  // tachi-sensor's time per frame did not move (0.71-0.74 ms against 0.70-0.83 ms,
   // tachi-sensor-process-bench, the same period).
   constexpr int kLargeBlock = 128 * 1024;
   ::mallopt(M_MMAP_THRESHOLD, kLargeBlock);

@@ -9,14 +9,9 @@
 
 namespace {
 
+// ASan's allocator answers neither mallopt nor mallinfo2; the sanitized unit tests are built with gcc.
 #if defined(__SANITIZE_ADDRESS__)
-constexpr bool kSanitizedAllocator = true;  // ASan's allocator answers neither mallopt nor mallinfo2
-#elif defined(__has_feature)
-#if __has_feature(address_sanitizer)
 constexpr bool kSanitizedAllocator = true;
-#else
-constexpr bool kSanitizedAllocator = false;
-#endif
 #else
 constexpr bool kSanitizedAllocator = false;
 #endif

@@ -132,11 +132,15 @@ QosPtr make_qos(QosProfile profile) {
       dds_qset_history(qos.get(), DDS_HISTORY_KEEP_LAST, 1024);
       break;
     case QosProfile::Strokes:
-      // The writer keeps its last 1024 samples (~30 s of hand) for readers that join late: a
-      // simulator restarted after a crash catches up on the stroke instead of losing its middle.
+      // The writer keeps its last 256 samples (~8.5 s of hand at 30 Hz) for readers that join late: a
+      // simulator restarted after a crash catches up on what was published while it was down (its
+      // journal holds the rest), and the launcher restarts it within 4 s backoff + ~2 s start. Not
+      // more: Cyclone 0.10.2 serializes a written sample into a pooled buffer, and when the pool hands
+      // back a smaller one (a received 56-byte raw hand) its output stream grows it to a 4 KiB step, so
+      // each kept stroke sample may hold 4 KiB: 1024 of them swung the filter's memory by up to 4 MB.
       dds_qset_reliability(qos.get(), DDS_RELIABILITY_RELIABLE, DDS_SECS(1));
       dds_qset_durability(qos.get(), DDS_DURABILITY_TRANSIENT_LOCAL);
-      dds_qset_history(qos.get(), DDS_HISTORY_KEEP_LAST, 1024);
+      dds_qset_history(qos.get(), DDS_HISTORY_KEEP_LAST, 256);
       break;
     case QosProfile::Topology:
       dds_qset_reliability(qos.get(), DDS_RELIABILITY_RELIABLE, DDS_SECS(1));

@@ -26,7 +26,8 @@ int parse_flags(int argc, char** argv, Flags& flags) {
   app.add_option("--duration", live.duration_s, "Live: stop after this many seconds (0: until SIGINT/SIGTERM)")
       ->check(CLI::NonNegativeNumber);
   app.add_option("--exit-when-idle", live.exit_when_idle_s,
-                 "Live: stop when no hand sample arrived for this many seconds after the first (0: never)")
+                 "Live: stop when no hand sample arrived for this many seconds after the first and no hand source (tachi-sensor, "
+                 "tachi-filter) is starting again (0: never)")
       ->check(CLI::NonNegativeNumber);
   app.add_option("--journal", live.journal,
                  "Live: journal every applied hand sample to FILE; a restarted simulator given the same FILE replays it "

@@ -65,4 +65,24 @@ bool StepSchedule::stepped(LiveClock::time_point now) {
   return false;
 }
 
+void IdleEnd::hand_sample(LiveClock::time_point now) {
+  had_sample_ = true;
+  last_activity_ = std::max(last_activity_, now);
+}
+
+void IdleEnd::source_status(const std::string& node, bool starting, LiveClock::time_point now) {
+  if (starting) {
+    starting_since_.try_emplace(node, now);  // a repeated STARTING heartbeat does not extend the hold
+    return;
+  }
+  if (starting_since_.erase(node) > 0) last_activity_ = std::max(last_activity_, now);
+}
+
+bool IdleEnd::over(LiveClock::time_point now) const {
+  if (!had_sample_) return false;
+  for (const auto& [node, since] : starting_since_)
+    if (now - since < max_hold_) return false;
+  return now - last_activity_ > settle_;
+}
+
 }  // namespace tachi::sim

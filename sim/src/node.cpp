@@ -68,7 +68,14 @@ struct SimNode::Impl {
         delta_writer((topology_first(), dds), bus::topics::cloth_topology_delta), delta(session.cloth()),
         rate(Clock::now()), schedule(std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(options.solver.dt)),
                                      Clock::now()),
-        start(Clock::now()), last_hand(start), waiting_for_filter("tachi-filter", dds.domain()) {
+        start(Clock::now()), waiting_for_filter("tachi-filter", dds.domain()) {
+    if (live.exit_when_idle_s > 0) {
+      idle_end.emplace(std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(live.exit_when_idle_s)), start);
+      // A simulator restarted late in a run has had its hand samples (the replayed journal): idle counts too.
+      if (replayed_samples > 0) idle_end->hand_sample(start);
+      statuses.emplace(dds, bus::topics::node_status, bus::ReaderKind::Observer);
+    }
+
     if (session.object() != nullptr) {
       // Transient-local: a viewer that starts later still gets the object it should draw.
       object_writer.emplace(dds, bus::topics::scene_object);
@@ -185,10 +192,20 @@ struct SimNode::Impl {
       }
       journal_append({JournalRecord::Kind::Hand, session.steps(), input->sensor_id, sample->time_ns, hand});
       ++samples_in;
-      last_hand = Clock::now();
+      if (idle_end) idle_end->hand_sample(Clock::now());
       batch_acquired_ns = std::max(batch_acquired_ns, sample->acquired_ns);
     }
     return batch_acquired_ns;
+  }
+
+  /// The hand sources' heartbeats: a sensor or filter the launcher restarted is starting (replaying its
+  /// recording or journal), and the run must not end in the gap before it publishes again.
+  void watch_hand_sources() {
+    for (const auto& status : statuses->take()) {
+      const std::string node(status->node);
+      if (node == "tachi-sensor" || node == "tachi-filter")
+        idle_end->source_status(node, status->state == tachi_msg_NODE_STARTING, Clock::now());
+    }
   }
 
   /// A filter that vanished mid-stroke would leave the stroke open forever: close it, unless it comes back.
@@ -247,10 +264,10 @@ struct SimNode::Impl {
     }
     if (live.max_steps && session.steps() >= static_cast<std::uint64_t>(*live.max_steps)) return false;
     if (live.duration_s > 0 && Clock::now() - start > std::chrono::duration<double>(live.duration_s)) return false;
-    // A simulator restarted late in a run has had its hand samples (the replayed journal): idle counts too.
-    if (live.exit_when_idle_s > 0 && samples_in + replayed_samples > 0 &&
-        Clock::now() - last_hand > std::chrono::duration<double>(live.exit_when_idle_s))
-      return false;
+    if (idle_end) {
+      watch_hand_sources();
+      if (idle_end->over(Clock::now())) return false;
+    }
     return true;
   }
 
@@ -327,7 +344,8 @@ struct SimNode::Impl {
   ObjectMessage object;
   std::optional<bus::Writer<tachi_msg_SceneObject>> object_writer;
   const Clock::time_point start;
-  Clock::time_point last_hand;
+  std::optional<IdleEnd> idle_end;                            // with --exit-when-idle
+  std::optional<bus::Reader<tachi_msg_NodeStatus>> statuses;  // ... the hand sources' heartbeats
   std::uint64_t samples_in = 0, messages_out = 1, grabs_refused = 0;
   std::uint64_t topology_updates = 0;
   std::size_t topology_bytes = 0;

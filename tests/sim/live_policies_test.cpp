@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 using namespace std::chrono_literals;
+using tachi::sim::IdleEnd;
 using tachi::sim::LiveClock;
 using tachi::sim::ReplayedSamples;
 using tachi::sim::StepSchedule;
@@ -95,6 +96,37 @@ TEST(StrokePublisherGrace, APublisherLeavingBetweenStrokesIsNothing) {
   grace.tick(true, false, t0);
   EXPECT_EQ(grace.tick(false, false, t0 + 1s), Verdict::None);
   EXPECT_EQ(grace.tick(false, true, t0 + 5s), Verdict::None);
+}
+
+TEST(IdleEnd, EndsSettleAfterTheLastHandSampleAndNeverBeforeTheFirst) {
+  IdleEnd idle{1500ms, t0};
+  EXPECT_FALSE(idle.over(t0 + 60s)) << "no hand sample yet: a run waits for its first";
+  idle.hand_sample(t0 + 10s);
+  EXPECT_FALSE(idle.over(t0 + 11s));
+  EXPECT_TRUE(idle.over(t0 + 11s + 501ms));
+}
+
+TEST(IdleEnd, ASourceStartingAgainHoldsTheEndUntilItRunsThenSettleCountsFromThere) {
+  IdleEnd idle{1500ms, t0};
+  idle.hand_sample(t0 + 10s);
+  idle.source_status("tachi-sensor", true, t0 + 10s + 300ms);  // killed mid-stroke, restarted, replaying
+  EXPECT_FALSE(idle.over(t0 + 13s)) << "the restarted sensor is still starting: the run must not end in the gap";
+  idle.source_status("tachi-sensor", true, t0 + 13s);  // a repeated heartbeat does not extend the hold
+  idle.source_status("tachi-sensor", false, t0 + 14s);
+  EXPECT_FALSE(idle.over(t0 + 15s)) << "settle counts from the moment it runs";
+  idle.hand_sample(t0 + 15s);
+  EXPECT_FALSE(idle.over(t0 + 16s));
+  EXPECT_TRUE(idle.over(t0 + 16s + 600ms));
+}
+
+TEST(IdleEnd, ASourceThatDiesWhileStartingHoldsTheEndAtMostMaxHold) {
+  IdleEnd idle{1500ms, t0, 10s};
+  idle.hand_sample(t0 + 1s);
+  idle.source_status("tachi-filter", true, t0 + 2s);
+  EXPECT_FALSE(idle.over(t0 + 11s));
+  EXPECT_TRUE(idle.over(t0 + 12s + 1ms)) << "never running: the hold ends after max_hold";
+  idle.source_status("tachi-sensor", false, t0 + 12s);  // a running source that never started is nothing
+  EXPECT_TRUE(idle.over(t0 + 12s + 1ms));
 }
 
 TEST(ReplayedSamples, SkipsWhatTheJournalAppliedPerSensorAndSession) {

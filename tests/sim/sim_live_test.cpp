@@ -2,6 +2,7 @@
 #include "paths.hpp"
 #include "process.hpp"
 #include "scratch_dir.hpp"
+#include "tachi/bus/heartbeat.hpp"
 #include "tachi/bus/topics.hpp"
 #include "tachi/bus/topology_assembler.hpp"
 
@@ -119,6 +120,26 @@ TEST(SimLive, StopsCleanlyOnSigint) {
   ASSERT_TRUE(states.wait_for_data(20s)) << sim.err();
   sim.signal(SIGINT);
   EXPECT_EQ(sim.wait(10s), 0) << sim.err();
+}
+
+TEST(SimLive, ARunDoesNotEndWhileARestartedHandSourceIsStarting) {
+  // The launcher restarts a killed sensor, which replays its recording before it publishes again (1-2 s under
+  // load): with --exit-when-idle 0.5 the simulator ended in that gap and the run lost the rest of its stroke.
+  const unsigned domain = kDomain + 2;
+  tachi::test::ChildProcess sim({tachi::test::executable("tachi-sim"), "--grid", "8", "--domain", std::to_string(domain),
+                                 "--exit-when-idle", "0.5"});
+  bus::Participant dds{domain};
+  bus::Writer<tachi_msg_StrokeSample> strokes{dds, bus::topics::stroke};
+  ASSERT_TRUE(strokes.wait_for_readers(1, 20s)) << sim.err();
+  // The restarted sensor: its heartbeat says STARTING from the moment it is up (given a second to be discovered).
+  tachi::bus::Heartbeat restarted_sensor{dds, "tachi-sensor"};
+  std::this_thread::sleep_for(1s);
+  for (std::uint64_t frame = 0; frame < 5; ++frame) strokes.write(sample(1, frame, 0.0f, 2.0f, false));
+  ASSERT_TRUE(strokes.wait_for_acks(5s));
+  std::this_thread::sleep_for(2s);
+  EXPECT_TRUE(sim.running()) << "ended while the sensor was starting: " << sim.err();
+  restarted_sensor.update(tachi_msg_NODE_RUNNING, 0, 0);
+  EXPECT_EQ(sim.wait(10s), 0) << "settles and ends once the sensor runs and stays silent: " << sim.err();
 }
 
 TEST(SimLive, RejectsAStrokeFileOutsideOfflineMode) {

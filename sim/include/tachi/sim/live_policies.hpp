@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <map>
 #include <optional>
+#include <string>
 #include <utility>
 
 namespace tachi::sim {
@@ -67,6 +68,33 @@ class StrokePublisherGrace {
   std::optional<LiveClock::time_point> gone_at_;
   std::uint64_t cutting_session_ = 0;  // the filter session of the newest cutting sample
   std::uint64_t gone_session_ = 0;     // ... when the stroke's publisher went away
+};
+
+/// When a run on a recording ends (`tachi-sim --exit-when-idle`): `settle` after the last hand sample, the cloth
+/// having settled. Not while a hand source upstream is starting: a sensor or filter the launcher restarted
+/// replays its recording or journal (1-2 s under load) before it publishes again, and a run that ended in that
+/// gap lost the rest of its stroke. A source counts as starting from its NODE_STARTING heartbeat to its next
+/// state, for at most `max_hold`, so one that dies while starting cannot keep the run open; the settle time
+/// counts again from the moment it is running.
+class IdleEnd {
+ public:
+  IdleEnd(LiveClock::duration settle, LiveClock::time_point now,
+          LiveClock::duration max_hold = std::chrono::seconds(10))
+      : settle_(settle), max_hold_(max_hold), last_activity_(now) {}
+  /// A hand sample was applied (or replayed from the journal).
+  void hand_sample(LiveClock::time_point now);
+  /// A heartbeat of a hand source (by node name): `starting` while it has not published yet.
+  void source_status(const std::string& node, bool starting, LiveClock::time_point now);
+  /// True when the run is over: a hand sample was seen, no source is starting, and `settle` has passed since the
+  /// last sample or the last source came up.
+  [[nodiscard]] bool over(LiveClock::time_point now) const;
+
+ private:
+  LiveClock::duration settle_;
+  LiveClock::duration max_hold_;
+  bool had_sample_ = false;
+  LiveClock::time_point last_activity_;
+  std::map<std::string, LiveClock::time_point> starting_since_;  // per node name
 };
 
 /// What a journal replay applied: per (sensor, filter session) the newest sample time. A restarted filter's

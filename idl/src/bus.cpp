@@ -198,6 +198,10 @@ dds_return_t check(dds_return_t rc, std::string_view context) {
   return rc;
 }
 
+void throw_on_topic(dds_return_t rc, std::string_view action, std::string_view topic, std::string_view call) {
+  throw DdsError(std::string(action).append(" on topic ").append(topic).append(": ").append(call), rc);
+}
+
 std::uint64_t new_session_id() {
   std::random_device entropy;
   std::uint64_t id = 0;

@@ -48,8 +48,8 @@ std::size_t SerializedReader::take(const Each& each) {
   std::array<dds_sample_info_t, kChunk> infos{};
   std::size_t valid = 0;
   while (true) {
-    const dds_return_t n = check(dds_takecdr(reader_, samples.data(), kChunk, infos.data(), DDS_ANY_STATE),
-                                 std::string("take on topic ") + topic_.name + ": dds_takecdr");
+    const dds_return_t n = check_on_topic(dds_takecdr(reader_, samples.data(), kChunk, infos.data(), DDS_ANY_STATE), "take",
+                                          topic_.name, "dds_takecdr");
     for (dds_return_t i = 0; i < n; ++i) {
       ddsi_serdata* sample = samples[static_cast<std::size_t>(i)];
       if (infos[static_cast<std::size_t>(i)].valid_data) {
@@ -109,7 +109,7 @@ void SerializedWriter::write(std::span<const std::byte> cdr) {
   std::unique_ptr<void, decltype(free_sample)> sample(dds_alloc(topic_.descriptor->m_size), free_sample);
   deserialize_into(*topic_.descriptor, cdr, sample.get(), payload_,
                    std::string("a sample of ") + topic_.name + " (" + std::string(topic_.type_name()) + ")");
-  check(dds_write(writer_, sample.get()), std::string("write on topic ") + topic_.name + ": dds_write");
+  check_on_topic(dds_write(writer_, sample.get()), "write", topic_.name, "dds_write");
 }
 
 std::vector<std::byte> serialize(const dds_topic_descriptor_t& descriptor, const void* sample) {

@@ -39,10 +39,12 @@ bool sleep_unless_stopped(std::chrono::steady_clock::time_point until);
 /// this does not spin. Sets the allocator up for a long run first (keep_large_blocks_mapped).
 void run_until_stopped(const std::function<bool()>& tick);
 
-/// Every block of 128 KiB or more gets its own mapping, given back to the system when it is freed, for
-/// the rest of the process: glibc's threshold otherwise rises to the size of each mapped block freed, so
-/// after the first of Cyclone's receive buffers was freed the later ones came from a thread's heap, whose
-/// freed pages stay resident until a trim (docs/benchmarks.md, "Soak"). Called by the long-running loops.
+/// For the rest of the process, a block of 128 KiB or more that the heap has no fitting free chunk for
+/// gets its own mapping, given back to the system when it is freed (a free chunk that fits is still used
+/// first: the threshold applies only when there is none). Without this, glibc's threshold rises to the size
+/// of each mapped block freed, so after the first of Cyclone's receive buffers was freed the later ones
+/// came from a thread's heap, whose freed pages stay resident until a trim (docs/benchmarks.md, "Soak").
+/// Called by the long-running loops.
 void keep_large_blocks_mapped();
 
 }  // namespace tachi::common

@@ -16,9 +16,11 @@ packages=(
   cyclonedds-dev cyclonedds-tools
   # Kinect v1 (live driver + fakenect playback library)
   libfreenect-dev libfreenect-bin
-  # maths, vision (libopencv-dev carries the CMake package config the module -dev packages lack); FFmpeg's
-  # libraries for the viewer's fragmented MP4 video (viewer/include/tachi/viewer/video_writer.hpp)
-  libeigen3-dev libopencv-dev libavformat-dev libavcodec-dev libswscale-dev libavutil-dev
+  # maths; vision: only the OpenCV modules sensor/ and viewer/ use (without libopencv-dev's CMake package
+  # cmake/TachiOpenCV.cmake finds them itself); FFmpeg's libraries for the viewer's fragmented MP4 video
+  # (viewer/include/tachi/viewer/video_writer.hpp)
+  libeigen3-dev libopencv-core-dev libopencv-imgproc-dev libopencv-imgcodecs-dev libopencv-highgui-dev
+  libopencv-videoio-dev libavformat-dev libavcodec-dev libswscale-dev libavutil-dev
   # objects to drape the cloth over: PLY point clouds (assimp) and nearest-point queries (nanoflann)
   libassimp-dev libnanoflann-dev
   # conventions shared by every executable
@@ -29,6 +31,9 @@ packages=(
   libx11-dev libxfixes-dev python3-matplotlib
 )
 test_packages=(
+  # OpenCV's own CMake package (it depends on every OpenCV module: 51 packages, 61 MB the demo does without);
+  # the full build takes the module targets from it
+  libopencv-dev
   # voice tests: recorded speech, synthesized speech in every English voice the machine can speak (docs/voice.md)
   pocketsphinx-testdata flite sox espeak-ng festival festvox-kallpc16k festvox-us-slt-hts
   # tests and benchmarks (Bullet is the simulator baseline)

@@ -1,8 +1,9 @@
 #include "tachi/common/composition.hpp"
 
-#include "tachi/common/app.hpp"
 #include "tachi/common/disk_full.hpp"
+#include "tachi/common/exit_codes.hpp"
 #include "tachi/common/log_sink.hpp"
+#include "tachi/common/process.hpp"
 
 #include <spdlog/pattern_formatter.h>
 #include <spdlog/spdlog.h>

@@ -1,7 +1,7 @@
 #include "tachi/bus/bus.hpp"
 #include "tachi/bus/run_partition.hpp"
 
-#include "tachi/common/app.hpp"
+#include "tachi/common/process.hpp"
 #include "tachi/common/text_file.hpp"
 
 #include <filesystem>

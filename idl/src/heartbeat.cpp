@@ -1,6 +1,6 @@
 #include "tachi/bus/heartbeat.hpp"
 
-#include "tachi/common/app.hpp"
+#include "tachi/common/process.hpp"
 
 #include <unistd.h>
 

@@ -1,6 +1,6 @@
 #include "bus_adapter.hpp"
 
-#include "tachi/common/app.hpp"
+#include "tachi/common/process.hpp"
 #include "tachi/bus/serialized.hpp"
 #include "tachi/common/disk_full.hpp"
 #include "tachi/common/latency.hpp"

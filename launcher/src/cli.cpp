@@ -1,6 +1,7 @@
 #include "cli.hpp"
 
 #include "tachi/bus/topics.hpp"
+#include "tachi/common/app.hpp"
 #include "tachi/launcher/config.hpp"
 
 #include <iostream>

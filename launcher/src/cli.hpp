@@ -4,7 +4,8 @@
 
 #include "bus_adapter.hpp"
 #include "record.hpp"
-#include "tachi/common/app.hpp"
+#include "tachi/common/exit_codes.hpp"
+#include "tachi/common/process.hpp"
 
 #include <set>
 #include <string>

@@ -1,6 +1,6 @@
 #include "preflight.hpp"
 
-#include "tachi/common/app.hpp"
+#include "tachi/common/process.hpp"
 #include "tachi/launcher/supervision.hpp"
 
 #include <fcntl.h>

@@ -1,6 +1,6 @@
 #include "record.hpp"
 
-#include "tachi/common/app.hpp"
+#include "tachi/common/process.hpp"
 #include "tachi/common/latency.hpp"
 
 #include <spdlog/spdlog.h>

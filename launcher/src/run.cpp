@@ -1,7 +1,7 @@
 #include "run.hpp"
 
 #include "bus_adapter.hpp"
-#include "tachi/common/app.hpp"
+#include "tachi/common/process.hpp"
 #include "tachi/common/disk_full.hpp"
 #include "tachi/launcher/child.hpp"
 #include "tachi/launcher/status.hpp"

@@ -1,26 +1,18 @@
 // Conventions every tachi executable shares, so that `main` stays a dozen lines:
 // one way to parse flags (CLI11), one way to log (spdlog), one way to stop (SIGINT/SIGTERM),
-// and one table of exit codes (exit_codes.hpp, documented in docs/cli.md).
+// and one table of exit codes (exit_codes.hpp, documented in docs/cli.md). What needs no CLI11 (the bus
+// flags' values, stopping, the log level) is in process.hpp: include that where no flags are parsed, as
+// CLI/CLI.hpp costs every translation unit that includes it ~5 s of a cold build.
 #pragma once
 
 #include "tachi/common/exit_codes.hpp"
+#include "tachi/common/process.hpp"
 
 #include <CLI/CLI.hpp>
 
-#include <atomic>
-#include <chrono>
-#include <functional>
 #include <string>
 
 namespace tachi::common {
-
-/// Flags every process that joins the DDS bus understands.
-struct BusOptions {
-  unsigned domain = 0;         ///< DDS domain id (0..232)
-  std::string dds_config;      ///< Cyclone XML file; empty = the loopback config built in
-  std::string secure_dir;      ///< DDS Security files (scripts/make_test_pki.sh); empty = no security
-  std::string identity;        ///< whose certificate and grant to use; default: the program's name without "tachi-"
-};
 
 /// Adds `--log-level` to an app; the chosen level is applied by parse().
 void add_log_level_flag(CLI::App& app, std::string& level);
@@ -32,31 +24,5 @@ void add_bus_flags(CLI::App& app, BusOptions& options);
 /// With the environment variable kCheckFlagsEnv set, a command line that parses returns kExitOk
 /// at once: the process only checks its flags (tachi run's preflight).
 int parse(CLI::App& app, int argc, char** argv);
-/// Set (to anything non-empty) when a process should check its flags and exit (see parse()).
-inline constexpr const char* kCheckFlagsEnv = "TACHI_CHECK_FLAGS";
-
-/// Sets spdlog's level from a name (trace, debug, info, warn, error, critical, off).
-void set_log_level(const std::string& level);
-
-/// Installs SIGINT/SIGTERM handlers that raise the stop flag instead of killing the process.
-void install_stop_handlers();
-/// True once SIGINT or SIGTERM has arrived (or request_stop was called).
-bool stop_requested();
-void request_stop();
-
-/// Sleeps until `until` or a stop request, whichever comes first (it wakes every 10 ms to look), so
-/// a long wait never outlasts SIGINT/SIGTERM by more than that. False when a stop ended it.
-bool sleep_unless_stopped(std::chrono::steady_clock::time_point until);
-
-/// Calls `tick` until it returns false or a stop is requested, and every 10 s gives the allocator's free
-/// pages back to the system (malloc_trim). `tick` is expected to block briefly (e.g. on a DDS waitset) so
-/// this does not spin. Sets the allocator up for a long run first (keep_large_blocks_mapped).
-void run_until_stopped(const std::function<bool()>& tick);
-
-/// Every block of 128 KiB or more gets its own mapping, given back to the system when it is freed, for
-/// the rest of the process: glibc's threshold otherwise rises to the size of each mapped block freed, so
-/// after the first of Cyclone's receive buffers was freed the later ones came from a thread's heap, whose
-/// freed pages stay resident until a trim (docs/benchmarks.md, "Soak"). Called by the long-running loops.
-void keep_large_blocks_mapped();
 
 }  // namespace tachi::common

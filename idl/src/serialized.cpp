@@ -77,7 +77,7 @@ std::uint64_t SerializedReader::lost() {
 
 SerializedWriter::SerializedWriter(const Participant& participant, const TopicInfo& topic)
     : topic_(topic),
-      topic_entity_(detail::create_topic(participant, topic.descriptor, topic.name)),
+      topic_entity_(detail::create_writer_topic(participant, topic.descriptor, topic.name)),
       writer_(detail::create_writer(participant, topic_entity_, topic.profile, topic.name)) {}
 
 SerializedWriter::~SerializedWriter() { detail::delete_entity(writer_); }

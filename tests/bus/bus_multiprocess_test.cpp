@@ -3,8 +3,13 @@
 #include "paths.hpp"
 #include "process.hpp"
 
+#include "tachi/bus/topics.hpp"
+
+#include <dds/ddsi/ddsi_serdata_default.h>
 #include <gtest/gtest.h>
 
+#include <array>
+#include <cstring>
 #include <thread>
 
 using namespace std::chrono_literals;
@@ -50,4 +55,52 @@ TEST(BusMultiProcess, LateJoinerReceivesTheLastTopology) {
   EXPECT_EQ(pub.wait(10s), 0) << pub.err();
   ASSERT_EQ(late.exit_code, 0) << late.out << late.err;
   EXPECT_NE(late.out.find(R"("versions":[3])"), std::string::npos) << late.out;
+}
+
+// A writer's samples are sized to themselves. Cyclone 0.10.2's dds_write serializes into the last freed
+// sample buffer of the domain's pool, a received one too, and grows one that is too small by 4 KiB; a
+// transient-local writer's history keeps it (in tachi-filter, heaptrack: 754 KB of its 977 KB heap peak
+// from strokes written into 60-byte raw hand buffers; docs/benchmarks.md, "Soak"). Here 3000 strokes come
+// from another process (80 bytes of CDR each) and are taken, which frees their buffers into the pool,
+// then 512 statuses of ~100 bytes are written: a reader on the writer's own topic gets the written
+// buffers themselves (a local reader of the same type shares them), and none may be larger than 256 bytes.
+TEST(BusMultiProcess, AWrittenSampleIsSizedToItselfNotToAReceivedBuffer) {
+  namespace bus = tachi::bus;
+  bus::Participant dds(23);
+  bus::Reader<tachi_msg_StrokeSample> strokes{dds, bus::topics::stroke};
+  constexpr bus::TopicSpec<tachi_msg_NodeStatus> kKept{"tachi/test/kept_status", bus::QosProfile::Strokes};
+  bus::Writer<tachi_msg_NodeStatus> kept{dds, kKept};
+  const dds_entity_t written = bus::detail::create_reader(dds, dds_get_topic(kept.handle()), bus::QosProfile::Strokes,
+                                                          kKept.name);
+  ChildProcess pub(peer("strokes-pub", 23, {"--keys", "1", "--count", "3000", "--rate", "3000"}));
+  unsigned received = 0;
+  const auto deadline = std::chrono::steady_clock::now() + 30s;
+  while (received < 3000 && std::chrono::steady_clock::now() < deadline) {
+    if (!strokes.wait_for_data(200ms)) continue;
+    received += static_cast<unsigned>(strokes.take(4096).size());
+  }
+  EXPECT_EQ(pub.wait(20s), 0) << pub.out() << pub.err();
+  ASSERT_EQ(received, 3000u);
+  tachi_msg_NodeStatus status{};
+  std::strcpy(status.node, "tachi-test");
+  std::strcpy(status.host, "localhost");
+  std::strcpy(status.detail, "longer than a stroke");  // ~100 bytes of CDR: more than 80, less than 128
+  unsigned larger = 0, taken = 0;
+  std::array<ddsi_serdata*, 64> samples{};
+  std::array<dds_sample_info_t, 64> infos{};
+  for (unsigned i = 0; i < 512; ++i) {
+    status.messages_in = i;
+    kept.write(status);
+    const dds_return_t n = dds_takecdr(written, samples.data(), samples.size(), infos.data(), DDS_ANY_STATE);
+    ASSERT_GE(n, 0);
+    for (dds_return_t k = 0; k < n; ++k) {
+      const auto* sample = reinterpret_cast<const ddsi_serdata_default*>(samples[static_cast<std::size_t>(k)]);
+      if (sample->size > 256) ++larger;
+      ++taken;
+      ddsi_serdata_unref(samples[static_cast<std::size_t>(k)]);
+    }
+  }
+  bus::detail::delete_entity(written);
+  EXPECT_EQ(taken, 512u);
+  EXPECT_EQ(larger, 0u) << larger << " of 512 written samples were kept in a buffer larger than 256 bytes";
 }

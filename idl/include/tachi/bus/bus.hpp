@@ -121,6 +121,12 @@ enum class ReaderKind { Consumer, Observer };
 
 namespace detail {
 dds_entity_t create_topic(const Participant& participant, const dds_topic_descriptor_t* descriptor, const char* name);
+/// The topic a writer writes on: the same type, CDR and type information as create_topic's, but each
+/// sample's buffer sized to it, never taken from Cyclone's pool of freed small samples (which can hand
+/// a written sample a received smaller one to grow by 4 KiB, kept as long as the writer's history keeps
+/// it: idl/src/writer_sertype.cpp).
+dds_entity_t create_writer_topic(const Participant& participant, const dds_topic_descriptor_t* descriptor,
+                                 const char* name);
 dds_entity_t create_writer(const Participant& participant, dds_entity_t topic, QosProfile profile, const char* name);
 /// A tool's change to a profile's reader QoS: KeepAll keeps every sample until taken (a recorder);
 /// Volatile asks for no samples written before it joined (a rate meter).
@@ -174,7 +180,7 @@ class Writer {
  public:
   Writer(const Participant& participant, const TopicSpec<T>& topic)
       : name_(topic.name),
-        topic_(detail::create_topic(participant, &Descriptor<T>::value(), topic.name)),
+        topic_(detail::create_writer_topic(participant, &Descriptor<T>::value(), topic.name)),
         writer_(detail::create_writer(participant, topic_, topic.profile, topic.name)) {}
   ~Writer() { detail::delete_entity(writer_); }
   Writer(const Writer&) = delete;

@@ -66,7 +66,8 @@ std::uint64_t new_session_id();
 enum class QosProfile {
   SensorData,  ///< reliable, transient-local, keep last 64 (~2 s of hand): a restarted filter catches up
   Commands,    ///< reliable, keep last 1024: voice commands, cut events must all arrive
-  Strokes,     ///< Commands, and transient-local: a restarted tachi-sim gets the samples it missed
+  Strokes,     ///< reliable, transient-local, keep last 256 (~8.5 s of hand): a restarted tachi-sim gets
+               ///< the samples it missed while down
   Topology,    ///< reliable, transient-local, keep last 1 per key: late joiners get the current mesh
   State,       ///< reliable, keep last 2: the newest cloth positions, never a queue of stale ones
   Status,      ///< reliable, transient-local, keep last 1 per node, 3 s liveliness lease

@@ -43,26 +43,35 @@ using SerdataDefault = ddsi_serdata_default;
 
 const SertypeDefault& sertype_of(const ddsi_serdata* d) { return *reinterpret_cast<const SertypeDefault*>(d->type); }
 
-// Allocates a serdata with room for `payload` bytes of CDR (a multiple of 4) and `key` bytes after it.
-SerdataDefault* allocate(const ddsi_sertype* type, ddsi_serdata_kind kind, std::uint32_t payload, std::uint32_t key) {
-  auto* d = static_cast<SerdataDefault*>(ddsrt_malloc(offsetof(SerdataDefault, data) + payload + key));
-  std::memset(static_cast<void*>(d), 0, offsetof(SerdataDefault, data));
+// A serdata's fields before its CDR: a serialization stream starts there, as Cyclone's does
+// (dds_ostream_from_serdata_default), so the CDR's alignment is the same.
+constexpr std::uint32_t kHeader = offsetof(SerdataDefault, data);
+static_assert(kHeader % 8 == 0, "the CDR of a serdata starts 8-byte aligned");
+
+// Initializes the fields before the CDR of `d`, an allocation of kHeader + `capacity` bytes.
+SerdataDefault* init_header(void* memory, const ddsi_sertype* type, ddsi_serdata_kind kind, std::uint32_t capacity) {
+  auto* d = static_cast<SerdataDefault*>(memory);
+  std::memset(memory, 0, kHeader);
   ddsi_serdata_init(&d->c, type, kind);
-  d->pos = 0;
-  d->size = payload;
-  d->serpool = nullptr;  // never pooled: free() below gives it back to the heap
+  d->size = capacity;
+  d->serpool = nullptr;  // never pooled: free_serdata gives it back to the heap
   return d;
 }
 
-// A stream a thread serializes into, kept between samples so that a write allocates only its sample.
+// A stream a thread serializes into, kept between samples so that a small write allocates only its
+// sample. `start` bytes are left free at its front (a serdata's header, for the payload stream).
 struct ReusedStream {
   dds_ostream_t stream{};
   ReusedStream() = default;
   ReusedStream(const ReusedStream&) = delete;
   ReusedStream& operator=(const ReusedStream&) = delete;
   ~ReusedStream() { dds_ostream_fini(&stream); }
-  dds_ostream_t& reset(std::uint32_t xcdr_version) {
-    stream.m_index = 0;
+  dds_ostream_t& reset(std::uint32_t xcdr_version, std::uint32_t start) {
+    if (stream.m_size < start + 256) {
+      stream.m_buffer = static_cast<unsigned char*>(ddsrt_realloc(stream.m_buffer, 4096));
+      stream.m_size = 4096;
+    }
+    stream.m_index = start;
     stream.m_xcdr_version = xcdr_version;
     return stream;
   }
@@ -70,16 +79,31 @@ struct ReusedStream {
 thread_local ReusedStream t_payload;
 thread_local ReusedStream t_key;
 
-// Builds a serdata from the payload in `payload_stream` (m_index bytes) and the XCDR2 key in
-// `key_stream`, exactly sized, with its hash computed as the default serdata's is.
+// Up to this size a sample is copied out of the thread's stream into an allocation of its size; a
+// larger one takes the stream's buffer itself, shrunk to it (realloc), and the next write starts a new
+// one: a copy of a 196 KB cloth state would cost more than the buffer's regrowth.
+constexpr std::uint32_t kCopyUpTo = 4096;
+
+// The serdata for the payload in t_payload (after kHeader) and the XCDR2 key in `key_stream`, sized
+// to them, its hash computed as Cyclone's serdata's is.
 ddsi_serdata* build(const ddsi_sertype* type, ddsi_serdata_kind kind, std::uint32_t xcdr_version,
-                    const dds_ostream_t& payload_stream, const dds_ostream_t* key_stream) {
+                    const dds_ostream_t* key_stream) {
   const auto& tp = *reinterpret_cast<const SertypeDefault*>(type);
-  const std::uint32_t length = payload_stream.m_index;
+  dds_ostream_t& payload = t_payload.stream;
+  const std::uint32_t length = payload.m_index - kHeader;
   const std::uint32_t padded = (length + 3u) & ~3u;  // DDSI wants 4-byte multiples; the pad is in options
   const std::uint32_t key_size = key_stream != nullptr ? key_stream->m_index : 0;
-  SerdataDefault* d = allocate(type, kind, padded, key_size);
-  if (length > 0) std::memcpy(d->data, payload_stream.m_buffer, length);
+  const std::size_t total = std::size_t{kHeader} + padded + key_size;
+  void* memory = nullptr;
+  if (total <= kCopyUpTo) {
+    memory = ddsrt_malloc(total);
+    std::memcpy(static_cast<unsigned char*>(memory) + kHeader, payload.m_buffer + kHeader, length);
+  } else {
+    memory = ddsrt_realloc(payload.m_buffer, total);
+    payload.m_buffer = nullptr;
+    payload.m_size = 0;
+  }
+  SerdataDefault* d = init_header(memory, type, kind, padded);
   std::memset(d->data + length, 0, padded - length);
   d->pos = padded;
   d->hdr.identifier = ddsi_sertype_get_native_enc_identifier(xcdr_version, tp.encoding_format);
@@ -96,7 +120,7 @@ ddsi_serdata* build(const ddsi_sertype* type, ddsi_serdata_kind kind, std::uint3
 ddsi_serdata* from_sample(const ddsi_sertype* type, ddsi_serdata_kind kind, const void* sample) {
   const auto& tp = *reinterpret_cast<const SertypeDefault*>(type);
   const std::uint32_t xcdr_version = tp.write_encoding_version;
-  dds_ostream_t& payload = t_payload.reset(xcdr_version);
+  dds_ostream_t& payload = t_payload.reset(xcdr_version, kHeader);
   switch (kind) {
     case SDK_EMPTY: break;
     case SDK_KEY: dds_stream_write_key(&payload, static_cast<const char*>(sample), &tp); break;
@@ -104,11 +128,11 @@ ddsi_serdata* from_sample(const ddsi_sertype* type, ddsi_serdata_kind kind, cons
       if (!dds_stream_write_sample(&payload, sample, &tp)) return nullptr;
       break;
   }
-  if (kind == SDK_EMPTY || tp.type.keys.nkeys == 0) return build(type, kind, xcdr_version, payload, nullptr);
-  dds_ostream_t& key = t_key.reset(CDR_ENC_VERSION_2);
+  if (kind == SDK_EMPTY || tp.type.keys.nkeys == 0) return build(type, kind, xcdr_version, nullptr);
+  dds_ostream_t& key = t_key.reset(CDR_ENC_VERSION_2, 0);
   // The key as Cyclone keeps it in a serdata: XCDR2, native byte order (gen_serdata_key).
   dds_stream_write_key(&key, static_cast<const char*>(sample), &tp);
-  return build(type, kind, xcdr_version, payload, &key);
+  return build(type, kind, xcdr_version, &key);
 }
 
 // The untyped key a writer keeps per instance (serdata_default_to_untyped): the XCDR2 key as an
@@ -117,7 +141,7 @@ ddsi_serdata* to_untyped(const ddsi_serdata* serdata) {
   const auto* d = reinterpret_cast<const SerdataDefault*>(serdata);
   const std::uint32_t key_size = d->key.keysize;
   const std::uint32_t padded = (key_size + 3u) & ~3u;
-  SerdataDefault* u = allocate(serdata->type, SDK_KEY, padded, 0);
+  SerdataDefault* u = init_header(ddsrt_malloc(kHeader + padded), serdata->type, SDK_KEY, padded);
   u->c.type = nullptr;
   u->c.hash = serdata->hash;
   u->c.timestamp.v = INT64_MIN;

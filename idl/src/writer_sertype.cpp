@@ -15,8 +15,9 @@
 // How: the sertype has the layout of Cyclone's default one (ddsi_serdata_default.h, installed with
 // 0.10.2) and reuses its sertype operations and every serdata operation that does not allocate
 // (sizes, keys, key hashes, to-CDR, to-sample, printing); the serdata operations that allocate are
-// ours. A reader never uses this type (readers keep dds_create_topic's), so the receive paths
-// (from a fragment chain, from a key hash) refuse.
+// ours. The pipeline's readers never use this type (they keep dds_create_topic's), so the receive
+// paths (from a fragment chain, from a key hash) refuse; a local reader of it gets the written samples
+// themselves (local delivery shares them), which is how the test looks at their buffers.
 #include "tachi/bus/bus.hpp"
 
 #include <dds/ddsi/ddsi_cdrstream.h>
@@ -48,7 +49,7 @@ const SertypeDefault& sertype_of(const ddsi_serdata* d) { return *reinterpret_ca
 constexpr std::uint32_t kHeader = offsetof(SerdataDefault, data);
 static_assert(kHeader % 8 == 0, "the CDR of a serdata starts 8-byte aligned");
 
-// Initializes the fields before the CDR of `d`, an allocation of kHeader + `capacity` bytes.
+// Initializes the fields before the CDR in `memory`, an allocation of kHeader + `capacity` bytes.
 SerdataDefault* init_header(void* memory, const ddsi_sertype* type, ddsi_serdata_kind kind, std::uint32_t capacity) {
   auto* d = static_cast<SerdataDefault*>(memory);
   std::memset(memory, 0, kHeader);

@@ -4,10 +4,14 @@
 // instead of taken from Cyclone's pool (idl/src/writer_sertype.cpp). Both in this process, alternating
 // round by round, no reader matched: the write's serialization, allocation and history, not the network.
 // Prints the median time per write of each type and the ratio.
+// Then what a bus::Reader's take costs on a quiet topic (node statuses, ~3.5 KB a sample): the reader's
+// own chunk of receive buffers against the baseline of 16 buffers built, zeroed and freed in every call
+// (bus::Reader until the chunk moved into it), so a loop that looks every turn knows what it pays.
 #include "tachi/bus/topics.hpp"
 #include "tachi/common/app.hpp"
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cstdio>
 #include <functional>
@@ -68,10 +72,37 @@ void compare(const char* what, const bus::Participant& dds, const bus::TopicSpec
               w / 1000.0, w / c);
 }
 
+// The baseline take: 16 receive buffers made for every call, as bus::Reader::take did before.
+template <class T>
+std::size_t take_with_fresh_buffers(dds_entity_t reader) {
+  constexpr std::size_t kChunk = 16;
+  std::array<bus::Owned<T>, kChunk> samples;
+  std::array<void*, kChunk> buffers;
+  std::array<dds_sample_info_t, kChunk> infos;
+  for (std::size_t i = 0; i < kChunk; ++i) buffers[i] = &*samples[i];
+  return static_cast<std::size_t>(bus::check(dds_take(reader, buffers.data(), infos.data(), kChunk, kChunk), "dds_take"));
+}
+
+void compare_quiet_takes(const bus::Participant& dds, const Options& o) {
+  bus::Reader<tachi_msg_NodeStatus> reader{dds, bus::topics::node_status};
+  std::vector<double> fresh_ns, own_ns;
+  std::size_t taken = 0;
+  for (unsigned round = 0; round <= o.rounds; ++round) {
+    const double f = time_per_write(o.writes, [&](unsigned) { taken += take_with_fresh_buffers<tachi_msg_NodeStatus>(reader.handle()); });
+    const double w = time_per_write(o.writes, [&](unsigned) { taken += reader.take().size(); });
+    if (round == 0) continue;
+    fresh_ns.push_back(f);
+    own_ns.push_back(w);
+  }
+  const double f = median(fresh_ns), w = median(own_ns);
+  std::printf("%-28s fresh buffers  %9.2f us   reader's chunk   %9.2f us   ratio %.2fx%s\n", "take, quiet node status",
+              f / 1000.0, w / 1000.0, w / f, taken ? "  (samples arrived: not quiet)" : "");
+}
+
 }  // namespace
 
 int main(int argc, char** argv) try {
-  CLI::App app{"tachi-write-bench: the time of a dds_write through Cyclone's type and through bus::Writer's"};
+  CLI::App app{"tachi-write-bench: the time of a dds_write through Cyclone's type and through bus::Writer's, and of a take on a quiet topic"};
   app.name("tachi-write-bench");
   Options o;
   app.add_option("--domain", o.domain, "DDS domain id")->check(CLI::Range(0u, 232u));
@@ -97,6 +128,7 @@ int main(int argc, char** argv) try {
     compare<tachi_msg_ClothState>(what.c_str(), dds, bus::topics::cloth_state, state,
                                   [](tachi_msg_ClothState& s, unsigned i) { s.frame = i; }, o);
   }
+  compare_quiet_takes(dds, o);
   return 0;
 } catch (const std::exception& e) {
   std::fprintf(stderr, "tachi-write-bench: %s\n", e.what());

@@ -206,12 +206,9 @@ struct SimNode::Impl {
 
   /// The hand sources' heartbeats: a sensor or filter the launcher restarted is starting (replaying its
   /// recording or journal), and the run must not end in the gap before it publishes again.
-  /// Ten times a second, not every loop turn: a take zeroes and frees 16 heartbeat-sized samples (~56 KB),
-  /// and heartbeats come once a second, so 100 ms late against a settle of seconds changes nothing.
   void watch_hand_sources() {
+    if (!statuses) return;
     const auto now = Clock::now();
-    if (!statuses || now < next_status_look) return;
-    next_status_look = now + std::chrono::milliseconds(100);
     for (const auto& status : statuses->take()) {
       const std::string node(status->node);
       if (node == "tachi-sensor" || node == "tachi-filter")
@@ -357,7 +354,6 @@ struct SimNode::Impl {
   const Clock::time_point start;
   std::optional<IdleEnd> idle_end;                            // with --exit-when-idle
   std::optional<bus::Reader<tachi_msg_NodeStatus>> statuses;  // ... the hand sources' heartbeats
-  Clock::time_point next_status_look{};                       // ... looked at every 100 ms
   std::uint64_t samples_in = 0, messages_out = 1, grabs_refused = 0;
   std::uint64_t topology_updates = 0;
   std::size_t topology_bytes = 0;

@@ -245,3 +245,56 @@ TEST(Bus, AnObserverDoesNotCountAsAWritersReader) {
   EXPECT_TRUE(writer.wait_for_readers(1, 5s));
   EXPECT_EQ(writer.matched_readers(), 1u);
 }
+
+// A reader deserializes into its own chunk of receive buffers, reused by every take: samples of changing
+// size, taken with room for one or for 256, arrive whole, and a buffer that held a disposal notice's key
+// is filled again correctly.
+TEST(Bus, AReadersReceiveBuffersAreReusedAcrossTakes) {
+  constexpr std::uint32_t kReuseDomain = 24;  // docs/testing.md: lent from bus_multiprocess_test's range
+  bus::Participant dds{kReuseDomain};
+  bus::Writer<tachi_msg_ClothState> writer{dds, bus::topics::cloth_state};
+  bus::Reader<tachi_msg_ClothState> reader{dds, bus::topics::cloth_state};
+  ASSERT_TRUE(writer.wait_for_readers(1, 5s));
+  const auto sample_size = [](std::uint64_t frame) -> std::size_t { return frame % 3 == 0 ? 30'000 : 1 + frame % 7; };
+  const auto write = [&](std::uint64_t frame) {
+    std::vector<float> positions(sample_size(frame));
+    for (std::size_t i = 0; i < positions.size(); ++i) positions[i] = static_cast<float>(frame * 100'000 + i);
+    tachi_msg_ClothState state{};
+    state.cloth_id = 1;
+    state.frame = frame;
+    state.positions._buffer = positions.data();
+    state.positions._length = state.positions._maximum = static_cast<std::uint32_t>(positions.size());
+    state.positions._release = false;
+    writer.write(state);
+  };
+  // One at a time: the state profile keeps only the newest two, and each take fills the same first buffer.
+  for (std::uint64_t frame = 0; frame < 30; ++frame) {
+    write(frame);
+    std::vector<bus::Owned<tachi_msg_ClothState>> got;
+    for (int tries = 0; tries < 250 && got.empty(); ++tries) {
+      reader.wait_for_data(20ms);
+      got = reader.take(frame % 2 == 0 ? 1 : 256);
+    }
+    ASSERT_EQ(got.size(), 1u) << "frame " << frame;
+    const auto& s = got[0];
+    ASSERT_EQ(s->frame, frame);
+    ASSERT_EQ(s->positions._length, sample_size(frame)) << "frame " << frame;
+    for (std::size_t i = 0; i < s->positions._length; ++i)
+      ASSERT_EQ(s->positions._buffer[i], static_cast<float>(frame * 100'000 + i)) << "frame " << frame;
+  }
+
+  // Disposal notices (a writer that goes away) land in the buffers too, and are dropped by take.
+  bus::Reader<tachi_msg_NodeStatus> statuses{dds, bus::topics::node_status};
+  std::vector<std::string> nodes;
+  const auto collect = [&] {
+    for (int i = 0; i < 10; ++i) {
+      statuses.wait_for_data(20ms);
+      for (const auto& s : statuses.take()) nodes.emplace_back(s->node);
+    }
+  };
+  { bus::Heartbeat first{dds, "tachi-first", std::chrono::hours(1)}; collect(); }
+  collect();
+  { bus::Heartbeat second{dds, "tachi-second-node", std::chrono::hours(1)}; collect(); }
+  collect();
+  EXPECT_EQ(nodes, (std::vector<std::string>{"tachi-first", "tachi-first", "tachi-second-node", "tachi-second-node"}));
+}

@@ -11,6 +11,7 @@
 #include <cstdint>
 #include <cstring>
 #include <functional>
+#include <memory>
 #include <stdexcept>
 #include <string>
 #include <string_view>
@@ -218,21 +219,19 @@ class Reader {
   Reader& operator=(const Reader&) = delete;
 
   /// Takes up to `max` samples with valid data (oldest first); disposal notices are dropped.
-  /// Takes in chunks of 16, so a call costs what arrived, not `max` zeroed samples.
+  /// Cyclone fills the reader's own chunk of 16 receive buffers, made once with the reader: a take that
+  /// finds nothing costs one dds_take, and one that finds n samples moves n out (each leaves its buffer
+  /// zeroed for the next take), so a loop may look at a quiet topic every turn.
   std::vector<Owned<T>> take(std::size_t max = 256) {
-    constexpr std::size_t kChunk = 16;
     std::vector<Owned<T>> valid;
-    std::array<Owned<T>, kChunk> samples;
-    std::array<void*, kChunk> buffers;
-    std::array<dds_sample_info_t, kChunk> infos;
+    auto& samples = chunk_->samples;
     while (valid.size() < max) {
       const std::size_t want = std::min(kChunk, max - valid.size());
-      for (std::size_t i = 0; i < want; ++i) buffers[i] = &*samples[i];
-      const auto n = static_cast<std::size_t>(
-          check_on_topic(dds_take(reader_, buffers.data(), infos.data(), want, static_cast<uint32_t>(want)), "take",
-                         name_, "dds_take"));
+      const auto n = static_cast<std::size_t>(check_on_topic(
+          dds_take(reader_, chunk_->buffers.data(), chunk_->infos.data(), want, static_cast<uint32_t>(want)), "take",
+          name_, "dds_take"));
       for (std::size_t i = 0; i < n; ++i)
-        if (infos[i].valid_data) valid.push_back(std::move(samples[i]));
+        if (chunk_->infos[i].valid_data) valid.push_back(std::move(samples[i]));
       if (n < want) break;
     }
     return valid;
@@ -247,9 +246,22 @@ class Reader {
   dds_entity_t handle() const noexcept { return reader_; }
 
  private:
+  static constexpr std::size_t kChunk = 16;
+  /// Receive buffers Cyclone deserializes into. A sample moved out leaves its buffer zeroed; a disposal
+  /// notice's key fields stay until the next take reuses the buffer (Cyclone frees what it replaces).
+  struct Chunk {
+    Chunk() {
+      for (std::size_t i = 0; i < kChunk; ++i) buffers[i] = &*samples[i];
+    }
+    std::array<Owned<T>, kChunk> samples;
+    std::array<void*, kChunk> buffers{};
+    std::array<dds_sample_info_t, kChunk> infos{};
+  };
+
   std::string name_;
   dds_entity_t topic_;
   dds_entity_t reader_;
+  std::unique_ptr<Chunk> chunk_ = std::make_unique<Chunk>();  // on the heap: 16 node statuses are ~56 KB
 };
 
 /// Waits on several readers at once: wakes when any has data, or on timeout.

@@ -115,6 +115,19 @@ std::atomic<bool> g_read_every_run{false};
 
 using QosPtr = std::unique_ptr<dds_qos_t, decltype(&dds_delete_qos)>;
 
+// Transient-local, keeping the newest `depth` samples per instance for readers that join late. Both
+// depths: Cyclone 0.10.2's writer history (dds_whc.c) serves late joiners from durability_service's
+// history, whose default depth is 1, and prunes to it every sample all current readers have acknowledged;
+// history alone only bounds what is kept until then. With history alone a simulator that matched the
+// filter late received one stroke sample of all those written before it, whenever another reader (a
+// viewer, a recorder, the launcher's observer) had taken them already.
+void keep_for_late_joiners(dds_qos_t* qos, std::int32_t depth) {
+  dds_qset_durability(qos, DDS_DURABILITY_TRANSIENT_LOCAL);
+  dds_qset_history(qos, DDS_HISTORY_KEEP_LAST, depth);
+  dds_qset_durability_service(qos, 0, DDS_HISTORY_KEEP_LAST, depth, DDS_LENGTH_UNLIMITED, DDS_LENGTH_UNLIMITED,
+                              DDS_LENGTH_UNLIMITED);
+}
+
 QosPtr make_qos(QosProfile profile) {
   QosPtr qos(dds_create_qos(), &dds_delete_qos);
   switch (profile) {
@@ -124,8 +137,7 @@ QosPtr make_qos(QosProfile profile) {
       // (tachi-filter --journal) carries the stroke on without a gap. Loopback loses nothing, so being
       // reliable costs no latency here; on a lossy link keep-last still bounds what is resent.
       dds_qset_reliability(qos.get(), DDS_RELIABILITY_RELIABLE, DDS_MSECS(100));
-      dds_qset_durability(qos.get(), DDS_DURABILITY_TRANSIENT_LOCAL);
-      dds_qset_history(qos.get(), DDS_HISTORY_KEEP_LAST, 64);
+      keep_for_late_joiners(qos.get(), 64);
       break;
     case QosProfile::Commands:
       dds_qset_reliability(qos.get(), DDS_RELIABILITY_RELIABLE, DDS_SECS(1));
@@ -134,18 +146,14 @@ QosPtr make_qos(QosProfile profile) {
     case QosProfile::Strokes:
       // The writer keeps its last 256 samples (~8.5 s of hand at 30 Hz) for readers that join late: a
       // simulator restarted after a crash catches up on what was published while it was down (its
-      // journal holds the rest), and the launcher restarts it within 4 s backoff + ~2 s start. Not
-      // more: Cyclone 0.10.2 serializes a written sample into a pooled buffer, and when the pool hands
-      // back a smaller one (a received 56-byte raw hand) its output stream grows it to a 4 KiB step, so
-      // each kept stroke sample may hold 4 KiB: 1024 of them swung the filter's memory by up to 4 MB.
+      // journal holds the rest), and the launcher restarts it within 4 s backoff + ~2 s start. Each kept
+      // sample is allocated at its size (~100 bytes: idl/src/writer_sertype.cpp), ~26 KB in all.
       dds_qset_reliability(qos.get(), DDS_RELIABILITY_RELIABLE, DDS_SECS(1));
-      dds_qset_durability(qos.get(), DDS_DURABILITY_TRANSIENT_LOCAL);
-      dds_qset_history(qos.get(), DDS_HISTORY_KEEP_LAST, 256);
+      keep_for_late_joiners(qos.get(), 256);
       break;
     case QosProfile::Topology:
       dds_qset_reliability(qos.get(), DDS_RELIABILITY_RELIABLE, DDS_SECS(1));
-      dds_qset_durability(qos.get(), DDS_DURABILITY_TRANSIENT_LOCAL);
-      dds_qset_history(qos.get(), DDS_HISTORY_KEEP_LAST, 1);
+      keep_for_late_joiners(qos.get(), 1);
       break;
     case QosProfile::State:
       dds_qset_reliability(qos.get(), DDS_RELIABILITY_RELIABLE, DDS_MSECS(100));
@@ -153,8 +161,7 @@ QosPtr make_qos(QosProfile profile) {
       break;
     case QosProfile::Status:
       dds_qset_reliability(qos.get(), DDS_RELIABILITY_RELIABLE, DDS_SECS(1));
-      dds_qset_durability(qos.get(), DDS_DURABILITY_TRANSIENT_LOCAL);
-      dds_qset_history(qos.get(), DDS_HISTORY_KEEP_LAST, 1);
+      keep_for_late_joiners(qos.get(), 1);
       dds_qset_liveliness(qos.get(), DDS_LIVELINESS_AUTOMATIC, DDS_SECS(3));
       break;
   }

@@ -298,3 +298,38 @@ TEST(Bus, AReadersReceiveBuffersAreReusedAcrossTakes) {
   collect();
   EXPECT_EQ(nodes, (std::vector<std::string>{"tachi-first", "tachi-first", "tachi-second-node", "tachi-second-node"}));
 }
+
+// A reader that joins late receives the writer's kept history (strokes: the newest 256 per hand) even when
+// another reader acknowledged every sample first: Cyclone prunes what all readers acknowledged down to the
+// durability service's depth (default 1), which once left a late simulator one stroke sample of many.
+TEST(Bus, ALateReaderReceivesTheKeptHistoryThatAnotherReaderAcknowledged) {
+  constexpr std::uint32_t kKeptHistoryDomain = 25;  // docs/testing.md: lent from bus_multiprocess_test's range
+  bus::Participant dds{kKeptHistoryDomain};
+  bus::Writer<tachi_msg_StrokeSample> writer{dds, bus::topics::stroke};
+  bus::Reader<tachi_msg_StrokeSample> early{dds, bus::topics::stroke};
+  ASSERT_TRUE(writer.wait_for_readers(1, 5s));
+  constexpr std::uint64_t kWritten = 200;  // within both the early reader's and the writer's 256
+  for (std::uint64_t frame = 0; frame < kWritten; ++frame) {
+    tachi_msg_StrokeSample s{};
+    s.sensor_id = 1;
+    s.frame = frame;
+    writer.write(s);
+  }
+  std::size_t early_got = 0;
+  for (int tries = 0; tries < 200 && early_got < kWritten; ++tries) {
+    early.wait_for_data(20ms);
+    early_got += early.take().size();
+  }
+  ASSERT_EQ(early_got, kWritten);
+  ASSERT_EQ(dds_wait_for_acks(writer.handle(), DDS_SECS(5)), DDS_RETCODE_OK);
+
+  bus::Participant late_dds{kKeptHistoryDomain};
+  bus::Reader<tachi_msg_StrokeSample> late{late_dds, bus::topics::stroke};
+  std::vector<std::uint64_t> frames;
+  for (int tries = 0; tries < 100 && frames.size() < kWritten; ++tries) {
+    late.wait_for_data(20ms);
+    for (const auto& s : late.take()) frames.push_back(s->frame);
+  }
+  ASSERT_EQ(frames.size(), kWritten);
+  for (std::uint64_t i = 0; i < kWritten; ++i) EXPECT_EQ(frames[i], i);
+}

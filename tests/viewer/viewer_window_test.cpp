@@ -45,11 +45,15 @@ class VirtualDisplay {
       server_ = std::make_unique<ChildProcess>(
           std::vector<std::string>{kXvfb, name_, "-screen", "0", screen, "-nolisten", "tcp"});
       const auto socket = std::filesystem::path("/tmp/.X11-unix") / ("X" + number);
-      for (int i = 0; i < 100 && !std::filesystem::exists(socket); ++i)
+      for (int i = 0; i < 100 && !std::filesystem::exists(socket) && server_->running(); ++i)
         std::this_thread::sleep_for(50ms);
-      return;
+      // Another test's server may have taken the number between the lock check and Xvfb's start: ours then
+      // exits ("server already active"), and the socket found would be the other's. Try the next number.
+      if (server_->running()) return;
     }
   }
+  /// Whether this test's X server is still up (a window search that finds nothing says which side failed).
+  bool running() const { return server_ && server_->running(); }
   ~VirtualDisplay() {
     if (server_) server_->signal(SIGTERM);
   }
@@ -142,7 +146,8 @@ TEST(ViewerWindow, FitsASmallScreenShowsTheClothAndSavesASnapshotOnAKey) {
   bus::Participant dds{155};
   bus::Reader<tachi_msg_NodeStatus> status{dds, bus::topics::node_status};
   const std::string window = display.viewer_window();
-  ASSERT_FALSE(window.empty()) << viewer.err();
+  ASSERT_FALSE(window.empty()) << "X server " << (display.running() ? "up" : "gone") << ", viewer "
+                               << (viewer.running() ? "running" : "exited") << "; stderr: " << viewer.err();
   ASSERT_TRUE(viewer_has_cloth(status)) << viewer.err();
 
   // Qt applies the fitted size asynchronously (seen once in a loaded ctest -j2 run: still 1000 px after

@@ -35,6 +35,14 @@ function(tachi_find_opencv)
     message(FATAL_ERROR "OpenCV not found: neither OpenCVConfig.cmake (libopencv-dev) nor opencv2/core.hpp "
                         "(libopencv-core-dev); run scripts/setup.sh")
   endif()
+  # The links between modules above are 4.x's; another major version may link its modules otherwise, which
+  # would surface as undefined symbols at link time. Say so here instead.
+  file(STRINGS "${TACHI_OPENCV_INCLUDE_DIR}/opencv2/core/version.hpp" _tachi_cv_major REGEX "#define CV_VERSION_MAJOR")
+  string(REGEX MATCH "[0-9]+" _tachi_cv_major "${_tachi_cv_major}")
+  if(NOT _tachi_cv_major STREQUAL "4")
+    message(FATAL_ERROR "OpenCV ${_tachi_cv_major}.x in ${TACHI_OPENCV_INCLUDE_DIR} without its CMake package: the "
+                        "fallback here knows 4.x's modules only; install libopencv-dev (scripts/setup.sh)")
+  endif()
   foreach(module IN LISTS modules)
     if(TARGET opencv_${module})
       continue()

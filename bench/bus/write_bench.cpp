@@ -32,10 +32,10 @@ double median(std::vector<double> v) {
   return v[v.size() / 2];
 }
 
-// Nanoseconds per call of `write`, `n` calls.
-double time_per_write(unsigned n, const std::function<void(unsigned)>& write) {
+// Nanoseconds per call of `call`, `n` calls.
+double time_per_call(unsigned n, const std::function<void(unsigned)>& call) {
   const auto start = std::chrono::steady_clock::now();
-  for (unsigned i = 0; i < n; ++i) write(i);
+  for (unsigned i = 0; i < n; ++i) call(i);
   const std::chrono::duration<double, std::nano> spent = std::chrono::steady_clock::now() - start;
   return spent.count() / n;
 }
@@ -61,8 +61,8 @@ void compare(const char* what, const bus::Participant& dds, const bus::TopicSpec
   bus::Writer<T> own{dds, spec};
   std::vector<double> cyclone_ns, own_ns;
   for (unsigned round = 0; round <= o.rounds; ++round) {  // round 0 warms both up and is not counted
-    const double c = time_per_write(o.writes, [&](unsigned i) { vary(sample, i); cyclone.write(sample); });
-    const double w = time_per_write(o.writes, [&](unsigned i) { vary(sample, i); own.write(sample); });
+    const double c = time_per_call(o.writes, [&](unsigned i) { vary(sample, i); cyclone.write(sample); });
+    const double w = time_per_call(o.writes, [&](unsigned i) { vary(sample, i); own.write(sample); });
     if (round == 0) continue;
     cyclone_ns.push_back(c);
     own_ns.push_back(w);
@@ -88,8 +88,8 @@ void compare_quiet_takes(const bus::Participant& dds, const Options& o) {
   std::vector<double> fresh_ns, own_ns;
   std::size_t taken = 0;
   for (unsigned round = 0; round <= o.rounds; ++round) {
-    const double f = time_per_write(o.writes, [&](unsigned) { taken += take_with_fresh_buffers<tachi_msg_NodeStatus>(reader.handle()); });
-    const double w = time_per_write(o.writes, [&](unsigned) { taken += reader.take().size(); });
+    const double f = time_per_call(o.writes, [&](unsigned) { taken += take_with_fresh_buffers<tachi_msg_NodeStatus>(reader.handle()); });
+    const double w = time_per_call(o.writes, [&](unsigned) { taken += reader.take().size(); });
     if (round == 0) continue;
     fresh_ns.push_back(f);
     own_ns.push_back(w);

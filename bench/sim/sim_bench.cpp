@@ -315,7 +315,7 @@ void print_xpbd_anchor(int n, int warmup, int steps) {
     const char* cloth = swinging ? "swinging" : "hanging";
     std::printf("%9s %10s %10d %12.3f %9.1f%% %10s\n", cloth, "tachi", defaults.substeps, t.step_ms,
                 100.0 * tachi_strain, "1.00x");
-    constexpr int kMostSubsteps = 512;
+    constexpr int kMostSubsteps = 1024;
     for (int substeps = 8; substeps <= kMostSubsteps; substeps *= 2) {
       const Run x = run_fresh([&] { return run_xpbd(n, substeps, w, steps, swinging); });
       const double strain = swinging ? x.peak_strain : x.max_strain;

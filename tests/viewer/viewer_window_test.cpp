@@ -36,9 +36,13 @@ const std::string kImport = TACHI_IMPORT_EXE;
 class VirtualDisplay {
  public:
   VirtualDisplay(int width, int height) {
-    for (int n = 150 + ::getpid() % 400;; ++n) {
+    // At most kTries servers started: an Xvfb that cannot start at all must fail the test (running() says
+    // so), not try every number.
+    constexpr int kTries = 10;
+    for (int n = 150 + ::getpid() % 400, tries = 0; tries < kTries; ++n) {
       const std::string number = std::to_string(n);
       if (std::filesystem::exists(std::filesystem::path("/tmp") / (".X" + number + "-lock"))) continue;
+      ++tries;
       name_ = ":" + number;
       char screen[32];
       std::snprintf(screen, sizeof screen, "%dx%dx24", width, height);

@@ -34,7 +34,7 @@ struct Primitive {
   Part part;
   Vec3 a, b;      // sphere/ellipsoid/disc centre in a; capsule ends a, b; box min a, max b
   Vec3 radii;     // ellipsoid radii; sphere/capsule radius in x; disc half-axes in x (along u), y (along v)
-  Vec3 u, v, n;   // disc axes and normal
+  Vec3 u, v, n;   // disc axes and normal; an ellipsoid's axes when u is not zero (zero: the world's)
 };
 
 /// SplitMix64's output function (Steele, Lea & Flood 2014): a well-mixed 64-bit hash.
@@ -85,8 +85,13 @@ double intersect(const Primitive& p, const Vec3& o, const Vec3& d) {
       return t > 0 ? t : -1;
     }
     case Primitive::Ellipsoid: {
-      const Vec3 oo = (o - p.a).cwiseQuotient(p.radii);
-      const Vec3 dd = d.cwiseQuotient(p.radii);
+      // Radii along the world axes, or along (u, v, n) when they are given: a part of the hand turns with it.
+      const bool oriented = p.u.squaredNorm() > 0;
+      const Vec3 oc = o - p.a;
+      const Vec3 ol = oriented ? Vec3(oc.dot(p.u), oc.dot(p.v), oc.dot(p.n)) : oc;
+      const Vec3 dl = oriented ? Vec3(d.dot(p.u), d.dot(p.v), d.dot(p.n)) : d;
+      const Vec3 oo = ol.cwiseQuotient(p.radii);
+      const Vec3 dd = dl.cwiseQuotient(p.radii);
       const double qa = dd.dot(dd), qb = oo.dot(dd), qc = oo.dot(oo) - 1.0;
       const double h = qb * qb - qa * qc;
       if (h < 0) return -1;
@@ -128,7 +133,15 @@ void bounds(const Primitive& p, Vec3& lo, Vec3& hi) {
       lo = p.a.cwiseMin(p.b).array() - p.radii.x();
       hi = p.a.cwiseMax(p.b).array() + p.radii.x();
       break;
-    case Primitive::Ellipsoid: lo = p.a - p.radii; hi = p.a + p.radii; break;
+    case Primitive::Ellipsoid: {
+      Vec3 half = p.radii;
+      if (p.u.squaredNorm() > 0)  // the box around a turned ellipsoid: per axis, the norm of its radii's components
+        for (int i = 0; i < 3; ++i)
+          half[i] = Vec3(p.u[i] * p.radii.x(), p.v[i] * p.radii.y(), p.n[i] * p.radii.z()).norm();
+      lo = p.a - half;
+      hi = p.a + half;
+      break;
+    }
     case Primitive::Box: lo = p.a; hi = p.b; break;
     case Primitive::Disc: {
       const double r = std::max(p.radii.x(), p.radii.y());
@@ -140,9 +153,9 @@ void bounds(const Primitive& p, Vec3& lo, Vec3& hi) {
 }
 
 Primitive capsule(Part part, const Vec3& a, const Vec3& b, double r) {
-  return {Primitive::Capsule, part, a, b, Vec3(r, r, r), {}, {}, {}};
+  return {Primitive::Capsule, part, a, b, Vec3(r, r, r), Vec3::Zero(), Vec3::Zero(), Vec3::Zero()};
 }
-Primitive sphere(Part part, const Vec3& c, double r) { return {Primitive::Sphere, part, c, c, Vec3(r, r, r), {}, {}, {}}; }
+Primitive sphere(Part part, const Vec3& c, double r) { return {Primitive::Sphere, part, c, c, Vec3(r, r, r), Vec3::Zero(), Vec3::Zero(), Vec3::Zero()}; }
 
 /// Monotone piecewise-cubic Hermite interpolation per axis (Fritsch & Carlson 1980, PCHIP
 /// weights): passes through every keyframe without overshoot, at rest at the first and last.
@@ -365,7 +378,7 @@ struct SyntheticScene::Impl {
     const Vec3 body = sway + lean + user;
     shoulder = Vec3(s * 0.19, 0.0, 1.44) + body;
     // Torso, neck, head, the hanging arm.
-    prims.push_back({Primitive::Ellipsoid, kBody, Vec3(0, 0.30, 1.47) + body, Vec3::Zero(), Vec3(0.18, 0.34, 0.11), {}, {}, {}});
+    prims.push_back({Primitive::Ellipsoid, kBody, Vec3(0, 0.30, 1.47) + body, Vec3::Zero(), Vec3(0.18, 0.34, 0.11), Vec3::Zero(), Vec3::Zero(), Vec3::Zero()});
     prims.push_back(capsule(kBody, Vec3(0, -0.20, 1.47) + body, Vec3(0, 0.0, 1.47) + body, 0.05));
     prims.push_back(sphere(kBody, Vec3(0, -0.30, 1.47) + body, 0.10));
     const Vec3 ls = Vec3(-s * 0.19, 0.0, 1.44) + body, le = Vec3(-s * 0.23, 0.31, 1.46) + body,
@@ -387,7 +400,9 @@ struct SyntheticScene::Impl {
     // Palm: a flat elliptic face (the camera-facing surface) with a thin back behind it.
     palm_disc = {Primitive::Disc, kPalm, palm, Vec3::Zero(), Vec3(kPalmHalfWidth, kPalmHalfHeight, 0), r, w, n};
     prims.push_back(palm_disc);
-    prims.push_back({Primitive::Ellipsoid, kArm, palm - 0.030 * n, Vec3::Zero(), Vec3(0.034, 0.040, 0.012), {}, {}, {}});
+    // The back turns with the palm (it did not: turned 45-60 degrees, its frontal face stood 2-3 cm
+    // beside the palm, a blob no hand has, which the finder measured as the palm).
+    prims.push_back({Primitive::Ellipsoid, kArm, palm - 0.030 * n, Vec3::Zero(), Vec3(0.034, 0.040, 0.012), r, w, n});
     // Fingers, their front surface level with the palm's: spread, or side by side and touching
     // (no gaps for the hand finder to see).
     const double finger_r = 0.0085;
@@ -412,7 +427,7 @@ struct SyntheticScene::Impl {
                          ? Vec3(spec.second_person_x + 0.01 * std::sin(2 * std::numbers::pi * 0.27 * t), 0.0, spec.second_person_z)
                          : Vec3(-0.9 + 1.8 * t / std::max(duration, 1e-3), 0.0, spec.second_person_z);
       const double swing = spec.second_person_standing ? 0.0 : 0.06 * std::sin(2 * std::numbers::pi * 0.9 * t);
-      prims.push_back({Primitive::Ellipsoid, kBody, c + Vec3(0, 0.30, 0), Vec3::Zero(), Vec3(0.17, 0.34, 0.11), {}, {}, {}});
+      prims.push_back({Primitive::Ellipsoid, kBody, c + Vec3(0, 0.30, 0), Vec3::Zero(), Vec3(0.17, 0.34, 0.11), Vec3::Zero(), Vec3::Zero(), Vec3::Zero()});
       prims.push_back(sphere(kBody, c + Vec3(0, -0.30, 0), 0.10));
       for (const double side : {-1.0, 1.0}) {
         const Vec3 s0 = c + Vec3(side * 0.19, 0.0, -0.02);
@@ -420,13 +435,13 @@ struct SyntheticScene::Impl {
       }
     }
     if (spec.distractor && t >= spec.distractor_from_s - 1e-9)
-      prims.push_back({Primitive::Box, kDistractor, Vec3(0.28, 0.12, 0.66), Vec3(0.46, 0.60, 0.80), {}, {}, {}, {}});
+      prims.push_back({Primitive::Box, kDistractor, Vec3(0.28, 0.12, 0.66), Vec3(0.46, 0.60, 0.80), {}, Vec3::Zero(), Vec3::Zero(), Vec3::Zero()});
     for (const auto& o : spec.objects) {
       if (t < o.from_s - o.slide_s - 1e-9) continue;
       const double left = o.slide_s > 0 ? std::clamp((o.from_s - t) / o.slide_s, 0.0, 1.0) : 0.0;
       const double eased = left * left * (3 - 2 * left);  // starts and stops gently
       const Vec3 shift = eased * o.slide_from;
-      prims.push_back({Primitive::Box, kDistractor, o.min + shift, o.max + shift, {}, {}, {}, {}});
+      prims.push_back({Primitive::Box, kDistractor, o.min + shift, o.max + shift, {}, Vec3::Zero(), Vec3::Zero(), Vec3::Zero()});
     }
     return prims;
   }

@@ -354,7 +354,8 @@ struct SyntheticScene::Impl {
   }
 
   /// Scene primitives at time t with the palm at `palm`; returns the palm's disc for visibility.
-  std::vector<Primitive> build(double t, const Vec3& palm, Primitive& palm_disc) const {
+  /// `palm` is where the path puts the palm; on return, where the arm can put it (see below).
+  std::vector<Primitive> build(double t, Vec3& palm, Primitive& palm_disc) const {
     std::vector<Primitive> prims;
     const Vec3 sway(0.010 * std::sin(2 * std::numbers::pi * 0.31 * t), 0.004 * std::sin(2 * std::numbers::pi * 0.47 * t),
                     0.008 * std::sin(2 * std::numbers::pi * 0.23 * t + 1.0));
@@ -368,7 +369,7 @@ struct SyntheticScene::Impl {
                                  Eigen::AngleAxisd(spec.palm_roll_deg * deg, Vec3::UnitZ()))
                                     .toRotationMatrix();
     const Vec3 n = rot * Vec3(0, 0, -1), w = rot * Vec3(0, -1, 0), r = -s * w.cross(n);  // r: toward the thumb
-    const Vec3 wrist = palm - 0.055 * w - 0.034 * n;
+    Vec3 wrist = palm - 0.055 * w - 0.034 * n;
     // The body leans toward a target out of reach (a person steps or leans in).
     const double upper_arm = kUpperArm * spec.arm_scale, forearm = kForearm * spec.arm_scale;
     const double reach = upper_arm + forearm - 0.01;
@@ -377,6 +378,17 @@ struct SyntheticScene::Impl {
     lean.y() = 0;
     const Vec3 body = sway + lean + user;
     shoulder = Vec3(s * 0.19, 0.0, 1.44) + body;
+    // A raised target still out of reach (above the head: a person leans, but does not grow) is not
+    // reached: the hand stops where the arm ends. It floated detached above the arm before, whose
+    // rounded stump and raised elbow were then the hand in view (seed 16: 24 frames captured 0.5 m
+    // from the truth). Below the shoulder the hand is left where the path puts it: the resting pose
+    // (0.72 m below the shoulder, fingers up) is beyond the arm's reach as well, a known flaw of the
+    // world (docs/sensor.md) that every bundled recording and tuning figure carries.
+    if (const Vec3 to_wrist = wrist - shoulder; to_wrist.y() < 0 && to_wrist.norm() > reach) {
+      const Vec3 shift = shoulder + reach * to_wrist.normalized() - wrist;
+      wrist += shift;
+      palm += shift;
+    }
     // Torso, neck, head, the hanging arm.
     prims.push_back({Primitive::Ellipsoid, kBody, Vec3(0, 0.30, 1.47) + body, Vec3::Zero(), Vec3(0.18, 0.34, 0.11), Vec3::Zero(), Vec3::Zero(), Vec3::Zero()});
     prims.push_back(capsule(kBody, Vec3(0, -0.20, 1.47) + body, Vec3(0, 0.0, 1.47) + body, 0.05));
@@ -504,9 +516,9 @@ DepthFrame SyntheticScene::render(std::uint64_t i, GroundTruth& truth) {
   Impl& m = *impl_;
   const double t = static_cast<double>(i) / m.spec.fps;
   const Vec3 intended = m.intended_at(t);
-  const Vec3 palm = intended + m.tremor_weight(t) * m.tremor_at(t);
+  Vec3 palm = intended + m.tremor_weight(t) * m.tremor_at(t);
   Primitive disc{};
-  const auto prims = m.build(t, palm, disc);
+  const auto prims = m.build(t, palm, disc);  // palm: now where the arm put it
   m.render_view(prims, Vec3::Zero(), m.zbuf, &m.label);
   const Vec3 projector(kProjectorBaseline, 0, 0);
   m.render_view(prims, projector, m.proj_zbuf, nullptr);

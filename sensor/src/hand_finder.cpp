@@ -10,6 +10,7 @@
 
 #include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
+#include <Eigen/LU>
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -197,6 +198,7 @@ struct HandFinder::Impl {
   cv::Mat roi_closed_buffer = cv::Mat(kDepthHeight + 2, kDepthWidth + 2, CV_8U);
   cv::Mat roi_dist_buffer = cv::Mat(kDepthHeight + 2, kDepthWidth + 2, CV_32F);
   std::vector<std::uint16_t> palm_raw;
+  std::vector<cv::Point> palm_pixels;      // ... and where they are
   bool tracking = false;
   cv::Point previous_cell{-1, -1};
   Eigen::Vector3d last_seen = Eigen::Vector3d::Zero();
@@ -228,6 +230,9 @@ struct HandFinder::Impl {
     bool cut_by_border = false;   ///< the hand leaves the image within a palm diameter of the circle
     bool placed_by_model = false; ///< an edge-on palm: its centre placed by the hand's shape (lower confidence)
     double ridge_m = 0;           ///< how far from the circle's centre the region stays nearly as wide (ridge_length)
+    double bulge_significance = 0;  ///< how surely its readings bulge toward the sensor (measure_bulge) ...
+    double bulge_min_per_m = 0;     ///< ... and how much along the flattest direction (1 / (2 R) for a sphere's cap)
+    double bulge_view_cos = 0;      ///< ... and how squarely it faces the sensor (cosine to the line of sight)
   };
 
   HandObservation find(std::span<const std::uint16_t> raw);
@@ -243,6 +248,13 @@ struct HandFinder::Impl {
   bool measure_in_band(std::span<const std::uint16_t> raw, const cv::Rect& cells, std::uint16_t near_raw, std::uint16_t far_raw,
                        cv::Point seed_cell, Palm& palm, int grow, bool two_sided);
   int touched = 0;
+  void measure_bulge(std::span<const std::uint16_t> raw, Palm& palm) const;
+  bool bulge_wanted = true;  // measure_bulge for this candidate: only a new track asks is_dome
+  /// A new track's test: the palm circle bulges like a head's or an elbow's (HandFinderParams::dome_significance).
+  bool is_dome(const Palm& palm) const {
+    return params.dome_significance > 0 && palm.bulge_significance > params.dome_significance &&
+           palm.bulge_min_per_m > params.dome_min_curvature_per_m && palm.bulge_view_cos > params.dome_min_view_cos;
+  }
   template <class OnCell, class OnStep>
   bool walk_surface(cv::Point seed, OnCell&& on_cell, OnStep&& on_step);
   static std::size_t grid_index(cv::Point p) { return static_cast<std::size_t>(p.y) * kGridW + static_cast<std::size_t>(p.x); }
@@ -515,6 +527,7 @@ bool HandFinder::Impl::measure_in_band(std::span<const std::uint16_t> raw, const
     const double u = rx0 - 1 + centre.x, v = ry0 - 1 + centre.y;
     // Palm depth: median reading inside the palm circle.
     palm_raw.clear();
+    palm_pixels.clear();
     const double r2 = max_dist * max_dist;
     int circle_pixels = 0;
     for (int y = std::max(ry0, static_cast<int>(v - max_dist)); y <= std::min(ry1 - 1, static_cast<int>(v + max_dist)); ++y) {
@@ -523,7 +536,10 @@ bool HandFinder::Impl::measure_in_band(std::span<const std::uint16_t> raw, const
       for (int x = std::max(rx0, static_cast<int>(u - max_dist)); x <= std::min(rx1 - 1, static_cast<int>(u + max_dist)); ++x) {
         if ((x - u) * (x - u) + (y - v) * (y - v) > r2) continue;
         ++circle_pixels;
-        if (m[x - rx0]) palm_raw.push_back(row[x]);
+        if (m[x - rx0]) {
+          palm_raw.push_back(row[x]);
+          palm_pixels.emplace_back(x, y);
+        }
       }
     }
     if (palm_raw.size() < 8) return false;
@@ -536,6 +552,10 @@ bool HandFinder::Impl::measure_in_band(std::span<const std::uint16_t> raw, const
     palm.radius_m = max_dist * palm.z / k.fx;
     palm.ridge_m = ridge_px * palm.z / k.fx;
     palm.valid_fraction = static_cast<double>(palm_raw.size()) / std::max(1, circle_pixels);
+    if (bulge_wanted)
+      measure_bulge(raw, palm);
+    else
+      palm.bulge_significance = palm.bulge_min_per_m = palm.bulge_view_cos = 0;
   }
   const double u = palm.u, v = palm.v;
 
@@ -561,6 +581,58 @@ bool HandFinder::Impl::measure_in_band(std::span<const std::uint16_t> raw, const
   const double crossing_m = std::max({top, bottom, left_edge, right_edge}) * static_cast<double>(palm.z) / k.fx;
   palm.cut_by_border = crossing_m >= params.border_cut_width_m && palm.radius_m < params.whole_palm_radius_m;
   return true;
+}
+
+/// How much the palm circle's readings (palm_pixels) bulge toward the sensor. A sphere's cap of
+/// radius R lies z = z0 + r^2 / (2 R) (its sagitta, to second order), a flat palm at any tilt on a
+/// plane, a cupped one bulges away. Fitted by least squares as a quadric in inverse depth,
+/// 1 / z = a + b x + c y + d x^2 + e x y + f y^2 (x, y in metres about the circle's centre at its
+/// depth), because a plane is linear in 1 / z over the image (n . (x, y, f) z = d), not in z: a
+/// turned palm would bulge otherwise. To second order z ~ z0 - z0^2 (1 / z - 1 / z0), so the
+/// curvatures toward the sensor are -z0^2 times the eigenvalues of [[d, e/2], [e/2, f]].
+/// bulge_significance: the mean curvature (d + f) over its standard error (from the residuals,
+/// Gauss-Markov), so that Kinect's disparity steps (~9 mm at 1.7 m) on a small circle do not count;
+/// bulge_min_per_m: the curvature along the flattest direction (a turned palm's rounded rim curves
+/// along one direction only, a head or an elbow along all).
+void HandFinder::Impl::measure_bulge(std::span<const std::uint16_t> raw, Palm& palm) const {
+  using Vector6d = Eigen::Matrix<double, 6, 1>;
+  using Matrix6d = Eigen::Matrix<double, 6, 6>;
+  palm.bulge_significance = palm.bulge_min_per_m = palm.bulge_view_cos = 0;
+  const double metres_per_px = palm.z / model.intrinsics().fx, inverse_z0 = 1.0 / palm.z;
+  // One pass: the normal equations' lower triangle, and the sum of squared targets for the residual.
+  Matrix6d normal = Matrix6d::Zero();
+  Vector6d rhs = Vector6d::Zero();
+  double target_squares = 0;
+  int count = 0;
+  for (const cv::Point& p : palm_pixels) {
+    const double z = model.metres(raw[static_cast<std::size_t>(p.y) * kDepthWidth + p.x]);
+    if (z <= 0) continue;
+    const double x = (p.x - palm.u) * metres_per_px, y = (p.y - palm.v) * metres_per_px, target = 1.0 / z - inverse_z0;
+    Vector6d f;
+    f << 1.0, x, y, x * x, x * y, y * y;
+    normal.selfadjointView<Eigen::Lower>().rankUpdate(f);
+    rhs += f * target;
+    target_squares += target * target;
+    ++count;
+  }
+  if (count < 12) return;
+  normal = normal.selfadjointView<Eigen::Lower>();
+  const Eigen::FullPivLU<Matrix6d> lu(normal);
+  if (!lu.isInvertible()) return;
+  const Vector6d q = lu.solve(rhs);
+  // Residual sum of squares |t - F q|^2 = t.t - q.(F^T t), at the least-squares solution.
+  const double residual_squares = std::max(0.0, target_squares - q.dot(rhs));
+  const Matrix6d covariance = lu.inverse() * (residual_squares / (count - 6));
+  const double mean_variance = covariance(3, 3) + covariance(5, 5) + 2 * covariance(3, 5);
+  if (!(mean_variance > 0)) return;
+  palm.bulge_significance = -(q(3) + q(5)) / std::sqrt(mean_variance);
+  Eigen::Matrix2d hessian;
+  hessian << q(3), q(4) / 2, q(4) / 2, q(5);
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> curvatures(hessian, Eigen::EigenvaluesOnly);
+  palm.bulge_min_per_m = -curvatures.eigenvalues()(1) * palm.z * palm.z;
+  // The fitted surface's normal at the centre, (-dz/dx, -dz/dy, 1) with dz/dx = -z0^2 b, against the line of sight.
+  const Eigen::Vector3d facing = Eigen::Vector3d(q(1), q(2), inverse_z0 * inverse_z0).normalized();
+  palm.bulge_view_cos = facing.dot(model.back_project(palm.u, palm.v, palm.z).normalized());
 }
 
 /// The plane through the readings under roi_mask (ROI [rx0, rx1) x [ry0, ry1)) by total least
@@ -1332,9 +1404,10 @@ bool HandFinder::Impl::arm_end_candidate(std::span<const std::uint16_t> raw, cv:
   // its nearest reading: a palm and its fingers, or the face of a box) must be whole in view. A
   // hand held against the chest keeps the torso out of it (4-8 cm behind).
   // The grid test first: it is cheap, the full-resolution measure is not.
+  bulge_wanted = true;
   if (front_touches_border(seed, near_raw, two_sided) || !reaches_back(seed, near_raw, two_sided) ||
       !measure(raw, box, near_raw, seed, palm, two_sided) || !palm_accepted(palm) ||
-      palm.radius_m > params.max_new_palm_radius_m || palm.ridge_m > params.max_palm_ridge_m)
+      palm.radius_m > params.max_new_palm_radius_m || palm.ridge_m > params.max_palm_ridge_m || is_dome(palm))
     return false;
   band_region.copyTo(arm);
   cv::dilate(arm, arm, kernel3);
@@ -1397,6 +1470,7 @@ bool HandFinder::Impl::follow_component(std::span<const std::uint16_t> raw, int 
     seed = end.seed;
     cells = end.cells;
   }
+  bulge_wanted = !continuing;
   const bool measured = measure(raw, cells, near_raw, seed, palm, at_end);
   if (measured) {
     previous_cell = {static_cast<int>(palm.u) / kStep, static_cast<int>(palm.v) / kStep};
@@ -1405,7 +1479,7 @@ bool HandFinder::Impl::follow_component(std::span<const std::uint16_t> raw, int 
     const bool jump = !take_over && jumped(palm);
     const bool found =
         palm_accepted(palm) && !jump &&
-        (continuing || (palm.radius_m <= params.max_new_palm_radius_m && palm.ridge_m <= params.max_palm_ridge_m &&
+        (continuing || (palm.radius_m <= params.max_new_palm_radius_m && palm.ridge_m <= params.max_palm_ridge_m && !is_dome(palm) &&
                         ((palm.z <= params.max_acquire_depth_m && !take_over) ||
                          (palm.z <= params.max_track_depth_m && reaches_back(seed, near_raw, at_end))) &&
                         !is_joint(seed, near_raw) && !nearest_at_border(arm_nearest)));

@@ -80,6 +80,17 @@ struct HandFinderParams {
   /// of constant width: the upper arm (4.5 cm in radius) holds a palm-sized circle all along it,
   /// and an elbow or a shoulder at the hand's depth took the track (chosen on seeds 1-100).
   double max_palm_ridge_m = 0.09;
+  /// A palm is flat (or cupped); a head, an elbow or a shoulder's round end seen from the front fills
+  /// the depth band's disc as a palm does, but bulges toward the sensor along every direction, its
+  /// apex facing the sensor. A new track does not start on a palm circle whose readings bulge so:
+  /// significantly (the fit's mean curvature over its standard error above dome_significance), by
+  /// more than dome_min_curvature_per_m along its flattest direction (1 / (2 R): 3 is a sphere of
+  /// R = 17 cm), and facing the sensor within acos(dome_min_view_cos) (a palm turned 45-60 degrees,
+  /// its rims rolling off at two sides, bulges as much). Chosen on seeds 1-100 (measure_bulge).
+  /// dome_significance <= 0: no such test.
+  double dome_significance = 12.0;
+  double dome_min_curvature_per_m = 3.0;
+  double dome_min_view_cos = 0.9;
   /// A new track from the foreground does not start on a component whose nearest reading is within
   /// this many grid cells (4 px) of the image border: what is nearer still is out of view, and an
   /// arm leaving the image across a side shows a palm-sized place at its bend (chosen on seeds

@@ -616,8 +616,8 @@ void HandFinder::Impl::measure_bulge(std::span<const std::uint16_t> raw, Palm& p
     ++count;
   }
   if (count < 12) return;
-  normal = normal.selfadjointView<Eigen::Lower>();
-  const Eigen::FullPivLU<Matrix6d> lu(normal);
+  const Matrix6d full = normal.selfadjointView<Eigen::Lower>();  // a copy: no aliasing with the lower triangle read
+  const Eigen::FullPivLU<Matrix6d> lu(full);
   if (!lu.isInvertible()) return;
   const Vector6d q = lu.solve(rhs);
   // Residual sum of squares |t - F q|^2 = t.t - q.(F^T t), at the least-squares solution.

@@ -12,9 +12,13 @@ command -v Xvfb >/dev/null && command -v xdotool >/dev/null || { echo "skip: nee
 mouse_run() {
   local mode=$1 domain=131 extra=() viewer_log=viewer.log
   if [ "$mode" = in-process ]; then domain=139 extra=(--in-process) viewer_log=pipeline.log; fi
-  local work pids=() xvfb="" n
+  # Not local: the EXIT trap runs when the subshell ends, after this function has returned, when its
+  # locals are gone (it killed nothing and removed nothing: every run left its Xvfb and folder behind).
+  # Each mode runs in a subshell of its own, so these are its own.
+  work="" pids=() xvfb=""
+  local n
   work=$(mktemp -d "/tmp/tachi-mouse-run-$mode-XXXXXX")
-  trap 'for p in "${pids[@]}" $xvfb; do kill "$p" 2>/dev/null; done; rm -rf "$work"' EXIT
+  trap 'for p in "${pids[@]}" $xvfb; do kill "$p" 2>/dev/null; done; wait 2>/dev/null; rm -rf "$work"' EXIT
   # A display number no other X server (or the other mode's) holds: Xvfb takes the lock or fails.
   for n in $(seq $((600 + ($$ + domain) % 300)) 999); do
     [ -e "/tmp/.X$n-lock" ] && continue

@@ -32,9 +32,11 @@ enum Part : std::uint8_t { kNone = 0, kWall, kBody, kArm, kPalm, kFinger, kDistr
 struct Primitive {
   enum Kind { Sphere, Capsule, Ellipsoid, Box, Disc } kind;
   Part part;
-  Vec3 a, b;      // sphere/ellipsoid/disc centre in a; capsule ends a, b; box min a, max b
-  Vec3 radii;     // ellipsoid radii; sphere/capsule radius in x; disc half-axes in x (along u), y (along v)
-  Vec3 u, v, n;   // disc axes and normal; an ellipsoid's axes when u is not zero (zero: the world's)
+  // Zero unless given: Eigen's default constructor leaves a vector uninitialised, and an ellipsoid
+  // whose u is not zero is turned (a garbage u turned the body's).
+  Vec3 a = Vec3::Zero(), b = Vec3::Zero();  // sphere/ellipsoid/disc centre in a; capsule ends a, b; box min a, max b
+  Vec3 radii = Vec3::Zero();  // ellipsoid radii; sphere/capsule radius in x; disc half-axes in x (along u), y (along v)
+  Vec3 u = Vec3::Zero(), v = Vec3::Zero(), n = Vec3::Zero();  // disc axes and normal; an ellipsoid's axes when u is not zero
 };
 
 /// SplitMix64's output function (Steele, Lea & Flood 2014): a well-mixed 64-bit hash.
@@ -153,9 +155,9 @@ void bounds(const Primitive& p, Vec3& lo, Vec3& hi) {
 }
 
 Primitive capsule(Part part, const Vec3& a, const Vec3& b, double r) {
-  return {Primitive::Capsule, part, a, b, Vec3(r, r, r), Vec3::Zero(), Vec3::Zero(), Vec3::Zero()};
+  return {Primitive::Capsule, part, a, b, Vec3(r, r, r)};
 }
-Primitive sphere(Part part, const Vec3& c, double r) { return {Primitive::Sphere, part, c, c, Vec3(r, r, r), Vec3::Zero(), Vec3::Zero(), Vec3::Zero()}; }
+Primitive sphere(Part part, const Vec3& c, double r) { return {Primitive::Sphere, part, c, c, Vec3(r, r, r)}; }
 
 /// Monotone piecewise-cubic Hermite interpolation per axis (Fritsch & Carlson 1980, PCHIP
 /// weights): passes through every keyframe without overshoot, at rest at the first and last.
@@ -390,7 +392,7 @@ struct SyntheticScene::Impl {
       palm += shift;
     }
     // Torso, neck, head, the hanging arm.
-    prims.push_back({Primitive::Ellipsoid, kBody, Vec3(0, 0.30, 1.47) + body, Vec3::Zero(), Vec3(0.18, 0.34, 0.11), Vec3::Zero(), Vec3::Zero(), Vec3::Zero()});
+    prims.push_back({Primitive::Ellipsoid, kBody, Vec3(0, 0.30, 1.47) + body, Vec3::Zero(), Vec3(0.18, 0.34, 0.11)});
     prims.push_back(capsule(kBody, Vec3(0, -0.20, 1.47) + body, Vec3(0, 0.0, 1.47) + body, 0.05));
     prims.push_back(sphere(kBody, Vec3(0, -0.30, 1.47) + body, 0.10));
     const Vec3 ls = Vec3(-s * 0.19, 0.0, 1.44) + body, le = Vec3(-s * 0.23, 0.31, 1.46) + body,
@@ -439,7 +441,7 @@ struct SyntheticScene::Impl {
                          ? Vec3(spec.second_person_x + 0.01 * std::sin(2 * std::numbers::pi * 0.27 * t), 0.0, spec.second_person_z)
                          : Vec3(-0.9 + 1.8 * t / std::max(duration, 1e-3), 0.0, spec.second_person_z);
       const double swing = spec.second_person_standing ? 0.0 : 0.06 * std::sin(2 * std::numbers::pi * 0.9 * t);
-      prims.push_back({Primitive::Ellipsoid, kBody, c + Vec3(0, 0.30, 0), Vec3::Zero(), Vec3(0.17, 0.34, 0.11), Vec3::Zero(), Vec3::Zero(), Vec3::Zero()});
+      prims.push_back({Primitive::Ellipsoid, kBody, c + Vec3(0, 0.30, 0), Vec3::Zero(), Vec3(0.17, 0.34, 0.11)});
       prims.push_back(sphere(kBody, c + Vec3(0, -0.30, 0), 0.10));
       for (const double side : {-1.0, 1.0}) {
         const Vec3 s0 = c + Vec3(side * 0.19, 0.0, -0.02);
@@ -447,13 +449,13 @@ struct SyntheticScene::Impl {
       }
     }
     if (spec.distractor && t >= spec.distractor_from_s - 1e-9)
-      prims.push_back({Primitive::Box, kDistractor, Vec3(0.28, 0.12, 0.66), Vec3(0.46, 0.60, 0.80), {}, Vec3::Zero(), Vec3::Zero(), Vec3::Zero()});
+      prims.push_back({Primitive::Box, kDistractor, Vec3(0.28, 0.12, 0.66), Vec3(0.46, 0.60, 0.80)});
     for (const auto& o : spec.objects) {
       if (t < o.from_s - o.slide_s - 1e-9) continue;
       const double left = o.slide_s > 0 ? std::clamp((o.from_s - t) / o.slide_s, 0.0, 1.0) : 0.0;
       const double eased = left * left * (3 - 2 * left);  // starts and stops gently
       const Vec3 shift = eased * o.slide_from;
-      prims.push_back({Primitive::Box, kDistractor, o.min + shift, o.max + shift, {}, Vec3::Zero(), Vec3::Zero(), Vec3::Zero()});
+      prims.push_back({Primitive::Box, kDistractor, o.min + shift, o.max + shift});
     }
     return prims;
   }

@@ -538,7 +538,7 @@ bool HandFinder::Impl::measure_in_band(std::span<const std::uint16_t> raw, const
         ++circle_pixels;
         if (m[x - rx0]) {
           palm_raw.push_back(row[x]);
-          palm_pixels.emplace_back(x, y);
+          if (bulge_wanted) palm_pixels.emplace_back(x, y);  // for measure_bulge only
         }
       }
     }

@@ -99,9 +99,10 @@ struct HandFinderParams {
   /// The arm's end is its geodesic extremity: the surface reached from the arm's nearest reading
   /// without a depth jump and no farther back than this is walked, from where it runs on farther
   /// back (toward the body) to the point farthest along it. Where that end's hand does not hold the
-  /// nearest reading and the nearest reading is a limb's joint (an elbow pointing at the camera,
+  /// nearest reading and the nearest reading lies on the way to it (an elbow pointing at the camera,
   /// 5-9 cm nearer than a hand raised high), the hand is measured at the end, in a depth band
-  /// around its own nearest reading. Negative: the nearest reading is the hand, as before.
+  /// around its own nearest reading: for a followed and a new track from the foreground alike; the
+  /// search without a background asks is_joint first. Negative: the nearest reading is the hand.
   double arm_end_window_m = 0.2;
   /// A followed track that is no arm's end (the surface does not run back arm_protrusion_m from
   /// it: a second person's head) gives way to a nearer foreground component that is one and passes

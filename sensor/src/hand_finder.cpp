@@ -250,6 +250,7 @@ struct HandFinder::Impl {
   int touched = 0;
   void measure_bulge(std::span<const std::uint16_t> raw, Palm& palm) const;
   bool bulge_wanted = true;  // measure_bulge for this candidate: only a new track asks is_dome
+  bool following = false;    // this candidate continues the followed hand, last measured at previous_cell
   /// A new track's test: the palm circle bulges like a head's or an elbow's (HandFinderParams::dome_significance).
   bool is_dome(const Palm& palm) const {
     return params.dome_significance > 0 && palm.bulge_significance > params.dome_significance &&
@@ -496,16 +497,41 @@ bool HandFinder::Impl::measure_in_band(std::span<const std::uint16_t> raw, const
   cv::floodFill(roi_closed, cv::Point(0, 0), cv::Scalar(128));
   cv::compare(roi_closed, 128, roi_closed, cv::CMP_NE);
   cv::distanceTransform(roi_closed, roi_dist, cv::DIST_L2, cv::DIST_MASK_5);
+  // The palm: the region's widest place; for a followed hand, the widest place near the seed
+  // (params.palm_from_nearest_m) unless that holds no palm-sized circle and the region's widest
+  // place is near where the palm was (a hand that left the image across its side leaves its upper
+  // arm, palm-sized, 20 cm from it: seed 126 followed it for 28 frames when taken anywhere).
   double max_dist = 0;
   cv::Point max_at;
+  const float z_near = model.metres(near_raw);
   distance_peak(roi_dist, max_dist, max_at);
+  if (params.palm_from_nearest_m > 0 && following) {
+    const int half = static_cast<int>(std::ceil(params.palm_from_nearest_m * k.fx / std::max(0.3f, z_near)));
+    const cv::Point at_seed = seed - hand_rect.tl();
+    const cv::Rect near_seed =
+        cv::Rect(at_seed.x - half, at_seed.y - half, 2 * half + 1, 2 * half + 1) & cv::Rect(0, 0, roi_dist.cols, roi_dist.rows);
+    // A circle wider than a palm's (the body behind a hand held against it) is left to measure's
+    // narrower bands, which then look near the seed.
+    if (!near_seed.contains(max_at) && max_dist * z_near / k.fx <= params.narrow_band_above_m) {
+      double near_dist = 0;
+      cv::Point near_at;
+      distance_peak(roi_dist(near_seed), near_dist, near_at);
+      const cv::Point2d was = cv::Point2d(previous_cell * kStep) + cv::Point2d(kStep / 2.0, kStep / 2.0);
+      const cv::Point2d peak(rx0 - 1 + max_at.x, ry0 - 1 + max_at.y);
+      const bool near_before = std::max(std::abs(peak.x - was.x), std::abs(peak.y - was.y)) <= half;
+      if (near_dist * z_near / k.fx >= params.min_palm_radius_m || max_dist * z_near / k.fx < params.min_palm_radius_m ||
+          !near_before) {
+        max_dist = near_dist;
+        max_at = near_at + near_seed.tl();
+      }
+    }
+  }
   if (max_dist < 2.0) return false;
   const double ridge_px = ridge_length(roi_dist, max_dist, max_at);
   cv::Point2d centre = plateau_centre(roi_dist, max_dist, max_at);
   // A palm turned away from the sensor is foreshortened across the turn, and its far side falls
   // out of the depth band of the nearest reading (the thumb): its inscribed circle shrinks toward
   // a forearm's. Where the circle is too small, the palm is measured in its own plane instead.
-  const float z_near = model.metres(near_raw);
   double circle_px = max_dist;  // radius in the image of the region whose readings give the depth
   const auto turned_palm = [&] {
     Plane plane;  // of the band's region, a first guess at the palm's
@@ -1405,6 +1431,7 @@ bool HandFinder::Impl::arm_end_candidate(std::span<const std::uint16_t> raw, cv:
   // hand held against the chest keeps the torso out of it (4-8 cm behind).
   // The grid test first: it is cheap, the full-resolution measure is not.
   bulge_wanted = true;
+  following = false;
   if (front_touches_border(seed, near_raw, two_sided) || !reaches_back(seed, near_raw, two_sided) ||
       !measure(raw, box, near_raw, seed, palm, two_sided) || !palm_accepted(palm) ||
       palm.radius_m > params.max_new_palm_radius_m || palm.ridge_m > params.max_palm_ridge_m || is_dome(palm))
@@ -1475,6 +1502,7 @@ bool HandFinder::Impl::follow_component(std::span<const std::uint16_t> raw, int 
     cells = end.cells;
   }
   bulge_wanted = !continuing;
+  following = continuing;
   const bool measured = measure(raw, cells, near_raw, seed, palm, at_end);
   if (measured) {
     previous_cell = {static_cast<int>(palm.u) / kStep, static_cast<int>(palm.v) / kStep};

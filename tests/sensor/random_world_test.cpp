@@ -122,12 +122,14 @@ TEST(RandomScene, AnArmLeavingTheImageDoesNotStartATrackAtItsBend) {
 // nearest reading. Tuning seed 25: the hand is up and still from the first frame (acquired without
 // a background, find_arm_end): the elbow was taken from frame 0 for 51 frames, 34 cm off. Tuning
 // seed 3: a user at 1.9 m raises the hand; the elbow was followed for 20 frames. With
-// arm_end_window_m negative (no geodesic end) and without the dome test (which now refuses these
-// elbows as well) both come back, so this can fail.
+// arm_end_window_m negative (no geodesic end), without the dome test (which now refuses these
+// elbows as well) and with a followed palm sought anywhere in the band (palm_from_nearest_m, which
+// keeps it near the nearest reading) both come back, so this can fail.
 TEST(RandomScene, AnElbowNearerThanTheRaisedHandIsNotTakenForIt) {
   HandFinderParams nearest_is_hand;
   nearest_is_hand.arm_end_window_m = -1;
   nearest_is_hand.dome_significance = 0;
+  nearest_is_hand.palm_from_nearest_m = 0;
   for (const std::uint64_t seed : {25u, 3u}) {
     const auto with_end = score_clip(random_scenario(seed));
     EXPECT_EQ(with_end.captured, 0u) << "seed " << seed;
@@ -179,21 +181,43 @@ TEST(RandomScene, ANewTrackIsMeasuredAtTheArmsEndNotOnItsForearm) {
   EXPECT_LE(score.longest_captured_run, 3u);
 }
 
+// Tuning seeds 16 and 34: a followed hand held 15-30 cm in front of the body; the depth band around its
+// nearest reading took in the upper arm or the shoulder, whose wider circle was measured as the palm,
+// 20-40 cm away, and the jump test refused it: the hand was lost for 35 % and 27 % of its visible
+// frames. A followed palm is sought near the hand's nearest reading (palm_from_nearest_m); sought
+// anywhere in the band, the frames are lost again, so this can fail.
+TEST(RandomScene, AFollowedPalmIsSoughtNearItsNearestReadingNotOnTheUpperArm) {
+  HandFinderParams anywhere;
+  anywhere.palm_from_nearest_m = 0;
+  for (const std::uint64_t seed : {16u, 34u}) {
+    const auto score = score_clip(random_scenario(seed));
+    EXPECT_GE(score.tracked_ratio(), 0.95) << "seed " << seed;
+    EXPECT_LE(score.rms_m, 0.01) << "seed " << seed;
+    EXPECT_EQ(score.captured, 0u) << "seed " << seed;
+    EXPECT_LT(score_clip(random_scenario(seed), anywhere).tracked_ratio(), 0.8) << "seed " << seed;
+  }
+}
+
 // Tuning seeds 7 and 75: the hand is up and still from the first frame (so part of the background), with
 // nearer things in the room; the nearest-first search used up its candidates on them, so the hand was found
 // once and lost again, untracked for its first ~30 frames (64 % and 73 % of visible frames; now 99 % and
 // 100 %), until it moved. A hand found last frame is tried first where it was (still_hand_m), and before any
 // hand was seen more candidates are tried (start_candidates). With both as before, the frames are lost
-// again, so this can fail.
+// again, so this can fail. Captures are counted while the hand is raised: seed 75's user stands 2.3 m
+// away and lowers the hand at the end, into the world's resting pose, which floats in view facing the
+// sensor (docs/sensor.md, "A flaw left in the world"); the finder follows it there (11 frames).
 TEST(RandomScene, AHandHeldStillFromTheFirstFrameIsTrackedFromTheStart) {
   HandFinderParams as_before;
   as_before.still_hand_m = 0;
   as_before.start_candidates = as_before.candidates;
   for (const std::uint64_t seed : {7u, 75u}) {
-    const auto still = score_clip(random_scenario(seed));
+    int captured_raised = 0;
+    const auto still = score_clip(random_scenario(seed), {}, [&](const GroundTruth& truth, const HandObservation& hand) {
+      if (truth.raised && hand.tracked && (hand.position_m.cast<double>() - truth.palm).norm() > kCaptureDistanceM) ++captured_raised;
+    });
     EXPECT_GE(still.tracked_ratio(), 0.95) << "seed " << seed;
     EXPECT_LE(still.rms_m, 0.01) << "seed " << seed;
-    EXPECT_EQ(still.captured, 0u) << "seed " << seed;
+    EXPECT_EQ(captured_raised, 0) << "seed " << seed;
     EXPECT_LT(score_clip(random_scenario(seed), as_before).tracked_ratio(), 0.8) << "seed " << seed;
   }
 }

@@ -44,6 +44,17 @@ struct HandFinderParams {
   double palm_radius_m = 0.042;     ///< expected palm radius: the palm circle must fit in the image
   double min_palm_radius_m = 0.032; ///< a smaller inscribed circle is a forearm (~2.8 cm) or fingers, not a palm
   double max_palm_radius_m = 0.075; ///< a larger one is a body, not a palm
+  /// A followed hand's palm circle is sought within this distance (a square of this half-width in
+  /// the image) of the hand's nearest reading: every reading of a hand lies within ~12 cm of its
+  /// palm's centre (the middle fingertip). The depth band around a hand held 15-30 cm in front of
+  /// the body takes in the forearm, the upper arm or the shoulder, whose wider circles took the
+  /// palm's place 20-40 cm away, and the jump test then dropped the hand (seeds 16, 18, 34: a third
+  /// of their visible frames). Where no palm-sized circle lies there (a forearm nearer than the
+  /// hand, leaving the image), the band's widest place is taken if it is this near where the palm
+  /// was. A new track keeps the band's widest place (its candidates are tested in turn; near the
+  /// nearest reading, a hand held against the chest was measured on the torso). <= 0: the band's
+  /// widest place always. Chosen on seeds 1-100.
+  double palm_from_nearest_m = 0.15;
   int min_component_cells = 10;     ///< on the 160x120 grid
   int edge_margin_px = 3;           ///< the palm circle must clear the image edge by this
   int invalid_left_columns = 8;     ///< Kinect's band without readings at the left edge

@@ -237,20 +237,22 @@ struct HandFinder::Impl {
 
   HandObservation find(std::span<const std::uint16_t> raw);
   void update_background(const cv::Mat* exclude);
+  /// Whose palm a measurement is for: a new track's, whose tests ask for its bulge (is_dome), or
+  /// the followed hand's, whose palm is sought near its nearest reading and where it was
+  /// (HandFinderParams::palm_from_nearest_m).
+  enum class Candidate { kNewTrack, kFollowed };
   /// `two_sided`: the band also stops kEndBandNearM in front of near_raw (a hand at an arm's
   /// geodesic end, whose forearm runs on nearer to an elbow; see arm_end).
   bool measure(std::span<const std::uint16_t> raw, const cv::Rect& cells, std::uint16_t near_raw, cv::Point seed_cell, Palm& palm,
-               bool two_sided = false);
+               bool two_sided, Candidate candidate);
   /// Sides of the ROI (for measure_in_band's `grow` and `touched`).
   enum Side : int { kLeft = 1, kTop = 2, kRight = 4, kBottom = 8 };
   /// Steps 3-4 in the depth band [near_raw, far_raw]: the ROI is the cells' box padded by a palm
   /// diameter, twice that on the sides in `grow`; `touched` says where the band's region met it.
   bool measure_in_band(std::span<const std::uint16_t> raw, const cv::Rect& cells, std::uint16_t near_raw, std::uint16_t far_raw,
-                       cv::Point seed_cell, Palm& palm, int grow, bool two_sided);
+                       cv::Point seed_cell, Palm& palm, int grow, bool two_sided, Candidate candidate);
   int touched = 0;
   void measure_bulge(std::span<const std::uint16_t> raw, Palm& palm) const;
-  bool bulge_wanted = true;  // measure_bulge for this candidate: only a new track asks is_dome
-  bool following = false;    // this candidate continues the followed hand, last measured at previous_cell
   /// A new track's test: the palm circle bulges like a head's or an elbow's (HandFinderParams::dome_significance).
   bool is_dome(const Palm& palm) const {
     return params.dome_significance > 0 && palm.bulge_significance > params.dome_significance &&
@@ -416,14 +418,15 @@ void HandFinder::reset() {
 /// Steps 3-4 for one candidate hand: its grid cells `cells` (bounding box), the nearest reading
 /// `near_raw` at grid cell `seed_cell`. Fills `palm`; false when no palm-like region is there.
 bool HandFinder::Impl::measure(std::span<const std::uint16_t> raw, const cv::Rect& cells, std::uint16_t near_raw,
-                               cv::Point seed_cell, Palm& palm, bool two_sided) {
-  if (!measure_in_band(raw, cells, near_raw, band_limit[near_raw], seed_cell, palm, 0, two_sided)) return false;
+                               cv::Point seed_cell, Palm& palm, bool two_sided, Candidate candidate) {
+  if (!measure_in_band(raw, cells, near_raw, band_limit[near_raw], seed_cell, palm, 0, two_sided, candidate)) return false;
   // No palm, and the band's region was cut by the ROI (made from the foreground's cells, which may
   // hold only part of the hand: one rising through where the arm rested is less than foreground_m
   // in front of it there): measured again with the ROI grown by a palm diameter on those sides.
   if (!palm_sized(palm) && touched != 0) {
     Palm grown;
-    if (measure_in_band(raw, cells, near_raw, band_limit[near_raw], seed_cell, grown, touched, two_sided) && palm_sized(grown))
+    if (measure_in_band(raw, cells, near_raw, band_limit[near_raw], seed_cell, grown, touched, two_sided, candidate) &&
+        palm_sized(grown))
       palm = grown;
   }
   // A circle much larger than a palm: the band reached something just behind the hand (a hand
@@ -432,14 +435,16 @@ bool HandFinder::Impl::measure(std::span<const std::uint16_t> raw, const cv::Rec
   const double z_near = model.metres(near_raw);
   for (double band = params.narrow_band_m; palm.radius_m > params.narrow_band_above_m && band >= 0.015; band /= 2) {
     Palm narrow;
-    if (!measure_in_band(raw, cells, near_raw, raw_limit(z_near + band, true), seed_cell, narrow, 0, two_sided)) break;
+    if (!measure_in_band(raw, cells, near_raw, raw_limit(z_near + band, true), seed_cell, narrow, 0, two_sided, candidate)) break;
     palm = narrow;
   }
   return true;
 }
 
 bool HandFinder::Impl::measure_in_band(std::span<const std::uint16_t> raw, const cv::Rect& cells, std::uint16_t near_raw,
-                                       std::uint16_t far_raw, cv::Point seed_cell, Palm& palm, int grow, bool two_sided) {
+                                       std::uint16_t far_raw, cv::Point seed_cell, Palm& palm, int grow, bool two_sided,
+                                       Candidate candidate) {
+  const bool bulge_wanted = candidate == Candidate::kNewTrack;  // only a new track's tests ask is_dome
   // Near the body part of the palm may be less than foreground_m in front of what was there
   // before, so at full resolution the depth band and connectivity bound the hand, in a ROI
   // grown by a palm diameter.
@@ -505,7 +510,7 @@ bool HandFinder::Impl::measure_in_band(std::span<const std::uint16_t> raw, const
   cv::Point max_at;
   const float z_near = model.metres(near_raw);
   distance_peak(roi_dist, max_dist, max_at);
-  if (params.palm_from_nearest_m > 0 && following) {
+  if (params.palm_from_nearest_m > 0 && candidate == Candidate::kFollowed) {
     const int half = static_cast<int>(std::ceil(params.palm_from_nearest_m * k.fx / std::max(0.3f, z_near)));
     const cv::Point at_seed = seed - hand_rect.tl();
     const cv::Rect near_seed =
@@ -1430,10 +1435,8 @@ bool HandFinder::Impl::arm_end_candidate(std::span<const std::uint16_t> raw, cv:
   // its nearest reading: a palm and its fingers, or the face of a box) must be whole in view. A
   // hand held against the chest keeps the torso out of it (4-8 cm behind).
   // The grid test first: it is cheap, the full-resolution measure is not.
-  bulge_wanted = true;
-  following = false;
   if (front_touches_border(seed, near_raw, two_sided) || !reaches_back(seed, near_raw, two_sided) ||
-      !measure(raw, box, near_raw, seed, palm, two_sided) || !palm_accepted(palm) ||
+      !measure(raw, box, near_raw, seed, palm, two_sided, Candidate::kNewTrack) || !palm_accepted(palm) ||
       palm.radius_m > params.max_new_palm_radius_m || palm.ridge_m > params.max_palm_ridge_m || is_dome(palm))
     return false;
   band_region.copyTo(arm);
@@ -1501,9 +1504,7 @@ bool HandFinder::Impl::follow_component(std::span<const std::uint16_t> raw, int 
     seed = end.seed;
     cells = end.cells;
   }
-  bulge_wanted = !continuing;
-  following = continuing;
-  const bool measured = measure(raw, cells, near_raw, seed, palm, at_end);
+  const bool measured = measure(raw, cells, near_raw, seed, palm, at_end, continuing ? Candidate::kFollowed : Candidate::kNewTrack);
   if (measured) {
     previous_cell = {static_cast<int>(palm.u) / kStep, static_cast<int>(palm.v) / kStep};
     tracking = palm_sized(palm);  // keep following an arm whose palm is at the edge

@@ -203,6 +203,8 @@ struct HandFinder::Impl {
   cv::Point previous_cell{-1, -1};
   Eigen::Vector3d last_seen = Eigen::Vector3d::Zero();
   int frames_since_seen = 1 << 20;
+  Eigen::Vector3d last_step = Eigen::Vector3d::Zero();  // last_seen less the palm a frame before it
+  bool step_known = false;                               // the palm was found in two frames running
 
   Impl(const DepthModel& m, const HandFinderParams& p) : model(m), params(p) {
     for (std::size_t raw = 0; raw < 2048; ++raw) {
@@ -332,6 +334,7 @@ struct HandFinder::Impl {
                          bool two_sided, Palm& palm);
   bool palm_accepted(const Palm& palm) const;
   bool jumped(const Palm& palm) const;
+  bool off_course(const Palm& palm) const;
   /// Whether a candidate's hand cells (the band's region, on the grid) reach the image's border
   /// (the invalid band at the left included). A new track does not start there: what the border
   /// cuts may be anything (the corner of a table or a box shows a palm-sized face and a side
@@ -413,6 +416,7 @@ void HandFinder::reset() {
   impl_->first_frame = true;
   impl_->tracking = false;
   impl_->frames_since_seen = 1 << 20;
+  impl_->step_known = false;
 }
 
 /// Steps 3-4 for one candidate hand: its grid cells `cells` (bounding box), the nearest reading
@@ -1451,6 +1455,15 @@ bool HandFinder::Impl::jumped(const Palm& palm) const {
   return (model.back_project(palm.u, palm.v, palm.z) - last_seen).norm() > params.max_jump_m;
 }
 
+/// A followed palm found in the last two frames is where its last step carries it, within
+/// max_off_course_m: a hand's own motion departs from that by a·dt²/2 (about 1 cm a frame at 30 Hz
+/// for the 50 m/s² of a fast reversal), its measured centre by a few mm more; a palm measured on
+/// the forearm or the upper arm of the same component departs by 10-30 cm.
+bool HandFinder::Impl::off_course(const Palm& palm) const {
+  if (params.max_off_course_m <= 0 || !step_known || frames_since_seen != 1) return false;
+  return (model.back_project(palm.u, palm.v, palm.z) - (last_seen + last_step)).norm() > params.max_off_course_m;
+}
+
 bool HandFinder::Impl::palm_accepted(const Palm& palm) const {
   const double expected_px = params.palm_radius_m * model.intrinsics().fx / palm.z + params.edge_margin_px;
   const bool inside = palm.u - expected_px >= params.invalid_left_columns && palm.u + expected_px <= kDepthWidth - 1 &&
@@ -1509,7 +1522,7 @@ bool HandFinder::Impl::follow_component(std::span<const std::uint16_t> raw, int 
     previous_cell = {static_cast<int>(palm.u) / kStep, static_cast<int>(palm.v) / kStep};
     tracking = palm_sized(palm);  // keep following an arm whose palm is at the edge
     // A new track does not start on a person walking by behind the user.
-    const bool jump = !take_over && jumped(palm);
+    const bool jump = !take_over && (jumped(palm) || (continuing && off_course(palm)));
     const bool found =
         palm_accepted(palm) && !jump &&
         (continuing || (palm.radius_m <= params.max_new_palm_radius_m && palm.ridge_m <= params.max_palm_ridge_m && !is_dome(palm) &&
@@ -1591,6 +1604,7 @@ HandObservation HandFinder::Impl::find(std::span<const std::uint16_t> raw) {
 
   Palm palm;
   bool found = false;
+  bool followed = false;  // found as the hand followed last frame (not a new track)
   // A followed track that is no arm's end (a second person's head, taken while the user's hand was
   // down, seed 53) gives way to a component that reaches an arm's protrusion nearer than it, is an
   // arm's end and passes a new track's tests (the user's hand, raised): the followed one would
@@ -1608,6 +1622,7 @@ HandObservation HandFinder::Impl::find(std::span<const std::uint16_t> raw) {
     tracking = true;
   } else if (chosen != 0) {
     found = follow_component(raw, chosen, continuing, false, palm);
+    followed = found && continuing;
   } else {
     tracking = false;
   }
@@ -1624,6 +1639,8 @@ HandObservation HandFinder::Impl::find(std::span<const std::uint16_t> raw) {
   if (!found) return out;
 
   const Eigen::Vector3d p = model.back_project(palm.u, palm.v, palm.z);
+  step_known = followed && frames_since_seen == 1;  // a new track's step would be a jump between two things
+  last_step = p - last_seen;
   last_seen = p;
   frames_since_seen = 0;
   out.tracked = true;

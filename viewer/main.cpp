@@ -18,6 +18,9 @@ int main(int argc, char** argv) try {
       tachi::viewer::MeshView view{options, window.get()};
       return tachi::common::run_until_signal(view);
     }
+    // Before the node is built: its first heartbeat (STARTING) goes out from its constructor, and a
+    // stop that follows it must find the handlers, not the default action that ends the process at once.
+    tachi::common::install_stop_handlers();
     const auto& b = options.bus;
     tachi::bus::Participant dds{b.domain, b.dds_config, {b.secure_dir, tachi::viewer::participant_identity(options)}};
     tachi::viewer::ViewerNode node{options, dds, window.get()};

@@ -107,6 +107,10 @@ struct ExactRun {
   double update_ms = 0.0;      ///< median: the solver's update after the cut (Solver::update_topology)
   double step_ms = 0.0;        ///< median step (no cut)
   double after_cut_ms = 0.0;   ///< median: the step right after the cut, its update included
+  /// median over reps of the worst step after that one while the cut's work and repair go on (and 2 more):
+  /// a cut's work spread over steps (SolverParams::cut_work_per_step) must not move the spike, only cut it
+  double worst_following_ms = 0.0;
+  std::size_t following_steps = 0;  ///< median count of those steps
   std::size_t particles = 0;
   std::size_t pieces = 0;
   double deviation = 0.0;
@@ -114,12 +118,14 @@ struct ExactRun {
 };
 
 ExactRun time_exact(const Cloth& prototype, const std::vector<tachi::sim::StrokeSample>& stroke,
-                    tachi::sim::CutMode mode, int reps) {
+                    tachi::sim::CutMode mode, int reps, const tachi::sim::SolverParams& params) {
   ExactRun run;
   std::vector<double> stroke_ms;
   std::vector<double> after_ms;
   std::vector<double> update_ms;
   std::vector<double> step_ms;
+  std::vector<double> worst_following_ms;
+  std::vector<double> following_steps;
   for (int r = 0; r < reps; ++r) {
     // As tachi-sim runs: the cutter reserves the cloth's room for cuts, then the solver's first step builds
     // its caches with that room (not timed). A copy of a warm solver would not do: a vector's copy drops
@@ -128,7 +134,7 @@ ExactRun time_exact(const Cloth& prototype, const std::vector<tachi::sim::Stroke
     tachi::sim::StrokeOptions options;
     options.mode = mode;
     tachi::sim::StrokeCutter cutter{cloth, options};
-    tachi::sim::Solver solver;
+    tachi::sim::Solver solver{params};
     solver.step(cloth);
     for (int s = 0; s < 3; ++s) {  // plain steps, for the median
       const auto t0 = cpu_ms();
@@ -145,6 +151,16 @@ ExactRun time_exact(const Cloth& prototype, const std::vector<tachi::sim::Stroke
     const auto t1 = cpu_ms();
     solver.step(cloth);
     after_ms.push_back(ms_since(t1) + update_ms.back());
+    double worst = 0.0;
+    int following = 0;
+    for (int tail = 0; tail < 2 && following < 200; ++following) {
+      if (!solver.repairing()) ++tail;
+      const auto t3 = cpu_ms();
+      solver.step(cloth);
+      worst = std::max(worst, ms_since(t3));
+    }
+    worst_following_ms.push_back(worst);
+    following_steps.push_back(following);
     run.particles = cloth.particle_count();
     run.pieces = tachi::sim::find_pieces(cloth).count();
     run.deviation = cutter.exact() != nullptr ? cutter.exact()->max_deviation_cells() : 0.0;
@@ -154,6 +170,8 @@ ExactRun time_exact(const Cloth& prototype, const std::vector<tachi::sim::Stroke
   run.step_ms = median(step_ms);
   run.after_cut_ms = median(after_ms);
   run.update_ms = median(update_ms);
+  run.worst_following_ms = median(worst_following_ms);
+  run.following_steps = static_cast<std::size_t>(median(following_steps));
   return run;
 }
 
@@ -253,14 +271,17 @@ LiveRun time_long_stroke(int n, tachi::sim::CutMode mode, const tachi::sim::Solv
 }  // namespace
 
 int main(int argc, char** argv) {
-  // cut_bench [reps] [repair_per_step] [threads] [substeps]: the second argument sets the long strokes'
-  // attachment repair budget (SolverParams::repair_per_step) for the measurements in docs/sim.md ("Limits");
-  // the third and fourth their solver's threads (given: the frames are timed in wall time) and sub-steps.
+  // cut_bench [reps] [repair_per_step] [threads] [substeps] [cut_work_per_step]: the second argument sets the
+  // long strokes' attachment repair budget (SolverParams::repair_per_step) for the measurements in docs/sim.md
+  // ("Limits"); the third and fourth their solver's threads (given: the frames are timed in wall time) and
+  // sub-steps; the fifth the exact section's SolverParams::cut_work_per_step (default: the solver's).
   const int reps = argc > 1 ? std::max(1, std::atoi(argv[1])) : 30;
   tachi::sim::SolverParams long_stroke_params;
   if (argc > 2) long_stroke_params.repair_per_step = std::max(1, std::atoi(argv[2]));
   if (argc > 3) long_stroke_params.threads = std::clamp(std::atoi(argv[3]), 1, 64);
   if (argc > 4) long_stroke_params.substeps = std::clamp(std::atoi(argv[4]), 1, 64);
+  tachi::sim::SolverParams exact_params;
+  if (argc > 5) exact_params.cut_work_per_step = std::max(0, std::atoi(argv[5]));
   constexpr int n = 128;
   tachi::sim::ClothConfig config;
   config.columns = n;
@@ -326,13 +347,16 @@ int main(int argc, char** argv) {
               bullet_median * static_cast<double>(edges) / stroke_median);
 
   // Exact mode, with the solver's incremental update, against the grid mode in the same process.
-  std::printf("exact cut, %dx%d, wavy 64-segment stroke cut at once after a first step, %d reps:\n", n, n, reps);
+  std::printf("exact cut, %dx%d, wavy 64-segment stroke cut at once after a first step, %d reps, cut_work_per_step %d:\n",
+              n, n, reps, exact_params.cut_work_per_step);
   for (const auto mode : {tachi::sim::CutMode::Exact, tachi::sim::CutMode::Grid, tachi::sim::CutMode::Delete}) {
-    const ExactRun e = time_exact(prototype, wavy_stroke(), mode, reps);
+    const ExactRun e = time_exact(prototype, wavy_stroke(), mode, reps, exact_params);
     std::printf("  %-6s stroke %.3f ms + solver update %.3f ms = %.3f ms (target <= 0.5 ms); step after cut %.3f ms / "
-                "median step %.3f ms = %.2fx (target <= 1.5x); %zu particles, %zu pieces, deviation %.3f cells, full builds %zu\n",
+                "median step %.3f ms = %.2fx (target <= 1.5x); worst of the %zu steps after it %.3f ms = %.2fx; "
+                "%zu particles, %zu pieces, deviation %.3f cells, full builds %zu\n",
                 std::string{tachi::sim::to_string(mode)}.c_str(), e.stroke_ms, e.update_ms, e.stroke_ms + e.update_ms,
-                e.after_cut_ms, e.step_ms, e.after_cut_ms / e.step_ms, e.particles, e.pieces, e.deviation, e.full_builds);
+                e.after_cut_ms, e.step_ms, e.after_cut_ms / e.step_ms, e.following_steps, e.worst_following_ms,
+                e.worst_following_ms / e.step_ms, e.particles, e.pieces, e.deviation, e.full_builds);
   }
   for (const int size : {128, 256}) {
     for (const auto mode : {tachi::sim::CutMode::Exact, tachi::sim::CutMode::Grid}) {

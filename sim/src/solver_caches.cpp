@@ -55,6 +55,7 @@ void Solver::refresh_caches(const Cloth& cloth) {
 
 void Solver::full_build(const Cloth& cloth, std::vector<std::uint32_t> pins) {
   ++full_builds_;
+  clear_cut_work();  // the new pin groups' searches start from scratch
   for (auto& g : quads_) g.clear();
   // As much room as the cloth reserved for its cuts (Cloth::reserve): the first cut then grows the solver's
   // per-particle arrays in place instead of reallocating (and faulting in) every one of them at once, which
@@ -65,7 +66,7 @@ void Solver::full_build(const Cloth& cloth, std::vector<std::uint32_t> pins) {
   reserve_touched(opened_mark_, particle_room);
   reserve_touched(touched_mark_, particle_room);
   reserve_touched(flood_seen_, particle_room);
-  // release_cut_off_by_components sizes its scratch to the cloth on every call, and a cut adds particles.
+  // The labelling of what a cut cut off (advance_cut_work) sizes its scratch to the cloth, and a cut adds particles.
   reserve_touched(flood_open_, particle_room);
   reserve_touched(flood_settled_, particle_room);
   reserve_touched(flood_met_, particle_room);
@@ -133,7 +134,23 @@ void Solver::update_incrementally(const Cloth& cloth) {
   std::sort(touched.begin(), touched.end());
   for (const std::uint32_t i : touched) touched_mark_[i] = 0;
   update_attachments(cloth, touched);
-  release_cut_off(cloth, touched);
+  if (!pin_groups_.empty()) {
+    // The rest of the tethers' update is a cut's work (advance_cut_work): in this step, or spread over the
+    // next ones (SolverParams::cut_work_per_step). A cut that comes meanwhile joins it, and the labelling
+    // of what is cut off starts again after the new orphans' subtrees are open.
+    const std::size_t before = cut_touched_.size();
+    cut_touched_.insert(cut_touched_.end(), touched.begin(), touched.end());
+    std::inplace_merge(cut_touched_.begin(), cut_touched_.begin() + static_cast<std::ptrdiff_t>(before),
+                       cut_touched_.end());
+    cut_touched_.erase(std::unique(cut_touched_.begin(), cut_touched_.end()), cut_touched_.end());
+    cut_phase_ = CutPhase::Open;
+    cut_cursor_ = 0;
+    // As much as cut_work_per_step allows now: a small cut's work ends here, as it always did, and the
+    // repairs go on in this step. What is left goes on from the next step.
+    const std::size_t now = params_.cut_work_per_step == 0 ? static_cast<std::size_t>(-1)
+                                                            : static_cast<std::size_t>(params_.cut_work_per_step);
+    cut_work_fresh_ = !advance_cut_work(cloth, now);
+  }
   append_springs(cloth, edited);
   // The strain limit: the cut's springs leave their places (never over the limit: skipped) and its new
   // ones go last. Re-ordering outwards from the pins (the distances behind a cut grow) is linear in the
@@ -152,7 +169,8 @@ void Solver::update_incrementally(const Cloth& cloth) {
     strain_limit_.push_back({na, nb, cloth.rest_length[k]});
   }
   limit_order_stale_ = true;
-  if (!repairing()) pending_limit_order_ = true;
+  // Re-ordered once no repair is going on (continue_repairs): at once if the cut opened nothing.
+  pending_limit_order_ = true;
 }
 
 }  // namespace tachi::sim

@@ -30,6 +30,7 @@ std::optional<const char*> validate(const SolverParams& p) {
   if (!(p.max_strain > 0.0F) || !(p.max_strain < 10.0F)) return "max_strain must be in (0, 10)";
   if (p.strain_limit_passes < 1 || p.strain_limit_passes > 100) return "strain_limit_passes must be in [1, 100]";
   if (p.repair_per_step < 1) return "repair_per_step must be at least 1";
+  if (p.cut_work_per_step < 0) return "cut_work_per_step must be >= 0";
   if (p.threads < 1 || p.threads > 64) return "threads must be in [1, 64]";
   return std::nullopt;
 }
@@ -50,7 +51,27 @@ void Solver::prepare(const Cloth& cloth) {
 
 void Solver::step(Cloth& cloth, const Colliders& colliders) {
   refresh_caches(cloth);
-  continue_repairs(cloth);
+  // A cut's tether work that its own step could not finish (SolverParams::cut_work_per_step) goes on over
+  // the steps after it, in even slices: what is left over the steps left (kMaxCutWorkSteps), at least
+  // cut_work_per_step. The repairs wait for it: during the pass that opens the orphans' subtrees they would
+  // settle particles from distances it has yet to open, and during the labelling they would seed the
+  // particles of the piece it is about to release (a 128 x 128 cloth's lower half: 1 ms a step). They
+  // resume on the step after it ends, which has paid for the release.
+  const bool cut_work = cut_work_pending();
+  if (cut_work) {
+    ++cut_work_steps_;
+    if (cut_work_fresh_) {
+      cut_work_fresh_ = false;  // the step of the cut: its update did this step's slice
+    } else {
+      const auto steps_left = static_cast<std::size_t>(std::max(1, kMaxCutWorkSteps - cut_work_steps_));
+      const bool overdue = cut_work_steps_ >= kMaxCutWorkSteps;
+      const std::size_t even = (cut_work_left(cloth) + steps_left - 1) / steps_left;
+      advance_cut_work(cloth, overdue ? static_cast<std::size_t>(-1)
+                                      : std::max(even, static_cast<std::size_t>(params_.cut_work_per_step)));
+    }
+  } else {
+    continue_repairs(cloth);
+  }
   engage_tethers();
   if (tether_order_stale_) order_tethers();
   const std::size_t n = cloth.particle_count();

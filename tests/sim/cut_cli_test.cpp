@@ -172,6 +172,28 @@ TEST_F(CutCli, ASlitRestsWithinTenPercentStrainInEveryModeWithTheDefaultJitter) 
   }
 }
 
+TEST_F(CutCli, ACutsTetherWorkSpreadOverStepsStillDropsThePiece) {
+  // --cut-work-per-step: what a cut's tether work does in the cut's step (docs/sim.md "Caches"); the rest
+  // is spread over the next steps, the cut-off piece held on its old tethers until it is labelled. The piece
+  // must still fall, whole, and the cloth rest as when all of it is done at once (0, the default).
+  const fs::path stroke = write_stroke(-0.1);
+  for (const std::string budget : {"0", "1", "4096"}) {
+    SCOPED_TRACE(budget);
+    const fs::path out = dir_ / ("out_" + budget);
+    const auto r = sim({"--offline", "--cut-mode", "exact", "--grid", "64", "--pin", "top-edge", "--stroke", stroke.string(),
+                        "--steps", "300", "--cut-work-per-step", budget, "--export", out.string()});
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    std::ifstream in{out / "summary.json"};
+    const auto j = nlohmann::json::parse(in);
+    EXPECT_EQ(j.at("pieces").get<int>(), 2);
+    EXPECT_EQ(j.at("fallen_pieces").get<int>(), 1) << "the cut-off piece fell";
+    EXPECT_LE(j.at("max_strain").get<double>(), 0.10);
+  }
+  const auto bad = sim({"--offline", "--grid", "8", "--steps", "1", "--cut-work-per-step", "-5"});
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_NE(bad.err.find("--cut-work-per-step"), std::string::npos) << bad.err;
+}
+
 TEST_F(CutCli, BadCutModeIsAUsageError) {
   const auto r = sim({"--offline", "--grid", "8", "--cut-mode", "laser", "--steps", "1"});
   EXPECT_EQ(r.exit_code, 2);

@@ -359,75 +359,84 @@ TEST(Solver, RejectsBadParameters) {
   p = {};
   p.repair_per_step = 0;
   EXPECT_TRUE(validate(p).has_value());
+  p = {};
+  p.cut_work_per_step = -1;
+  EXPECT_TRUE(validate(p).has_value());
+  p.cut_work_per_step = 0;  // all of a cut's work in its step
+  EXPECT_FALSE(validate(p).has_value());
 }
 
 }  // namespace
 
 // The update after a cut touches only what the cut changed (the attachments' shortest paths are
-// repaired decrementally, within each step's budget). Whatever the cuts and however they interleave with
+// repaired incrementally, within each step's budget). Whatever the cuts and however they interleave with
 // the repair, once it settles every particle must reach the same pin groups as a full build on the same
-// cloth finds, at the same path length, or a little longer where an exact cut's new edges made a shortcut
-// the repair does not look for (Solver::update_attachments): never shorter, which would stretch the cloth.
+// cloth finds, at the same path length: never shorter, which would stretch the cloth, and never longer,
+// which would loosen its tethers (an exact cut's new springs can make a shortcut: Solver::reopen_shorter).
 /// Every pin group's distance of every particle, as the solver has them, against a full build of the same
-/// cloth: never shorter, and equal unless `longer_allowed` (a fraction) says an exact cut's skipped shortcuts
-/// may make it longer.
-void expect_distances_of_a_full_build(const Solver& solver, const Cloth& cloth, float longer_allowed) {
-  Cloth same = cloth;
-  Solver fresh;
-  fresh.update_topology(same);
-  ASSERT_EQ(fresh.pin_groups(), solver.pin_groups());
-  for (std::size_t g = 0; g < solver.pin_groups(); ++g) {
-    for (std::uint32_t i = 0; i < cloth.particle_count(); ++i) {
-      const float want = fresh.pin_distance(g, i);
-      const float got = solver.pin_distance(g, i);
-      if (std::isinf(want)) {
-        ASSERT_TRUE(std::isinf(got)) << "group " << g << " particle " << i;
-      } else if (longer_allowed > 0.0F) {
-        ASSERT_GE(got, want * (1.0F - 1e-5F)) << "group " << g << " particle " << i;
-        ASSERT_LE(got, want * (1.0F + longer_allowed) + 1e-6F) << "group " << g << " particle " << i;
+/// cloth.
+/// Every pin group's distance of each of `particles` particles: `got`'s against `want`'s.
+void expect_same_distances(const Solver& got, const Solver& want, std::size_t particles) {
+  ASSERT_EQ(got.pin_groups(), want.pin_groups());
+  for (std::size_t g = 0; g < want.pin_groups(); ++g) {
+    for (std::uint32_t i = 0; i < particles; ++i) {
+      const float w = want.pin_distance(g, i);
+      const float d = got.pin_distance(g, i);
+      if (std::isinf(w)) {
+        ASSERT_TRUE(std::isinf(d)) << "group " << g << " particle " << i;
       } else {
-        ASSERT_NEAR(got, want, 1e-5F * std::max(1.0F, want)) << "group " << g << " particle " << i;
+        ASSERT_NEAR(d, w, 1e-5F * std::max(1.0F, w)) << "group " << g << " particle " << i;
       }
     }
   }
 }
 
+void expect_distances_of_a_full_build(const Solver& solver, const Cloth& cloth) {
+  Cloth same = cloth;
+  Solver fresh;
+  fresh.update_topology(same);
+  expect_same_distances(solver, fresh, cloth.particle_count());
+}
+
 class IncrementalAttachments : public ::testing::TestWithParam<CutMode> {};
 
 TEST_P(IncrementalAttachments, CutsWhileRepairingEndAsAFullBuildWould) {
-  std::mt19937 rng{11};
-  std::uniform_real_distribution<float> coord{-0.6F, 0.6F};
-  for (int trial = 0; trial < 20; ++trial) {
-    Cloth cloth = make(24, PinMode::TopEdge);
-    StrokeOptions options;
-    options.mode = GetParam();
-    StrokeCutter cutter{cloth, options};
-    SolverParams params;
-    params.repair_per_step = 50;  // a repair takes several steps here, so later cuts come in the middle of it
-    Solver solver{params};
-    solver.step(cloth);
-    double t = 0.0;
-    // Twelve strokes of a few long segments each, a step after every sample: later segments cut while the
-    // repair of earlier ones is still going on.
-    for (int stroke = 0; stroke < 12; ++stroke) {
-      Eigen::Vector3f at{coord(rng), coord(rng), 0.0F};
-      for (int s = 0; s < 6; ++s) {
-        cutter.add_sample({t += 1.0 / 60.0, at});
-        solver.step(cloth);
-        at = Eigen::Vector3f{coord(rng), coord(rng), 0.0F};
+  for (const unsigned seed : {11U, 12U, 13U}) {
+    std::mt19937 rng{seed};
+    std::uniform_real_distribution<float> coord{-0.6F, 0.6F};
+    for (int trial = 0; trial < 20; ++trial) {
+      Cloth cloth = make(24, PinMode::TopEdge);
+      StrokeOptions options;
+      options.mode = GetParam();
+      StrokeCutter cutter{cloth, options};
+      SolverParams params;
+      params.repair_per_step = 50;  // a repair takes several steps here, so later cuts come in the middle of it
+      Solver solver{params};
+      solver.step(cloth);
+      double t = 0.0;
+      // Twelve strokes of a few long segments each, a step after every sample: later segments cut while the
+      // repair of earlier ones is still going on.
+      for (int stroke = 0; stroke < 12; ++stroke) {
+        Eigen::Vector3f at{coord(rng), coord(rng), 0.0F};
+        for (int s = 0; s < 6; ++s) {
+          cutter.add_sample({t += 1.0 / 60.0, at});
+          solver.step(cloth);
+          at = Eigen::Vector3f{coord(rng), coord(rng), 0.0F};
+        }
+        cutter.end_stroke();
       }
-      cutter.end_stroke();
-    }
-    solver.step(cloth);  // picks up the strokes' last cuts (end_stroke cuts the last segment)
-    for (int s = 0; s < 2000 && solver.repairing(); ++s) solver.step(cloth);
-    ASSERT_FALSE(solver.repairing()) << "trial " << trial;
-    EXPECT_GT(solver.incremental_updates(), 0U) << "trial " << trial;
+      solver.step(cloth);  // picks up the strokes' last cuts (end_stroke cuts the last segment)
+      for (int s = 0; s < 2000 && solver.repairing(); ++s) solver.step(cloth);
+      ASSERT_FALSE(solver.repairing()) << "trial " << trial;
+      EXPECT_GT(solver.incremental_updates(), 0U) << "trial " << trial;
 
-    // A shortcut saves at most the 8 % by which an octile path exceeds the straight line, but the shortcuts
-    // of several cuts along one path add up: up to 10 % measured here over these trials.
-    SCOPED_TRACE("trial " + std::to_string(trial));
-    expect_distances_of_a_full_build(solver, cloth, GetParam() == CutMode::Exact ? 0.15F : 0.0F);
-    if (HasFatalFailure()) return;
+      // Before the repair opened again the particles an exact cut's new springs brought nearer, their
+      // distances stayed up to 25 % too long (17 % on seed 12 here, 25 % on seed 11 once the cut's work was
+      // spread over steps: which particles are still open when a shortcut comes depends on the timing).
+      SCOPED_TRACE("seed " + std::to_string(seed) + " trial " + std::to_string(trial));
+      expect_distances_of_a_full_build(solver, cloth);
+      if (HasFatalFailure()) return;
+    }
   }
 }
 
@@ -466,56 +475,135 @@ TEST(IncrementalAttachments, ACutThatTakesASeededParticlesWayToThePinSeedsItAgai
   });
   for (int s = 0; s < 5000 && solver.repairing(); ++s) solver.step(cloth);
   ASSERT_FALSE(solver.repairing());
-  expect_distances_of_a_full_build(solver, cloth, 0.0F);
+  expect_distances_of_a_full_build(solver, cloth);
 }
 
-TEST(IncrementalAttachments, AnOpenedParticleKeepsItsTetherAndACutOffPieceLosesItsAtOnce) {
+/// Removes every live spring whose rest segment (grid coordinates) crosses the segment from (u0, v0) to
+/// (u1, v1): a cut that depends on the rest shape only, so two cloths moved differently are cut the same.
+void cut_along(Cloth& cloth, float u0, float v0, float u1, float v1) {
+  const auto side = [](float ax, float ay, float bx, float by, float px, float py) {
+    return (bx - ax) * (py - ay) - (by - ay) * (px - ax);
+  };
+  for (std::uint32_t k = 0; k < cloth.spring_count(); ++k) {
+    if (cloth.alive[k] == 0) continue;
+    const GridCoord a = cloth.grid[cloth.spring_a[k]];
+    const GridCoord b = cloth.grid[cloth.spring_b[k]];
+    const auto au = static_cast<float>(a.u), av = static_cast<float>(a.v);
+    const auto bu = static_cast<float>(b.u), bv = static_cast<float>(b.v);
+    const bool apart = side(u0, v0, u1, v1, au, av) * side(u0, v0, u1, v1, bu, bv) < 0.0F;
+    const bool within = side(au, av, bu, bv, u0, v0) * side(au, av, bu, bv, u1, v1) < 0.0F;
+    if (apart && within) cloth.remove_spring(k);
+  }
+}
+
+class CutOff : public ::testing::TestWithParam<int> {};
+
+TEST_P(CutOff, AnOpenedParticleKeepsItsTetherAndACutOffPieceLosesItsAllAtOnce) {
   // While the repair after a cut goes on (here one particle a step), the particles it opened keep their old
   // tethers: turned off, the region below a stroke advancing into a 256 x 256 cloth hung without them for the
-  // whole stroke and fell stretched. But a piece the cut separates from the pins must fall now, not once the
-  // repair has settled everything else (Solver::release_cut_off). 24 x 24: the piece is found by flooding it;
-  // 64 x 64: its 2048 particles are past the flood's cap, so the components are labelled by union-find.
+  // whole stroke and fell stretched. But a piece the cut separates from the pins must fall as one, not once
+  // the repair has settled everything else (Solver::release_cut_off). 24 x 24: the piece is found by flooding
+  // it; 64 x 64: its 2048 particles are past the flood's cap, so the components are labelled by union-find.
+  // The parameter is cut_work_per_step: 0 (the default) releases the piece in the step of the cut; otherwise
+  // what the cut's step cannot do within it goes on over the steps after it (at most Solver::kMaxCutWorkSteps),
+  // the piece held as before until then (1: nearly all of it; 4096: all of it at 24 x 24, not at 64 x 64).
   for (const int n : {24, 64}) {
     SCOPED_TRACE(n);
     Cloth cloth = make(n, PinMode::TopEdge);
     SolverParams params;
     params.repair_per_step = 1;
+    params.cut_work_per_step = GetParam();
     Solver solver{params};
     solver.step(cloth);
     const std::size_t tethers = solver.attachment_count();
     ASSERT_EQ(tethers, solver.pin_groups() * static_cast<std::size_t>(n * (n - 1)));
-    // Every spring across the line between rows n/2 - 1 and n/2, from column `first` to column `last`.
     const int below = n / 2;
-    const auto cut_across = [&](int first, int last) {
-      for (std::uint32_t k = 0; k < cloth.spring_count(); ++k) {
-        const GridCoord a = cloth.grid[cloth.spring_a[k]];
-        const GridCoord b = cloth.grid[cloth.spring_b[k]];
-        const bool across = std::min(a.v, b.v) < below && std::max(a.v, b.v) >= below;
-        const bool within = std::min(a.u, b.u) >= first && std::max(a.u, b.u) <= last;
-        if (cloth.alive[k] != 0 && across && within) cloth.remove_spring(k);
-      }
-    };
-    cut_across(0, n / 2 - 1);  // a slit from the left edge: the cloth below it hangs on through its right half
+    const auto line = static_cast<float>(below) - 0.5F;  // between rows below - 1 and below
+    // A slit from the left edge: the cloth below it hangs on through its right half.
+    cut_along(cloth, -1.0F, line, static_cast<float>(n) / 2.0F - 0.5F, line);
     solver.update_topology(cloth);
     ASSERT_TRUE(solver.repairing());
     EXPECT_EQ(solver.attachment_count(), tethers) << "the slit's opened particles kept their tethers";
-    cut_across(0, n - 1);  // the rest of the line: the lower half comes off
+    cut_along(cloth, -1.0F, line, static_cast<float>(n), line);  // the rest of the line: the lower half comes off
     solver.update_topology(cloth);
-    ASSERT_TRUE(solver.repairing());
+    int steps = 0;
+    if (GetParam() == 1 || (GetParam() == 4096 && n == 64)) {
+      EXPECT_TRUE(solver.cut_work_pending());
+    }
+    if (solver.cut_work_pending()) {
+      EXPECT_EQ(solver.attachment_count(), tethers) << "held as before while the cut's work goes on";
+      while (solver.cut_work_pending() && steps < 100) {
+        solver.step(cloth);
+        ++steps;
+        if (solver.cut_work_pending()) {
+          EXPECT_EQ(solver.attachment_count(), tethers) << "released in parts";
+        }
+      }
+      EXPECT_LE(steps, Solver::kMaxCutWorkSteps);
+    }
+    EXPECT_FALSE(solver.cut_work_pending());
     EXPECT_EQ(solver.attachment_count(), tethers - solver.pin_groups() * static_cast<std::size_t>(n * (n - below)))
         << "the cut-off piece lost every tether at once";
     // Everything the cuts opened is in that piece, which no pin can reach: nothing is left for the repair to
     // seed or settle (before, the whole piece stayed open until the repair had walked it).
     EXPECT_EQ(solver.open_particles(), 0U);
-    // And it falls freely from the next step on, while the repair is still far from done.
+    // And it falls freely from the next step on.
+    const std::vector<Eigen::Vector3f> before(cloth.velocity.begin(), cloth.velocity.end());
     solver.step(cloth);
-    ASSERT_TRUE(solver.repairing());
     const float dt = solver.params().dt;
     for (int u = 0; u < n; ++u) {
-      EXPECT_NEAR(cloth.velocity[cloth.index(u, n - 4)].y(), solver.params().gravity.y() * dt, 0.25F * 9.81F * dt) << u;
+      const std::uint32_t i = cloth.index(u, n - 4);
+      EXPECT_NEAR(cloth.velocity[i].y() - before[i].y(), solver.params().gravity.y() * dt, 0.25F * 9.81F * dt) << u;
     }
   }
 }
+
+TEST(CutOff, CutsWorkSpreadOverStepsEndsAsDoneAtOnce) {
+  // The same cuts on two cloths, one solver doing a cut's tether work in the step of the cut, the other
+  // spreading it (the default), cuts coming while it is under way (they join it): once both have repaired,
+  // the same pin distances for every particle and group, and the same tethers released.
+  std::mt19937 rng{5};
+  std::uniform_real_distribution<float> coord{-2.0F, 33.0F};
+  for (int trial = 0; trial < 8; ++trial) {
+    SCOPED_TRACE(trial);
+    Cloth at_once = make(32, trial % 2 == 0 ? PinMode::TopEdge : PinMode::Corners);
+    Cloth spread = at_once;
+    SolverParams params;
+    params.repair_per_step = 64;
+    params.cut_work_per_step = 0;
+    Solver solver_at_once{params};
+    params.cut_work_per_step = 16;  // small, so the work really spans steps at 32 x 32
+    Solver solver_spread{params};
+    solver_at_once.step(at_once);
+    solver_spread.step(spread);
+    bool overlapped = false;
+    for (int cut = 0; cut < 5; ++cut) {
+      const float u0 = coord(rng), v0 = coord(rng), u1 = coord(rng), v1 = coord(rng);
+      cut_along(at_once, u0, v0, u1, v1);
+      cut_along(spread, u0, v0, u1, v1);
+      overlapped = overlapped || solver_spread.cut_work_pending();
+      const int steps = 1 + static_cast<int>(rng() % 3);
+      for (int s = 0; s < steps; ++s) {
+        solver_at_once.step(at_once);
+        solver_spread.step(spread);
+      }
+    }
+    for (int s = 0; s < 5000 && solver_at_once.repairing(); ++s) solver_at_once.step(at_once);
+    for (int s = 0; s < 5000 && solver_spread.repairing(); ++s) solver_spread.step(spread);
+    ASSERT_FALSE(solver_at_once.repairing());
+    ASSERT_FALSE(solver_spread.repairing());
+    if (trial == 0) {
+      EXPECT_TRUE(overlapped) << "a cut should come while the work of one before it goes on";
+    }
+    EXPECT_EQ(solver_spread.attachment_count(), solver_at_once.attachment_count());
+    expect_same_distances(solver_spread, solver_at_once, at_once.particle_count());
+    if (HasFatalFailure()) return;
+    expect_distances_of_a_full_build(solver_spread, spread);
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(CutWork, CutOff, ::testing::Values(0, 1, 4096),
+                         [](const auto& param) { return "CutWorkPerStep" + std::to_string(param.param); });
 
 TEST(IncrementalAttachments, ARepairThatAStrokeKeepsReopeningListsWhatIsOpenNotWhatWasEver) {
   // A stroke advancing into the cloth opens the region below its tip again with every cut, so the repair

@@ -48,6 +48,15 @@ struct SolverParams {
   /// re-routes a whole piece is spread over steps (those particles keep their old tethers meanwhile, except
   /// where the cut separated them from a pin group: Solver::release_cut_off).
   int repair_per_step = 2048;
+  /// How much of a cut's tether work is done in the cut's own step, in visits (particles opened, 16 entries of a
+  /// settle order passed, particles and springs labelled): opening the particles whose shortest paths the cut
+  /// broke (a pass over each pin group's settle order) and labelling what it cut off (floods, then union-find
+  /// over the springs). The rest goes on over the steps after it in even slices of at least this much, at most
+  /// Solver::kMaxCutWorkSteps steps: meanwhile the piece keeps its old tethers and the repairs wait; it is
+  /// released in one pass. Cuts that come meanwhile join the work. 0 (the default): all of it in the step of
+  /// the cut. Spread (1 or 4096), the step after a 128 x 128 cut costs 1.3-1.8x a plain one against 3.0-3.7x,
+  /// but the repairs' timing changes with it, and with it which delete-mode slits flutter (docs/sim.md).
+  int cut_work_per_step = 0;
   bool long_range_attachments = true;
   bool soft_every_substep = true;  ///< shear/bend in every sub-step (false: cheaper, but never fully at rest)
   /// Threads of the sweeps (OpenMP). The positions are a function of this number, not of how many threads the
@@ -101,8 +110,15 @@ class Solver {
   /// Rest length of the shortest path along the cloth's springs from pin group `group` to `particle`
   /// (+inf: none, or a repair after a cut has not settled it yet). What its tether is measured from.
   [[nodiscard]] float pin_distance(std::size_t group, std::uint32_t particle) const;
-  /// Whether a repair of the attachments after a cut is still going on (it goes on within each step).
+  /// Whether a repair of the attachments after a cut is still going on (it goes on within each step), the
+  /// cut's own work (cut_work_per_step) included.
   [[nodiscard]] bool repairing() const;
+  /// Whether a cut's tether work is still spread over the coming steps (SolverParams::cut_work_per_step).
+  [[nodiscard]] bool cut_work_pending() const { return cut_phase_ != CutPhase::None; }
+  /// Steps a cut's tether work takes at most: past them the rest is done in one step. A stroke cuts on
+  /// every step, and each cut restarts the labelling, so without a bound a long stroke's cut-off pieces
+  /// would hang on their old tethers until the hand stopped.
+  static constexpr int kMaxCutWorkSteps = 12;
   /// Particles the repairs still have to settle, counted once per pin group whose repair has them open.
   [[nodiscard]] std::size_t open_particles() const;
   /// Entries in the repairs' lists of open particles, over all pin groups: what the next cut reads.
@@ -129,6 +145,7 @@ class Solver {
     std::uint8_t lane = 0;
     std::uint8_t family = 0;
   };
+  static constexpr std::size_t kNoScan = static_cast<std::size_t>(-1);
   /// A pin group of the long-range attachments (one pin when there are few, else an end or a half of the
   /// pinned line: build_attachments) with its shortest-path tree over the springs (Dijkstra, search_paths) and
   /// the state of its repair after a cut.
@@ -161,7 +178,13 @@ class Solver {
     /// orphaned subtrees are then one pass over the array from the first orphan, with no adjacency walks.
     std::vector<std::uint32_t> order;
     std::vector<std::uint32_t> order_pos;  ///< per particle: its live place in order (none: not settled)
+    /// Where the pass over `order` that opens a cut's orphaned subtrees goes on (none: no pass to make).
+    std::size_t scan_from = kNoScan;
   };
+  /// A cut's tether work, in the order it is done: the orphans' subtrees opened (per pin group), then what the
+  /// cut separated from a pin group found by floods from the touched particles and, past their cap, by
+  /// union-find over the springs (its passes: each particle's bits, the springs, the roots), then released.
+  enum class CutPhase : std::uint8_t { None, Open, Flood, Bits, Unite, Fold, Release };
 
   void refresh_caches(const Cloth& cloth);
   void full_build(const Cloth& cloth, std::vector<std::uint32_t> pins);
@@ -178,11 +201,21 @@ class Solver {
   void open_particle(PinGroup& group, std::uint32_t i);
   static void seed(const Cloth& cloth, PinGroup& group, std::uint32_t i);
   static void compact_order(PinGroup& group, std::size_t particles);
+  /// A settled particle the repair found a shorter way to (an exact cut's shortcut): opened again with its
+  /// subtree.
+  void reopen_shorter(const Cloth& cloth, PinGroup& group, std::uint32_t root);
   static void compact_open_list(PinGroup& group);
   [[nodiscard]] static bool parent_spring_intact(const Cloth& cloth, PinGroup& group, std::uint32_t i);
+  /// A cut's immediate part of the attachments' update: the arrays grown to the new particles, the particles
+  /// whose path to the parent the cut broke opened; their subtrees are left to advance_cut_work.
   void update_attachments(const Cloth& cloth, const std::vector<std::uint32_t>& touched);
-  void release_cut_off(const Cloth& cloth, const std::vector<std::uint32_t>& touched);
-  void release_cut_off_by_components(const Cloth& cloth);
+  /// Goes on with the cuts' tether work within `budget` visits (SIZE_MAX: to the end). Returns true when done.
+  bool advance_cut_work(const Cloth& cloth, std::size_t budget);
+  /// The subtrees of the orphans: one pass over each group's settle order (update_attachments). Returns the
+  /// budget left, or nothing when it ran out first.
+  std::optional<std::size_t> open_subtrees(const Cloth& cloth, std::size_t budget);
+  /// Returns whether every open particle's verdict is in (else the components are labelled instead).
+  bool release_cut_off(const Cloth& cloth, const std::vector<std::uint32_t>& touched);
   /// Particle i has no path to `group` any more: its tether of that group goes (kept disabled,
   /// anchored on itself, so that the step reads a valid index).
   void drop_tether(const PinGroup& group, std::uint32_t i);
@@ -288,13 +321,24 @@ class Solver {
   // before in this update); the flooded particles in order, component after component.
   std::vector<std::uint8_t> flood_seen_;
   std::vector<std::uint32_t> flood_visited_;
-  // Scratch of release_cut_off_by_components: per particle the pin groups it is open in, the ones it is
+  // Scratch of the labelling by union-find (advance_cut_work): per particle the pin groups it is open in, the ones it is
   // settled in, the groups it meets (then per component root), and the union-find parent.
   std::vector<std::uint8_t> flood_open_;
   std::vector<std::uint8_t> flood_settled_;
   std::vector<std::uint8_t> flood_met_;
   UnionFind<std::uint32_t> flood_sets_;
+  std::vector<std::uint32_t> reopen_subtree_;  ///< scratch of reopen_shorter
   std::vector<std::uint8_t> touched_mark_;  ///< per particle: touched by the update's springs (cleared after it)
+  // The cuts' tether work spread over steps (advance_cut_work): its phase, the particles every cut since it
+  // began touched (sorted, once each), where the phase's pass is, and the steps it has taken.
+  CutPhase cut_phase_ = CutPhase::None;
+  std::vector<std::uint32_t> cut_touched_;
+  std::size_t cut_cursor_ = 0;
+  int cut_work_steps_ = 0;
+  bool cut_work_fresh_ = false;  ///< left over by this step's cut (its update did this step's slice)
+  void clear_cut_work();
+  /// The visits the cut's work has left, as advance_cut_work counts them (the release pass not included).
+  [[nodiscard]] std::size_t cut_work_left(const Cloth& cloth) const;
   // Positions with the inverse mass in w, during a step; element 0 is the fixed padding particle.
   std::vector<Eigen::Vector4f> work_;
   std::vector<Eigen::Vector4f> old_work_;

@@ -120,6 +120,8 @@ struct ExactRun {
 ExactRun time_exact(const Cloth& prototype, const std::vector<tachi::sim::StrokeSample>& stroke,
                     tachi::sim::CutMode mode, int reps, const tachi::sim::SolverParams& params) {
   ExactRun run;
+  // On several threads the main thread's CPU time misses the others' work: wall time then.
+  const auto now = params.threads > 1 ? wall_ms : cpu_ms;
   std::vector<double> stroke_ms;
   std::vector<double> after_ms;
   std::vector<double> update_ms;
@@ -137,27 +139,27 @@ ExactRun time_exact(const Cloth& prototype, const std::vector<tachi::sim::Stroke
     tachi::sim::Solver solver{params};
     solver.step(cloth);
     for (int s = 0; s < 3; ++s) {  // plain steps, for the median
-      const auto t0 = cpu_ms();
+      const auto t0 = now();
       solver.step(cloth);
-      step_ms.push_back(ms_since(t0));
+      step_ms.push_back(now() - t0);
     }
-    const auto t0 = cpu_ms();
+    const auto t0 = now();
     for (const auto& s : stroke) cutter.add_sample(s);
     cutter.end_stroke();
-    stroke_ms.push_back(ms_since(t0));
-    const auto t2 = cpu_ms();
+    stroke_ms.push_back(now() - t0);
+    const auto t2 = now();
     solver.update_topology(cloth);
-    update_ms.push_back(ms_since(t2));
-    const auto t1 = cpu_ms();
+    update_ms.push_back(now() - t2);
+    const auto t1 = now();
     solver.step(cloth);
-    after_ms.push_back(ms_since(t1) + update_ms.back());
+    after_ms.push_back(now() - t1 + update_ms.back());
     double worst = 0.0;
     int following = 0;
     for (int tail = 0; tail < 2 && following < 200; ++following) {
       if (!solver.repairing()) ++tail;
-      const auto t3 = cpu_ms();
+      const auto t3 = now();
       solver.step(cloth);
-      worst = std::max(worst, ms_since(t3));
+      worst = std::max(worst, now() - t3);
     }
     worst_following_ms.push_back(worst);
     following_steps.push_back(following);
@@ -274,7 +276,8 @@ int main(int argc, char** argv) {
   // cut_bench [reps] [repair_per_step] [threads] [substeps] [cut_work_per_step]: the second argument sets the
   // long strokes' attachment repair budget (SolverParams::repair_per_step) for the measurements in docs/sim.md
   // ("Limits"); the third and fourth their solver's threads (given: the frames are timed in wall time) and
-  // sub-steps; the fifth the exact section's SolverParams::cut_work_per_step (default: the solver's).
+  // sub-steps (the third also the exact section's threads); the fifth the exact section's
+  // SolverParams::cut_work_per_step (default: the solver's).
   const int reps = argc > 1 ? std::max(1, std::atoi(argv[1])) : 30;
   tachi::sim::SolverParams long_stroke_params;
   if (argc > 2) long_stroke_params.repair_per_step = std::max(1, std::atoi(argv[2]));
@@ -282,6 +285,7 @@ int main(int argc, char** argv) {
   if (argc > 4) long_stroke_params.substeps = std::clamp(std::atoi(argv[4]), 1, 64);
   tachi::sim::SolverParams exact_params;
   if (argc > 5) exact_params.cut_work_per_step = std::max(0, std::atoi(argv[5]));
+  exact_params.threads = long_stroke_params.threads;  // the target is for one thread and two
   constexpr int n = 128;
   tachi::sim::ClothConfig config;
   config.columns = n;
@@ -347,8 +351,9 @@ int main(int argc, char** argv) {
               bullet_median * static_cast<double>(edges) / stroke_median);
 
   // Exact mode, with the solver's incremental update, against the grid mode in the same process.
-  std::printf("exact cut, %dx%d, wavy 64-segment stroke cut at once after a first step, %d reps, cut_work_per_step %d:\n",
-              n, n, reps, exact_params.cut_work_per_step);
+  std::printf("exact cut, %dx%d, wavy 64-segment stroke cut at once after a first step, %d reps, cut_work_per_step %d, "
+              "%d thread(s) (%s time):\n",
+              n, n, reps, exact_params.cut_work_per_step, exact_params.threads, exact_params.threads > 1 ? "wall" : "CPU");
   for (const auto mode : {tachi::sim::CutMode::Exact, tachi::sim::CutMode::Grid, tachi::sim::CutMode::Delete}) {
     const ExactRun e = time_exact(prototype, wavy_stroke(), mode, reps, exact_params);
     std::printf("  %-6s stroke %.3f ms + solver update %.3f ms = %.3f ms (target <= 0.5 ms); step after cut %.3f ms / "

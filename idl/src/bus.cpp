@@ -26,6 +26,7 @@ constexpr std::string_view kObserverMark = "tachi.observer";
 constexpr const char* kLossyLinkTimingXml =
     "<NackDelay>0 ms</NackDelay>"
     "<HeartbeatInterval min=\"2 ms\" minsched=\"5 ms\" max=\"100 ms\">10 ms</HeartbeatInterval>";
+constexpr const char* kLossyLinkDiscoveryInterval = "500 ms";
 
 // Cyclone allows one explicitly created domain per id per process, and deleting it deletes every
 // participant in it; so domains are shared and reference counted between Participants.
@@ -182,7 +183,13 @@ std::string lossy_config_xml(const std::string& base_xml, int permille) {
   // gap (NackDelay), and a writer heartbeats every 100 ms (HeartbeatInterval), so one lost hand
   // sample waited ~100-200 ms. A link that loses packets wants the answer at once; the heartbeats
   // are sent only while data is unacknowledged, so the extra traffic stops when nothing is lost.
-  return base_xml + "\n<CycloneDDS xmlns=\"https://cdds.io/config\"><Domain id=\"any\"><Internal>" +
+  //
+  // Participant discovery is best effort and Cyclone repeats it every 30 s (SPDPInterval): a process that
+  // joins a running pipeline and loses its one announcement to a peer is unknown to that peer for 30 s.
+  // A sensor that plays a recording lives ~3 s, so 1 run in ~6 ended with the launcher never having
+  // heard its heartbeat (summary frames 0). Announcing every 500 ms costs a few packets a second.
+  return base_xml + "\n<CycloneDDS xmlns=\"https://cdds.io/config\"><Domain id=\"any\">" +
+         "<Discovery><SPDPInterval>" + std::string(kLossyLinkDiscoveryInterval) + "</SPDPInterval></Discovery><Internal>" +
          "<Test><XmitLossiness>" + std::to_string(permille) + "</XmitLossiness></Test>" +
          std::string(kLossyLinkTimingXml) + "</Internal></Domain></CycloneDDS>\n";
 }

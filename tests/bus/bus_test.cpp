@@ -164,6 +164,7 @@ TEST(Bus, ALossyConfigIsOneCycloneAccepts) {
   const std::string xml = bus::lossy_config_xml(bus::dds_config_xml(""), 500);
   EXPECT_EQ(xml.find(bus::kLoopbackConfigXml), 0u) << "the base config first, whole";
   EXPECT_NE(xml.find("<XmitLossiness>500</XmitLossiness>"), std::string::npos);
+  EXPECT_NE(xml.find("<SPDPInterval>500 ms</SPDPInterval>"), std::string::npos) << "a lost announcement is repeated soon";
   const auto path = std::filesystem::temp_directory_path() / "tachi_lossy_cyclone_config.xml";
   std::ofstream(path) << xml;
   EXPECT_NO_THROW(bus::Participant(kLossyDomain, path.string()));

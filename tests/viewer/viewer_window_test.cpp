@@ -82,6 +82,12 @@ class VirtualDisplay {
     }
     return {};
   }
+  /// Every named window on this display and its name, for a failure message (the window search failed
+  /// twice in CI, 2026-12-04 and 12-05, and never by hand: what the display held is the clue).
+  std::string window_names() const {
+    const auto r = tachi::test::run({kXdotool, "search", "--name", ".", "getwindowname", "%@"}, 10s, env());
+    return "windows on " + name_ + ": [" + r.out + "] (xdotool exit " + std::to_string(r.exit_code) + ")";
+  }
   /// Whether the pointer, where it is, shows any pixel (its image as XFixes reports it).
   bool pointer_visible() const {
     Display* display = XOpenDisplay(name_.c_str());
@@ -138,6 +144,17 @@ bool viewer_has_cloth(bus::Reader<tachi_msg_NodeStatus>& status) {
   }, 20s) && frames_drawn(status, 2);
 }
 
+// The viewer's last heartbeat in words (its state detail and frames drawn), for a failure message.
+std::string last_detail(bus::Reader<tachi_msg_NodeStatus>& status) {
+  std::string said = "none in 2 s";
+  tachi::test::wait_for_status(status, "tachi-viewer", [&](const tachi_msg_NodeStatus& s) {
+    said = std::string(s.detail);
+    said.append(" (frames ").append(std::to_string(tachi::test::metric(s, "frames").value_or(-1))).append(")");
+    return false;
+  }, 2s);
+  return said;
+}
+
 }  // namespace
 
 TEST(ViewerWindow, FitsASmallScreenShowsTheClothAndSavesASnapshotOnAKey) {
@@ -151,8 +168,9 @@ TEST(ViewerWindow, FitsASmallScreenShowsTheClothAndSavesASnapshotOnAKey) {
   bus::Reader<tachi_msg_NodeStatus> status{dds, bus::topics::node_status};
   const std::string window = display.viewer_window();
   ASSERT_FALSE(window.empty()) << "X server " << (display.running() ? "up" : "gone") << ", viewer "
-                               << (viewer.running() ? "running" : "exited") << "; stderr: " << viewer.err();
-  ASSERT_TRUE(viewer_has_cloth(status)) << viewer.err();
+                               << (viewer.running() ? "running" : "exited") << "; " << display.window_names()
+                               << "; viewer's heartbeat: " << last_detail(status) << "; stderr: " << viewer.err();
+  ASSERT_TRUE(viewer_has_cloth(status)) << last_detail(status) << "; stderr: " << viewer.err();
 
   // Qt applies the fitted size asynchronously (seen once in a loaded ctest -j2 run: still 1000 px after
   // 2 s): the settled geometry is what a user sees, so it is read again for up to 3 s more.

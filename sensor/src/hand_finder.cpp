@@ -78,18 +78,30 @@ cv::Point2d plateau_centre(const cv::Mat& dist, double peak, cv::Point at) {
 }
 
 /// How far (pixels) from a distance transform's maximum `peak` at `at` the region stays nearly as
-/// wide (values >= kRidgeShare of the peak): a palm is a compact blob, its widest place a short
-/// ridge (the palm and the fingers beside it); a limb is a tube of constant width (the upper arm,
-/// 4.5 cm in radius, holds a palm-sized circle all along its length).
+/// wide (values >= kRidgeShare of the peak, connected to the maximum): a palm is a compact blob, its
+/// widest place a short ridge (the palm and the fingers beside it); a limb is a tube of constant
+/// width (the upper arm, 4.5 cm in radius, holds a palm-sized circle all along its length).
+/// Every wide place of the region counts, unless `connected`: then only the ridge through the
+/// maximum. A palm held up with its upper arm at its depth, beyond the narrower wrist and forearm,
+/// measured 32 cm of ridge counted whole (seed 86 of the tuning range: its first 15 frames
+/// untracked); counted connected for every new track, an elbow whose forearm left the image became
+/// a short ridge and was taken (seed 121: 23 frames 34 cm off). So only a palm sought near the
+/// nearest reading (arm_end_candidate's second look) counts its own ridge. `scratch`: a buffer.
 constexpr double kRidgeShare = 0.85;
-double ridge_length(const cv::Mat& dist, double peak, cv::Point at) {
+double ridge_length(const cv::Mat& dist, double peak, cv::Point at, bool connected, cv::Mat& scratch) {
   const auto level = static_cast<float>(kRidgeShare * peak);
+  cv::compare(dist, level, scratch, cv::CMP_GE);
+  std::uint8_t counted = 255;
+  if (connected) {
+    cv::floodFill(scratch, at, cv::Scalar(128), nullptr, cv::Scalar(0), cv::Scalar(0), 8);
+    counted = 128;
+  }
   int far2 = 0;
-  for (int y = 0; y < dist.rows; ++y) {
-    const float* row = dist.ptr<float>(y);
+  for (int y = 0; y < scratch.rows; ++y) {
+    const auto* row = scratch.ptr<std::uint8_t>(y);
     const int dy2 = (y - at.y) * (y - at.y);
-    for (int x = 0; x < dist.cols; ++x)
-      if (row[x] >= level) far2 = std::max(far2, dy2 + (x - at.x) * (x - at.x));
+    for (int x = 0; x < scratch.cols; ++x)
+      if (row[x] == counted) far2 = std::max(far2, dy2 + (x - at.x) * (x - at.x));
   }
   return std::sqrt(static_cast<double>(far2));
 }
@@ -193,7 +205,7 @@ struct HandFinder::Impl {
   std::uint32_t visit_generation = 0;
   std::vector<cv::Point> queue;
   cv::Mat kernel3 = cv::getStructuringElement(cv::MORPH_RECT, {3, 3});
-  cv::Mat roi_mask, roi_closed, roi_dist;
+  cv::Mat roi_mask, roi_closed, roi_dist, ridge_mask;
   cv::Mat roi_mask_buffer = cv::Mat(kDepthHeight + 2, kDepthWidth + 2, CV_8U);
   cv::Mat roi_closed_buffer = cv::Mat(kDepthHeight + 2, kDepthWidth + 2, CV_8U);
   cv::Mat roi_dist_buffer = cv::Mat(kDepthHeight + 2, kDepthWidth + 2, CV_32F);
@@ -241,8 +253,9 @@ struct HandFinder::Impl {
   void update_background(const cv::Mat* exclude);
   /// Whose palm a measurement is for: a new track's, whose tests ask for its bulge (is_dome), or
   /// the followed hand's, whose palm is sought near its nearest reading and where it was
-  /// (HandFinderParams::palm_from_nearest_m).
-  enum class Candidate { kNewTrack, kFollowed };
+  /// (HandFinderParams::palm_from_nearest_m), or a new track's measured again near its nearest
+  /// reading (its widest place was a limb: arm_end_candidate).
+  enum class Candidate { kNewTrack, kFollowed, kNewTrackNearSeed };
   /// `two_sided`: the band also stops kEndBandNearM in front of near_raw (a hand at an arm's
   /// geodesic end, whose forearm runs on nearer to an elbow; see arm_end).
   bool measure(std::span<const std::uint16_t> raw, const cv::Rect& cells, std::uint16_t near_raw, cv::Point seed_cell, Palm& palm,
@@ -448,7 +461,7 @@ bool HandFinder::Impl::measure(std::span<const std::uint16_t> raw, const cv::Rec
 bool HandFinder::Impl::measure_in_band(std::span<const std::uint16_t> raw, const cv::Rect& cells, std::uint16_t near_raw,
                                        std::uint16_t far_raw, cv::Point seed_cell, Palm& palm, int grow, bool two_sided,
                                        Candidate candidate) {
-  const bool bulge_wanted = candidate == Candidate::kNewTrack;  // only a new track's tests ask is_dome
+  const bool bulge_wanted = candidate != Candidate::kFollowed;  // only a new track's tests ask is_dome
   // Near the body part of the palm may be less than foreground_m in front of what was there
   // before, so at full resolution the depth band and connectivity bound the hand, in a ROI
   // grown by a palm diameter.
@@ -514,7 +527,7 @@ bool HandFinder::Impl::measure_in_band(std::span<const std::uint16_t> raw, const
   cv::Point max_at;
   const float z_near = model.metres(near_raw);
   distance_peak(roi_dist, max_dist, max_at);
-  if (params.palm_from_nearest_m > 0 && candidate == Candidate::kFollowed) {
+  if (params.palm_from_nearest_m > 0 && candidate != Candidate::kNewTrack) {
     const int half = static_cast<int>(std::ceil(params.palm_from_nearest_m * k.fx / std::max(0.3f, z_near)));
     const cv::Point at_seed = seed - hand_rect.tl();
     const cv::Rect near_seed =
@@ -529,14 +542,14 @@ bool HandFinder::Impl::measure_in_band(std::span<const std::uint16_t> raw, const
       const cv::Point2d peak(rx0 - 1 + max_at.x, ry0 - 1 + max_at.y);
       const bool near_before = std::max(std::abs(peak.x - was.x), std::abs(peak.y - was.y)) <= half;
       if (near_dist * z_near / k.fx >= params.min_palm_radius_m || max_dist * z_near / k.fx < params.min_palm_radius_m ||
-          !near_before) {
+          !near_before || candidate == Candidate::kNewTrackNearSeed) {
         max_dist = near_dist;
         max_at = near_at + near_seed.tl();
       }
     }
   }
   if (max_dist < 2.0) return false;
-  const double ridge_px = ridge_length(roi_dist, max_dist, max_at);
+  const double ridge_px = ridge_length(roi_dist, max_dist, max_at, candidate == Candidate::kNewTrackNearSeed, ridge_mask);
   cv::Point2d centre = plateau_centre(roi_dist, max_dist, max_at);
   // A palm turned away from the sensor is foreshortened across the turn, and its far side falls
   // out of the depth band of the nearest reading (the thumb): its inscribed circle shrinks toward
@@ -1440,9 +1453,26 @@ bool HandFinder::Impl::arm_end_candidate(std::span<const std::uint16_t> raw, cv:
   // hand held against the chest keeps the torso out of it (4-8 cm behind).
   // The grid test first: it is cheap, the full-resolution measure is not.
   if (front_touches_border(seed, near_raw, two_sided) || !reaches_back(seed, near_raw, two_sided) ||
-      !measure(raw, box, near_raw, seed, palm, two_sided, Candidate::kNewTrack) || !palm_accepted(palm) ||
-      palm.radius_m > params.max_new_palm_radius_m || palm.ridge_m > params.max_palm_ridge_m || is_dome(palm))
+      !measure(raw, box, near_raw, seed, palm, two_sided, Candidate::kNewTrack))
     return false;
+  const auto new_palm = [&](const Palm& p) {
+    return palm_accepted(p) && p.radius_m <= params.max_new_palm_radius_m && p.ridge_m <= params.max_palm_ridge_m && !is_dome(p);
+  };
+  if (!new_palm(palm)) {
+    if (!params.second_look_near_nearest || params.palm_from_nearest_m <= 0) return false;
+    // The band's widest place was a limb (a tube: its ridge runs on) or round: a hand held up beside
+    // the head with its forearm and upper arm at its depth has its widest place at the elbow, 15-25 cm
+    // below the palm. The palm is then sought where a followed one is, near the nearest reading (the
+    // fingertips); the same tests decide (seed 86 of the tuning range: its first 15 frames).
+    // Only a palm elsewhere is a second look: the same place, its ridge counted the other way, would
+    // overturn the first verdict on a hair (seed 66: a shoulder refused at 9.1 cm of ridge, taken at 8.6).
+    Palm near_seed;
+    if (!measure(raw, box, near_raw, seed, near_seed, two_sided, Candidate::kNewTrackNearSeed) ||
+        std::hypot(near_seed.u - palm.u, near_seed.v - palm.v) * palm.z <= palm.radius_m * model.intrinsics().fx ||
+        !new_palm(near_seed))
+      return false;
+    palm = near_seed;
+  }
   band_region.copyTo(arm);
   cv::dilate(arm, arm, kernel3);
   return true;

@@ -135,6 +135,12 @@ struct HandFinderParams {
   /// taken if its palm moved less than this (0.45 m/s at 30 Hz); 0: off (the nearest-first search only,
   /// which lost it behind nearer things until it moved).
   double still_hand_m = 0.015;
+  /// A new track without a background whose band's widest place is no palm (a limb's tube, a dome) is
+  /// looked at again near its nearest reading, as a followed palm is (palm_from_nearest_m), counting
+  /// only the ridge through that circle: a hand held up beside the head with its forearm and upper arm
+  /// at its depth has its widest place at the elbow. Tuning seeds 1-100 and 101-200: visible frames
+  /// tracked 91.78 -> 92.39 % and 92.69 -> 93.27 %, nothing else changed. false: the first look only.
+  bool second_look_near_nearest = true;
 };
 
 struct HandObservation {

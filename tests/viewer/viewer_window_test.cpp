@@ -176,7 +176,7 @@ TEST(ViewerWindow, FitsASmallScreenShowsTheClothAndSavesASnapshotOnAKey) {
   // 2 s): the settled geometry is what a user sees, so it is read again for up to 3 s more.
   cv::Rect where;
   eventually([&] { return (where = display.geometry(window)).height <= 700; }, 3s);
-  EXPECT_LE(where.height, 700) << "a 1000 px window is shrunk to the 700 px screen";
+  EXPECT_LE(where.height, 700) << "a 1000 px window is shrunk to the 700 px screen; stderr: " << viewer.err();
   EXPECT_GT(where.height, 400);
   EXPECT_LE(where.br().y, 700);
   EXPECT_LE(where.br().x, 1024);

@@ -27,6 +27,7 @@ class ChildProcess {
   /// Sends a signal (e.g. SIGINT to test a clean stop).
   void signal(int signo);
   bool running();
+  pid_t pid() const { return pid_; }
   /// Reads the child's output until stdout contains `text` (true) or the timeout passes or the
   /// child exits without printing it (false).
   bool wait_for_output(const std::string& text, std::chrono::milliseconds timeout);

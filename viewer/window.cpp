@@ -94,10 +94,11 @@ int Window::poll(int wait_ms) {
 }
 
 void Window::settle_fit() {
-  // The size asked for at creation does not always hold: on a loaded machine the window was mapped at
-  // the requested 1000 px on a 700 px screen (ctest, 2026-12-05: twice in ~30 runs), the resize asked
-  // before it was mapped lost. Until the window is seen at the fitted size (then it is the user's to
-  // resize), a larger one is asked again, now and then for a few seconds of polls.
+  // The size asked for at creation does not always hold: the screen may not answer yet when the window is
+  // made (an X server still starting), or a window manager may map the window at the requested size. A
+  // test's server that was not ready left a 1000 px window on a 700 px screen (ctest, 2026-12-05). Until
+  // the window is seen at the fitted size (then it is the user's to resize), the screen is asked again
+  // and a larger window resized, now and then for a few seconds of polls.
   if (fit_checks_ > 300 || fit_checks_++ % 10 != 0) return;
   if (size_ == requested_) size_ = fitted(true);  // the screen unknown at creation: asked again
   cv::Rect area;

@@ -78,7 +78,7 @@ cv::Point2d plateau_centre(const cv::Mat& dist, double peak, cv::Point at) {
 }
 
 /// How far (pixels) from a distance transform's maximum `peak` at `at` the region stays nearly as
-/// wide (values >= kRidgeShare of the peak, connected to the maximum): a palm is a compact blob, its
+/// wide (values >= kRidgeShare of the peak): a palm is a compact blob, its
 /// widest place a short ridge (the palm and the fingers beside it); a limb is a tube of constant
 /// width (the upper arm, 4.5 cm in radius, holds a palm-sized circle all along its length).
 /// Every wide place of the region counts, unless `connected`: then only the ridge through the

@@ -42,21 +42,23 @@ std::optional<cv::Size> screen_size() {
   return size;
 }
 
-cv::Size Window::fitted(bool log) const {
+std::optional<cv::Size> Window::fitted() const {
   const auto screen = screen_size();
-  if (!screen) return requested_;
+  if (!screen) return std::nullopt;
   // Keep the aspect: a square view stays square on a wide or a tall screen.
   const double fit = std::min({1.0, static_cast<double>(screen->width - kScreenMargin_px) / requested_.width,
                                static_cast<double>(screen->height - kScreenMargin_px) / requested_.height});
   const cv::Size size(std::max(kMinimumSide_px, static_cast<int>(requested_.width * fit)),
                       std::max(kMinimumSide_px, static_cast<int>(requested_.height * fit)));
-  if (log && size != requested_)
+  if (size != requested_)
     spdlog::info("tachi-viewer: window {}x{} to fit the {}x{} screen", size.width, size.height, screen->width, screen->height);
   return size;
 }
 
 Window::Window(std::string name, cv::Size requested) : name_(std::move(name)), requested_(requested) {
-  size_ = fitted(true);
+  const auto fits = fitted();
+  screen_known_ = fits.has_value();
+  size_ = fits.value_or(requested_);
   // GUI_NORMAL: no toolbar (its zoom would fight ours) and a window that can shrink; FREERATIO: the
   // image follows the window, and every frame is rendered at the window's size.
   cv::namedWindow(name_, cv::WINDOW_NORMAL | cv::WINDOW_GUI_NORMAL | cv::WINDOW_FREERATIO);
@@ -100,7 +102,12 @@ void Window::settle_fit() {
   // the window is seen at the fitted size (then it is the user's to resize), the screen is asked again
   // and a larger window resized, now and then for a few seconds of polls.
   if (fit_checks_ > 300 || fit_checks_++ % 10 != 0) return;
-  if (size_ == requested_) size_ = fitted(true);  // the screen unknown at creation: asked again
+  if (!screen_known_) {  // the screen did not answer at creation: asked again
+    const auto fits = fitted();
+    if (!fits) return;
+    screen_known_ = true;
+    size_ = *fits;
+  }
   cv::Rect area;
   try {
     area = cv::getWindowImageRect(name_);

@@ -45,11 +45,13 @@ class Window final : public ViewerWindow {
  private:
   static void on_mouse(int event, int x, int y, int flags, void* self);
   void apply_hidden_pointer();
-  /// The size that fits the screen (the requested one where the screen is unknown or large enough).
-  cv::Size fitted(bool log) const;
+  /// The size that fits the screen (the requested one where the screen is large enough); nullopt while
+  /// the screen does not answer.
+  std::optional<cv::Size> fitted() const;
   void settle_fit();
   std::string name_;
   cv::Size requested_;
+  bool screen_known_ = false;
   bool fit_settled_ = false;  ///< the window was seen at the fitted size (from then on the user's to resize)
   int fit_checks_ = 0;
   void* display_ = nullptr;  ///< Xlib Display*, kept open while the blank cursor is in use

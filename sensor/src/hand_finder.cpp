@@ -86,22 +86,29 @@ cv::Point2d plateau_centre(const cv::Mat& dist, double peak, cv::Point at) {
 /// measured 32 cm of ridge counted whole (seed 86 of the tuning range: its first 15 frames
 /// untracked); counted connected for every new track, an elbow whose forearm left the image became
 /// a short ridge and was taken (seed 121: 23 frames 34 cm off). So only a palm sought near the
-/// nearest reading (arm_end_candidate's second look) counts its own ridge. `scratch`: a buffer.
+/// nearest reading (arm_end_candidate's second look) counts its own ridge. `connected_scratch`: null
+/// for every wide place, else a mask of dist's size (a view of a frame-sized buffer: nothing allocated).
 constexpr double kRidgeShare = 0.85;
-double ridge_length(const cv::Mat& dist, double peak, cv::Point at, bool connected, cv::Mat& scratch) {
+double ridge_length(const cv::Mat& dist, double peak, cv::Point at, cv::Mat* connected_scratch) {
   const auto level = static_cast<float>(kRidgeShare * peak);
-  cv::compare(dist, level, scratch, cv::CMP_GE);
-  std::uint8_t counted = 255;
-  if (connected) {
-    cv::floodFill(scratch, at, cv::Scalar(128), nullptr, cv::Scalar(0), cv::Scalar(0), 8);
-    counted = 128;
-  }
   int far2 = 0;
-  for (int y = 0; y < scratch.rows; ++y) {
-    const auto* row = scratch.ptr<std::uint8_t>(y);
+  if (connected_scratch == nullptr) {
+    for (int y = 0; y < dist.rows; ++y) {
+      const float* row = dist.ptr<float>(y);
+      const int dy2 = (y - at.y) * (y - at.y);
+      for (int x = 0; x < dist.cols; ++x)
+        if (row[x] >= level) far2 = std::max(far2, dy2 + (x - at.x) * (x - at.x));
+    }
+    return std::sqrt(static_cast<double>(far2));
+  }
+  cv::Mat& mask = *connected_scratch;
+  cv::compare(dist, level, mask, cv::CMP_GE);
+  cv::floodFill(mask, at, cv::Scalar(128), nullptr, cv::Scalar(0), cv::Scalar(0), 8);
+  for (int y = 0; y < mask.rows; ++y) {
+    const auto* row = mask.ptr<std::uint8_t>(y);
     const int dy2 = (y - at.y) * (y - at.y);
-    for (int x = 0; x < scratch.cols; ++x)
-      if (row[x] == counted) far2 = std::max(far2, dy2 + (x - at.x) * (x - at.x));
+    for (int x = 0; x < mask.cols; ++x)
+      if (row[x] == 128) far2 = std::max(far2, dy2 + (x - at.x) * (x - at.x));
   }
   return std::sqrt(static_cast<double>(far2));
 }
@@ -209,6 +216,7 @@ struct HandFinder::Impl {
   cv::Mat roi_mask_buffer = cv::Mat(kDepthHeight + 2, kDepthWidth + 2, CV_8U);
   cv::Mat roi_closed_buffer = cv::Mat(kDepthHeight + 2, kDepthWidth + 2, CV_8U);
   cv::Mat roi_dist_buffer = cv::Mat(kDepthHeight + 2, kDepthWidth + 2, CV_32F);
+  cv::Mat ridge_mask_buffer = cv::Mat(kDepthHeight + 2, kDepthWidth + 2, CV_8U);  // ridge_length's connected ridge
   std::vector<std::uint16_t> palm_raw;
   std::vector<cv::Point> palm_pixels;      // ... and where they are
   bool tracking = false;
@@ -549,7 +557,9 @@ bool HandFinder::Impl::measure_in_band(std::span<const std::uint16_t> raw, const
     }
   }
   if (max_dist < 2.0) return false;
-  const double ridge_px = ridge_length(roi_dist, max_dist, max_at, candidate == Candidate::kNewTrackNearSeed, ridge_mask);
+  if (candidate == Candidate::kNewTrackNearSeed) ridge_mask = ridge_mask_buffer(cv::Rect(0, 0, roi_dist.cols, roi_dist.rows));
+  const double ridge_px =
+      ridge_length(roi_dist, max_dist, max_at, candidate == Candidate::kNewTrackNearSeed ? &ridge_mask : nullptr);
   cv::Point2d centre = plateau_centre(roi_dist, max_dist, max_at);
   // A palm turned away from the sensor is foreshortened across the turn, and its far side falls
   // out of the depth band of the nearest reading (the thumb): its inscribed circle shrinks toward

@@ -43,7 +43,8 @@ class VirtualDisplay {
     constexpr int kTries = 10;
     for (int n = 150 + ::getpid() % 400, tries = 0; tries < kTries; ++n) {
       const std::string number = std::to_string(n);
-      if (held(std::filesystem::path("/tmp") / (".X" + number + "-lock"))) continue;
+      const auto lock = std::filesystem::path("/tmp") / (".X" + number + "-lock");
+      if (held(lock)) continue;
       ++tries;
       name_ = ":" + number;
       char screen[32];
@@ -54,7 +55,6 @@ class VirtualDisplay {
       // socket left by a killed server, or another test's server that took the number between the lock
       // check and Xvfb's start (ours then exits, "server already active"), let the viewer start before
       // or beside our server (seen in full ctest runs: no window, or one never fitted to the screen).
-      const auto lock = std::filesystem::path("/tmp") / (".X" + number + "-lock");
       for (int i = 0; i < 200 && server_->running(); ++i) {
         std::ifstream in(lock);
         pid_t owner = 0;

@@ -328,7 +328,12 @@ class Solver {
   std::vector<std::uint8_t> flood_met_;
   UnionFind<std::uint32_t> flood_sets_;
   std::vector<std::uint32_t> reopen_subtree_;  ///< scratch of reopen_shorter
-  std::vector<std::uint8_t> touched_mark_;  ///< per particle: touched by the update's springs (cleared after it)
+  // Scratch of the incremental update: a bit per spring (edited by the cut) and per particle (touched by the
+  // edited springs), cleared as read; the same once each, in increasing order.
+  std::vector<std::uint64_t> edited_bits_;
+  std::vector<std::uint64_t> touched_bits_;
+  std::vector<std::uint32_t> edited_;
+  std::vector<std::uint32_t> touched_;
   // The cuts' tether work spread over steps (advance_cut_work): its phase, the particles every cut since it
   // began touched (sorted, once each), where the phase's pass is, and the steps it has taken.
   CutPhase cut_phase_ = CutPhase::None;

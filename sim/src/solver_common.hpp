@@ -7,9 +7,11 @@
 
 #include <Eigen/Core>
 
+#include <bit>
 #include <cstddef>
 #include <cstdint>
 #include <limits>
+#include <vector>
 
 namespace tachi::sim::solver_detail {
 
@@ -41,6 +43,27 @@ void for_chunks(std::size_t n, int threads, const Body& body) {
     const auto chunk = static_cast<std::size_t>(t);
     const auto parts = static_cast<std::size_t>(threads);
     body(n * chunk / parts, n * (chunk + 1) / parts);
+  }
+}
+
+/// A set of indices kept as a bit per index, for a log with repeats that is wanted once each and in
+/// increasing order (the update after a cut: the springs it edited, the particles they touch). Marking is a
+/// store per entry and the read-out one pass over the words, where sort + unique of the log was ~0.2 ms of
+/// the update after a 64-segment exact cut at 128 x 128 (5,722 edits). The read-out is in increasing
+/// order, as sort + unique gave it: the strain limit appends the edited springs in that order.
+inline void mark_index(std::vector<std::uint64_t>& bits, std::uint32_t i) {
+  bits[i >> 6U] |= std::uint64_t{1} << (i & 63U);
+}
+
+/// Appends the marked indices to `out` in increasing order and clears the marks.
+inline void take_marked(std::vector<std::uint64_t>& bits, std::vector<std::uint32_t>& out) {
+  for (std::size_t w = 0; w < bits.size(); ++w) {
+    std::uint64_t word = bits[w];
+    if (word == 0) continue;
+    bits[w] = 0;
+    for (; word != 0; word &= word - 1) {
+      out.push_back(static_cast<std::uint32_t>(w * 64 + static_cast<std::size_t>(std::countr_zero(word))));
+    }
   }
 }
 

@@ -189,6 +189,7 @@ class Solver {
   void refresh_caches(const Cloth& cloth);
   void full_build(const Cloth& cloth, std::vector<std::uint32_t> pins);
   void update_incrementally(const Cloth& cloth);
+  /// Batches `springs` (in increasing index: the sweep order's tie-break) after each family's quads.
   void append_springs(const Cloth& cloth, const std::vector<std::uint32_t>& springs);
   void order_strain_limit(const Cloth& cloth);
   void build_attachments(const Cloth& cloth);
@@ -278,6 +279,15 @@ class Solver {
   std::vector<std::size_t> tether_block_end_;
   std::size_t unbent_tethers_ = 0;  ///< leading entries of tether_order_ with no bend (when it is in use)
   std::vector<Slot> slot_;                    ///< per spring
+  // Scratch of append_springs: per family the springs in the order given and their sweep keys; one
+  // family's springs in sweep order, their keys, their ends, their quads; the counting sort's counts.
+  std::array<std::vector<std::uint32_t>, 3> batch_springs_;
+  std::array<std::vector<std::uint32_t>, 3> batch_keys_;
+  std::vector<std::uint32_t> batch_order_;
+  std::vector<std::uint32_t> batch_sorted_keys_;
+  std::vector<PackedSpring> batch_packed_;
+  std::vector<SpringQuad> batch_fresh_;
+  std::vector<std::uint32_t> batch_count_;
   std::size_t lanes_ = 0;                     ///< lanes in use when last fully built, and blanked since
   std::size_t blanked_ = 0;
   // Structural springs again, ordered outwards from the pins, for the strain limit; per spring its place
@@ -328,7 +338,12 @@ class Solver {
   std::vector<std::uint8_t> flood_met_;
   UnionFind<std::uint32_t> flood_sets_;
   std::vector<std::uint32_t> reopen_subtree_;  ///< scratch of reopen_shorter
-  std::vector<std::uint8_t> touched_mark_;  ///< per particle: touched by the update's springs (cleared after it)
+  // Scratch of the incremental update: a bit per spring (edited by the cut) and per particle (touched by the
+  // edited springs), cleared as read; the same once each, in increasing order.
+  std::vector<std::uint64_t> edited_bits_;
+  std::vector<std::uint64_t> touched_bits_;
+  std::vector<std::uint32_t> edited_;
+  std::vector<std::uint32_t> touched_;
   // The cuts' tether work spread over steps (advance_cut_work): its phase, the particles every cut since it
   // began touched (sorted, once each), where the phase's pass is, and the steps it has taken.
   CutPhase cut_phase_ = CutPhase::None;

@@ -221,10 +221,14 @@ struct HandFinder::Impl {
   std::vector<cv::Point> palm_pixels;      // ... and where they are
   bool tracking = false;
   cv::Point previous_cell{-1, -1};
+  // The grid cell of the last palm reported: previous_cell is also where a component that was
+  // measured and refused this frame had its palm, which is not where the hand was.
+  cv::Point last_seen_cell{-1, -1};
   Eigen::Vector3d last_seen = Eigen::Vector3d::Zero();
   int frames_since_seen = 1 << 20;
   Eigen::Vector3d last_step = Eigen::Vector3d::Zero();  // last_seen less the palm a frame before it
   bool step_known = false;                               // the palm was found in two frames running
+  bool continued_in_background = false;  // find_arm_end found the last frame's hand where it was, or its step carried it
 
   Impl(const DepthModel& m, const HandFinderParams& p) : model(m), params(p) {
     for (std::size_t raw = 0; raw < 2048; ++raw) {
@@ -1376,6 +1380,7 @@ void HandFinder::Impl::band_cells_at(cv::Point seed, std::uint16_t near_raw, boo
 /// arm's end (reaches_back). Finds a hand held still since the first frame, which
 /// the background holds; a box, a head or a torso fail the shape or the depth test.
 bool HandFinder::Impl::find_arm_end(std::span<const std::uint16_t> raw, Palm& palm, cv::Point& seed_out) {
+  continued_in_background = false;
   candidate_mask.create(kGridH, kGridW, CV_8U);
   candidate_mask.setTo(0);
   // One candidate: the grid cells within the depth band connected to the seed (masked as tried).
@@ -1406,22 +1411,35 @@ bool HandFinder::Impl::find_arm_end(std::span<const std::uint16_t> raw, Palm& pa
   // was lost again behind the nearer objects of the room (a box, a table edge, a side wall running back
   // give one candidate per depth band each), until it moved (measured on seeds 1-100: the hand held up
   // from the first frame untracked for its first 30 frames in 5 clips).
-  if (params.still_hand_m > 0 && frames_since_seen == 1 && previous_cell.x >= 0) {
+  // Where it was is last_seen_cell, not previous_cell: an object moved in this frame (a foreground
+  // component, tried first and refused) leaves its own palm's cell there (seed 207 of the tuning
+  // range: a still hand lost for its last 90 frames when a table edge entered the image's corner).
+  if (params.still_hand_m > 0 && frames_since_seen == 1 && last_seen_cell.x >= 0) {
     constexpr int kNear = 3;  // grid cells (12 px): a still hand's nearest reading stays within its palm
     std::uint16_t near_raw = kNoReading;
     cv::Point seed{-1, -1};
-    for (int gy = std::max(0, previous_cell.y - kNear); gy <= std::min(kGridH - 1, previous_cell.y + kNear); ++gy) {
+    for (int gy = std::max(0, last_seen_cell.y - kNear); gy <= std::min(kGridH - 1, last_seen_cell.y + kNear); ++gy) {
       const auto* g = grid.ptr<std::uint16_t>(gy);
-      for (int gx = std::max(0, previous_cell.x - kNear); gx <= std::min(kGridW - 1, previous_cell.x + kNear); ++gx)
+      for (int gx = std::max(0, last_seen_cell.x - kNear); gx <= std::min(kGridW - 1, last_seen_cell.x + kNear); ++gx)
         if (g[gx] != 0 && g[gx] < near_raw) {  // 0: no reading (as untried_row_minimum skips it)
           near_raw = g[gx];
           seed = {gx, gy};
         }
     }
-    // Held still: the palm within still_hand_m of where it was (a hand that moves is foreground, followed as such).
-    if (seed.x >= 0 && try_seed(seed, near_raw) &&
-        (model.back_project(palm.u, palm.v, palm.z) - last_seen).norm() <= params.still_hand_m)
-      return true;
+    // Held still, or moving on as it did: the palm within still_hand_m of where it was, or of where its
+    // last step carries it. A hand that starts to move in front of its own background, or slowly just
+    // in front of the body, stays less than foreground_m nearer than what is behind it for many frames
+    // (seed 207: pushing toward the camera at 1-2 cm a frame from rest; seed 298: a followed hand 10 cm
+    // before the chest); held to where it was, it was lost at its first step. Where it was stays a
+    // test of its own: a still hand's measured centre jitters by a few mm, which its "step" carries on.
+    if (seed.x >= 0 && try_seed(seed, near_raw)) {
+      const Eigen::Vector3d at = model.back_project(palm.u, palm.v, palm.z);
+      if ((at - last_seen).norm() <= params.still_hand_m ||
+          (step_known && (at - last_seen - last_step).norm() <= params.still_hand_m)) {
+        continued_in_background = true;
+        return true;
+      }
+    }
     candidate_mask.setTo(0);  // not there: the search below as if it had not been tried
   }
   // Otherwise the nearest readings first; before any hand was seen (a hand held up and still from the
@@ -1644,6 +1662,7 @@ HandObservation HandFinder::Impl::find(std::span<const std::uint16_t> raw) {
 
   Palm palm;
   bool found = false;
+  continued_in_background = false;
   bool followed = false;  // found as the hand followed last frame (not a new track)
   // A followed track that is no arm's end (a second person's head, taken while the user's hand was
   // down, seed 53) gives way to a component that reaches an arm's protrusion nearer than it, is an
@@ -1679,9 +1698,12 @@ HandObservation HandFinder::Impl::find(std::span<const std::uint16_t> raw) {
   if (!found) return out;
 
   const Eigen::Vector3d p = model.back_project(palm.u, palm.v, palm.z);
-  step_known = followed && frames_since_seen == 1;  // a new track's step would be a jump between two things
+  // A new track's step would be a jump between two things; a hand found where it was (or where its
+  // step carried it) within the background is the same hand.
+  step_known = (followed || continued_in_background) && frames_since_seen == 1;
   last_step = p - last_seen;
   last_seen = p;
+  last_seen_cell = {static_cast<int>(palm.u) / kStep, static_cast<int>(palm.v) / kStep};
   frames_since_seen = 0;
   out.tracked = true;
   out.position_m = p.cast<float>();

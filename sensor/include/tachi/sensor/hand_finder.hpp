@@ -131,9 +131,11 @@ struct HandFinderParams {
   /// background, and a room's nearer things (a box, a table edge, a side wall running back: one candidate
   /// per depth band each) used up the 6 before it (tuning seeds 1-100: 5 clips untracked ~30 frames).
   int start_candidates = 12;
-  /// A hand found last frame and held still since (part of the background) is tried first where it was,
-  /// taken if its palm moved less than this (0.45 m/s at 30 Hz); 0: off (the nearest-first search only,
-  /// which lost it behind nearer things until it moved).
+  /// A hand found last frame and not foreground now (held still, part of the background, or moving on
+  /// less than foreground_m in front of what is behind it) is tried first where it was, taken if its
+  /// palm is within this of where it was or of where its last step carries it (0.45 m/s at 30 Hz,
+  /// from rest or from its last step). 0: off (the nearest-first search only, which lost it behind
+  /// nearer things until it moved).
   double still_hand_m = 0.015;
   /// A new track without a background whose band's widest place is no palm (a limb's tube, a dome) is
   /// looked at again near its nearest reading, as a followed palm is (palm_from_nearest_m), counting

@@ -273,11 +273,11 @@ LiveRun time_long_stroke(int n, tachi::sim::CutMode mode, const tachi::sim::Solv
 }  // namespace
 
 int main(int argc, char** argv) {
-  // cut_bench [reps] [repair_per_step] [threads] [substeps] [cut_work_per_step]: the second argument sets the
+  // cut_bench [reps] [repair_per_step] [threads] [substeps] [cut_work_per_step] [long_cut_work_per_step]: the second argument sets the
   // long strokes' attachment repair budget (SolverParams::repair_per_step) for the measurements in docs/sim.md
   // ("Limits"); the third and fourth their solver's threads (given: the frames are timed in wall time) and
   // sub-steps (the third also the exact section's threads); the fifth the exact section's
-  // SolverParams::cut_work_per_step (default: the solver's).
+  // SolverParams::cut_work_per_step (default: the solver's); the sixth the long strokes' (default: the solver's).
   const int reps = argc > 1 ? std::max(1, std::atoi(argv[1])) : 30;
   tachi::sim::SolverParams long_stroke_params;
   if (argc > 2) long_stroke_params.repair_per_step = std::max(1, std::atoi(argv[2]));
@@ -285,6 +285,7 @@ int main(int argc, char** argv) {
   if (argc > 4) long_stroke_params.substeps = std::clamp(std::atoi(argv[4]), 1, 64);
   tachi::sim::SolverParams exact_params;
   if (argc > 5) exact_params.cut_work_per_step = std::max(0, std::atoi(argv[5]));
+  if (argc > 6) long_stroke_params.cut_work_per_step = std::max(0, std::atoi(argv[6]));
   exact_params.threads = long_stroke_params.threads;  // the target is for one thread and two
   constexpr int n = 128;
   tachi::sim::ClothConfig config;

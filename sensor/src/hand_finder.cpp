@@ -228,7 +228,7 @@ struct HandFinder::Impl {
   int frames_since_seen = 1 << 20;
   Eigen::Vector3d last_step = Eigen::Vector3d::Zero();  // last_seen less the palm a frame before it
   bool step_known = false;                               // the palm was found in two frames running
-  bool continued_in_background = false;  // find_arm_end found the last frame's hand where it was, or its step carried it
+  bool continued_in_background = false;  // this frame (find clears it): find_arm_end found the last frame's hand where it was, or its step carried it
 
   Impl(const DepthModel& m, const HandFinderParams& p) : model(m), params(p) {
     for (std::size_t raw = 0; raw < 2048; ++raw) {
@@ -1380,7 +1380,6 @@ void HandFinder::Impl::band_cells_at(cv::Point seed, std::uint16_t near_raw, boo
 /// arm's end (reaches_back). Finds a hand held still since the first frame, which
 /// the background holds; a box, a head or a torso fail the shape or the depth test.
 bool HandFinder::Impl::find_arm_end(std::span<const std::uint16_t> raw, Palm& palm, cv::Point& seed_out) {
-  continued_in_background = false;
   candidate_mask.create(kGridH, kGridW, CV_8U);
   candidate_mask.setTo(0);
   // One candidate: the grid cells within the depth band connected to the seed (masked as tried).

@@ -201,7 +201,7 @@ TEST_F(CutCli, ASlitStaysWithinTenPercentStrainInEveryModeOverJitterSeeds) {
 TEST_F(CutCli, ACutsTetherWorkSpreadOverStepsStillDropsThePiece) {
   // --cut-work-per-step: what a cut's tether work does in the cut's step (docs/sim.md "Caches"); the rest
   // is spread over the next steps, the cut-off piece held on its old tethers until it is labelled. The piece
-  // must still fall, whole, and the cloth rest as when all of it is done at once (0, the default).
+  // must still fall, whole, and the cloth rest as when all of it is done at once (0; the default is 1).
   const fs::path stroke = write_stroke(-0.1);
   for (const std::string budget : {"0", "1", "4096"}) {
     SCOPED_TRACE(budget);

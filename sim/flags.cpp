@@ -118,7 +118,8 @@ void add_offline_flags(CLI::App& app, OfflineOptions& o) {
       ->capture_default_str();
   app.add_option("--cut-work-per-step", o.solver.cut_work_per_step,
                  "A cut's tether work done in the cut's step, in visits (docs/sim.md \"Caches\"); the rest goes on in "
-                 "even slices of at least as much over at most 12 steps after it. 0: all of it in the step of the cut")
+                 "even slices of at least as much over at most 12 steps after it (1, the default: nearly all of it spread). "
+                 "0: all of it in the step of the cut")
       ->check(CLI::Range(0, 1 << 30))
       ->capture_default_str();
   app.add_option_function<std::vector<float>>(

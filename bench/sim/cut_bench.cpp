@@ -277,7 +277,8 @@ int main(int argc, char** argv) {
   // long strokes' attachment repair budget (SolverParams::repair_per_step) for the measurements in docs/sim.md
   // ("Limits"); the third and fourth their solver's threads (given: the frames are timed in wall time) and
   // sub-steps (the third also the exact section's threads); the fifth the exact section's
-  // SolverParams::cut_work_per_step (default: the solver's); the sixth the long strokes' (default: the solver's).
+  // SolverParams::cut_work_per_step (default: the solver's, 1 since 2026-12-05; the figures measured before
+  // it without these arguments are 0's); the sixth the long strokes' (default: the solver's).
   const int reps = argc > 1 ? std::max(1, std::atoi(argv[1])) : 30;
   tachi::sim::SolverParams long_stroke_params;
   if (argc > 2) long_stroke_params.repair_per_step = std::max(1, std::atoi(argv[2]));

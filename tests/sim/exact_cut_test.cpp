@@ -337,7 +337,7 @@ TEST(ExactCut, ASlitInAnEdgePinnedClothRestsWithinTenPercentInEveryModeAndTheSum
   // followed the cut (and with the strain limit's follow-the-leader rule) this rested at 470 % (grid) and
   // 1770 % (exact): the cloth below the slit was torn sideways every sub-step.
   // In the cloth's plane (no out-of-plane jitter); with tachi-sim's jitter, through the CLI:
-  // CutCli.ASlitRestsWithinTenPercentStrainInEveryModeWithTheDefaultJitter.
+  // CutCli.ASlitStaysWithinTenPercentStrainInEveryModeOverJitterSeeds.
   const auto dir = std::filesystem::temp_directory_path() / "tachi_exact_cut_slit_strain";
   std::filesystem::create_directories(dir);
   const auto stroke = dir / "slit.csv";

@@ -504,7 +504,7 @@ TEST_P(CutOff, AnOpenedParticleKeepsItsTetherAndACutOffPieceLosesItsAllAtOnce) {
   // whole stroke and fell stretched. But a piece the cut separates from the pins must fall as one, not once
   // the repair has settled everything else (Solver::release_cut_off). 24 x 24: the piece is found by flooding
   // it; 64 x 64: its 2048 particles are past the flood's cap, so the components are labelled by union-find.
-  // The parameter is cut_work_per_step: 0 (the default) releases the piece in the step of the cut; otherwise
+  // The parameter is cut_work_per_step: 0 releases the piece in the step of the cut; otherwise (1, the default)
   // what the cut's step cannot do within it goes on over the steps after it (at most Solver::kMaxCutWorkSteps),
   // the piece held as before until then (1: nearly all of it; 4096: all of it at 24 x 24, not at 64 x 64).
   for (const int n : {24, 64}) {

@@ -53,10 +53,12 @@ struct SolverParams {
   /// broke (a pass over each pin group's settle order) and labelling what it cut off (floods, then union-find
   /// over the springs). The rest goes on over the steps after it in even slices of at least this much, at most
   /// Solver::kMaxCutWorkSteps steps: meanwhile the piece keeps its old tethers and the repairs wait; it is
-  /// released in one pass. Cuts that come meanwhile join the work. 0 (the default): all of it in the step of
-  /// the cut. Spread (1 or 4096), the step after a 128 x 128 cut costs 1.3-1.8x a plain one against 3.0-3.7x,
-  /// but the repairs' timing changes with it, and with it which delete-mode slits flutter (docs/sim.md).
-  int cut_work_per_step = 0;
+  /// released in one pass. Cuts that come meanwhile join the work. 1 (the default since 2026-12-05): nearly
+  /// all of it spread; the step after a 128 x 128 cut costs 1.2-1.4x a plain one against 3.0-3.7x with 0 (all
+  /// of it in the step of the cut), and a long stroke's flap keeps its old tethers until the work ends (peak
+  /// strain 8-10 % against 65-992 %). The price: a cut-off piece falls up to kMaxCutWorkSteps steps after it
+  /// separates, and the slit behind a long stroke stays shut until then (docs/sim.md "Caches").
+  int cut_work_per_step = 1;
   bool long_range_attachments = true;
   bool soft_every_substep = true;  ///< shear/bend in every sub-step (false: cheaper, but never fully at rest)
   /// Threads of the sweeps (OpenMP). The positions are a function of this number, not of how many threads the

@@ -290,6 +290,9 @@ struct HandFinder::Impl {
   static std::size_t grid_index(cv::Point p) { return static_cast<std::size_t>(p.y) * kGridW + static_cast<std::size_t>(p.x); }
   bool reaches_back(cv::Point seed, std::uint16_t near_raw, bool past_nearer = false);
   bool front_touches_border(cv::Point seed, std::uint16_t near_raw, bool two_sided = false);
+  /// Whether that front surface reaches the image's border farther from the palm's centre than a
+  /// hand's fingertips do (kTipToPalmCentreM and a cell): the border cuts something beyond the hand.
+  bool front_crosses_border_beyond_hand(cv::Point seed, std::uint16_t near_raw, bool two_sided, const Palm& palm);
   /// The grid cells of the depth band [near side, band_limit[near_raw]] connected to `seed` into
   /// band_region (255), their box into `box`; `two_sided`: the near side is kEndBandNearM in front.
   void band_cells_at(cv::Point seed, std::uint16_t near_raw, bool two_sided, cv::Rect& box);
@@ -1368,6 +1371,23 @@ bool HandFinder::Impl::front_touches_border(cv::Point seed, std::uint16_t near_r
   return touches_border(front);
 }
 
+bool HandFinder::Impl::front_crosses_border_beyond_hand(cv::Point seed, std::uint16_t near_raw, bool two_sided,
+                                                        const Palm& palm) {
+  if (!params.front_in_view_beyond_hand || !front_touches_border(seed, near_raw, two_sided)) return false;  // front_cells: 128
+  const double reach_px = (kTipToPalmCentreM * model.intrinsics().fx / palm.z) + kStep;
+  const auto beyond = [&](int gx, int gy) {
+    if (front_cells.at<std::uint8_t>(gy, gx) != 128) return false;
+    const double du = gx * kStep + kStep / 2 - palm.u, dv = gy * kStep + kStep / 2 - palm.v;
+    return du * du + dv * dv > reach_px * reach_px;
+  };
+  const int left = (params.invalid_left_columns + kStep - 1) / kStep;
+  for (int gx = left; gx < kGridW; ++gx)
+    if (beyond(gx, 0) || beyond(gx, kGridH - 1)) return true;
+  for (int gy = 0; gy < kGridH; ++gy)
+    if (beyond(left, gy) || beyond(kGridW - 1, gy)) return true;
+  return false;
+}
+
 void HandFinder::Impl::band_cells_at(cv::Point seed, std::uint16_t near_raw, bool two_sided, cv::Rect& box) {
   cv::inRange(grid, two_sided ? end_band_near(near_raw) : 0, band_limit[near_raw], band_cells);
   cv::floodFill(band_cells, seed, cv::Scalar(128), &box, cv::Scalar(0), cv::Scalar(0), 8);
@@ -1578,14 +1598,18 @@ bool HandFinder::Impl::follow_component(std::span<const std::uint16_t> raw, int 
   if (measured) {
     previous_cell = {static_cast<int>(palm.u) / kStep, static_cast<int>(palm.v) / kStep};
     tracking = palm_sized(palm);  // keep following an arm whose palm is at the edge
-    // A new track does not start on a person walking by behind the user.
+    // A new track does not start on a person walking by behind the user, nor where its front surface runs
+    // out of the image beyond a hand's reach of the palm (front_in_view_beyond_hand). Fingers cut by the
+    // border are within that reach (seed 10, a user at 0.67 m); find_arm_end refuses any front surface
+    // at the border, where there is no background to go by.
     const bool jump = !take_over && (jumped(palm) || (continuing && off_course(palm)));
     const bool found =
         palm_accepted(palm) && !jump &&
         (continuing || (palm.radius_m <= params.max_new_palm_radius_m && palm.ridge_m <= params.max_palm_ridge_m && !is_dome(palm) &&
                         ((palm.z <= params.max_acquire_depth_m && !take_over) ||
                          (palm.z <= params.max_track_depth_m && reaches_back(seed, near_raw, at_end))) &&
-                        !is_joint(seed, near_raw) && !nearest_at_border(arm_nearest)));
+                        !is_joint(seed, near_raw) && !nearest_at_border(arm_nearest) &&
+                        !front_crosses_border_beyond_hand(seed, near_raw, at_end, palm)));
     if (jump || (!found && !continuing)) tracking = false;
     return found;
   }

@@ -105,15 +105,19 @@ TEST(RandomScene, AnElbowAtTheHandsDepthDoesNotStartATrack) {
 
 // Seed 42: the hand leaves the image across a side with the arm bent; the bend, its nearest reading
 // at the border, held a palm-sized circle and was followed for 31 frames. A track does not start
-// where a component's nearest reading is at the border (nearest_border_cells): with the test off,
-// the bend is taken again, so this can fail.
+// where a component's nearest reading is at the border (nearest_border_cells), nor where its front
+// surface runs out of the image beyond a hand's reach (front_in_view_beyond_hand): either refuses the
+// bend; with both off it is taken again, so this can fail.
 TEST(RandomScene, AnArmLeavingTheImageDoesNotStartATrackAtItsBend) {
   const auto captured = [](const HandFinderParams& params) {
     return score_clip(random_scenario(42), params).captured;
   };
   EXPECT_EQ(captured({}), 0u);
-  HandFinderParams no_border_test;
-  no_border_test.nearest_border_cells = -1;
+  HandFinderParams no_nearest_test;
+  no_nearest_test.nearest_border_cells = -1;
+  EXPECT_EQ(captured(no_nearest_test), 0u);
+  HandFinderParams no_border_test = no_nearest_test;
+  no_border_test.front_in_view_beyond_hand = false;
   EXPECT_GT(captured(no_border_test), 20u);
 }
 
@@ -266,6 +270,25 @@ TEST(RandomScene, AHandThatMovesOnWithinTheBackgroundIsStillFollowed) {
   EXPECT_GE(before_chest.tracked_ratio(), 0.7);
   EXPECT_LE(before_chest.rms_m, 0.01);
   EXPECT_EQ(before_chest.captured, 0u);
+}
+
+// Tuning seed 156: the user reaches out of the image's side, the arm level with the shoulder; the shoulder's
+// junction with the arm held a palm-sized place whose surface runs back, and once the arm's nearest reading
+// left the border it was taken as a new track and followed for 48 frames, 30 cm from the hand, out of view.
+// A new track's front surface (within 2 cm of its nearest reading) may meet the border only within a hand's
+// reach of its palm (fingers cut by the border, as in seed 10: a user at 0.67 m whose fingers leave the
+// top), not farther (an arm running out of the image). Seed 48: the user's other arm, hanging, its forearm
+// running out of the image's bottom, taken for 6 frames while no hand was raised.
+TEST(RandomScene, AnArmThatRunsOutOfTheImageIsNotTakenForAHandButFingersThatDoAre) {
+  HandFinderParams no_border_test;
+  no_border_test.front_in_view_beyond_hand = false;
+  for (const std::uint64_t seed : {156u, 48u}) {
+    EXPECT_EQ(score_clip(random_scenario(seed)).captured, 0u) << "seed " << seed;
+    EXPECT_GT(score_clip(random_scenario(seed), no_border_test).longest_captured_run, 3u) << "seed " << seed;
+  }
+  const auto fingers_cut = score_clip(random_scenario(10));
+  EXPECT_GE(fingers_cut.tracked_ratio(), 0.95);
+  EXPECT_LE(fingers_cut.rms_m, 0.01);
 }
 
 TEST(ClipScore, CapturedIsFarFromTheHandOrAnyPointWhenNoHandIsRaised) {

@@ -113,6 +113,13 @@ struct HandFinderParams {
   /// arm leaving the image across a side shows a palm-sized place at its bend (chosen on seeds
   /// 1-100). Negative: no such test.
   int nearest_border_cells = 1;
+  /// A new track from the foreground does not start where its front surface (within 2 cm of its
+  /// nearest reading) meets the image border farther from the palm than a hand's fingertips reach
+  /// (12 cm): an arm running out of the image at its side or bottom, whose junction with the shoulder
+  /// or bend holds a palm-sized place (tuning seed 156: 48 frames, 30 cm off). Fingers cut by the
+  /// border are within that reach. false: no such test (the search without a background refuses any
+  /// front surface at the border).
+  bool front_in_view_beyond_hand = true;
   /// The arm's end is its geodesic extremity: the surface reached from the arm's nearest reading
   /// without a depth jump and no farther back than this is walked, from where it runs on farther
   /// back (toward the body) to the point farthest along it. Where that end's hand does not hold the

@@ -367,8 +367,10 @@ struct HandFinder::Impl {
   /// (the invalid band at the left included). A new track does not start there: what the border
   /// cuts may be anything (the corner of a table or a box shows a palm-sized face and a side
   /// running back like an arm), and a hand is reported only whole in view anyway.
+  /// The first grid column with readings: Kinect's invalid band at the left is no image.
+  int left_border_cell() const { return (params.invalid_left_columns + kStep - 1) / kStep; }
   bool touches_border(const cv::Rect& cells) const {
-    const int left = (params.invalid_left_columns + kStep - 1) / kStep;
+    const int left = left_border_cell();
     return cells.x <= left || cells.y <= 0 || cells.x + cells.width >= kGridW || cells.y + cells.height >= kGridH;
   }
   /// Whether a component's nearest reading (grid cell `seed`) lies at the image's border: what is
@@ -1380,7 +1382,7 @@ bool HandFinder::Impl::front_crosses_border_beyond_hand(cv::Point seed, std::uin
     const double du = gx * kStep + kStep / 2 - palm.u, dv = gy * kStep + kStep / 2 - palm.v;
     return du * du + dv * dv > reach_px * reach_px;
   };
-  const int left = (params.invalid_left_columns + kStep - 1) / kStep;
+  const int left = left_border_cell();
   for (int gx = left; gx < kGridW; ++gx)
     if (beyond(gx, 0) || beyond(gx, kGridH - 1)) return true;
   for (int gy = 0; gy < kGridH; ++gy)

@@ -84,13 +84,17 @@ void Solver::append_springs(const Cloth& cloth, const std::vector<std::uint32_t>
   // build's every live spring, an update's edits read out of a bit set), so a stable counting sort by key
   // gives that order in one pass, where std::sort on packed (key, index) was ~0.1 ms of the update after a
   // 64-segment exact cut at 128 x 128. The keys are the rows times a few colours: their range is small.
+  // Springs not in increasing index (no caller passes them so) are sorted as (key, index) pairs instead.
   std::array<std::vector<std::uint32_t>, 3>& family_springs = batch_springs_;
   std::array<std::vector<std::uint32_t>, 3>& family_keys = batch_keys_;
   for (std::size_t f = 0; f < 3; ++f) {
     family_springs[f].clear();
     family_keys[f].clear();
   }
-  for (const std::uint32_t k : springs) {
+  bool increasing = true;
+  for (std::size_t j = 0; j < springs.size(); ++j) {
+    const std::uint32_t k = springs[j];
+    increasing = increasing && (j == 0 || springs[j - 1] < k);
     if (cloth.alive[k] == 0) continue;
     const auto f = static_cast<std::size_t>(cloth.kind[k]);
     family_springs[f].push_back(k);
@@ -110,7 +114,7 @@ void Solver::append_springs(const Cloth& cloth, const std::vector<std::uint32_t>
       const auto [lo, hi] = std::minmax_element(from_keys.begin(), from_keys.end());
       const std::uint32_t low = *lo;
       const std::size_t range = static_cast<std::size_t>(*hi - low) + 1;
-      if (range <= 4 * from.size() + 4096) {
+      if (increasing && range <= 4 * from.size() + 4096) {
         count.assign(range + 1, 0);
         for (const std::uint32_t key : from_keys) ++count[key - low + 1];
         for (std::size_t c = 1; c <= range; ++c) count[c] += count[c - 1];
@@ -120,7 +124,8 @@ void Solver::append_springs(const Cloth& cloth, const std::vector<std::uint32_t>
           keys[at] = from_keys[j];
         }
       } else {
-        // Keys spread too far for a count (a particle's grid row far off): sorted as (key, index) pairs.
+        // Keys spread too far for a count (a particle's grid row far off), or the springs out of index
+        // order: sorted as (key, index) pairs.
         std::vector<std::uint64_t> pairs(from.size());
         for (std::size_t j = 0; j < from.size(); ++j) {
           pairs[j] = (static_cast<std::uint64_t>(from_keys[j]) << 32U) | from[j];

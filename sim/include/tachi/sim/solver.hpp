@@ -191,7 +191,8 @@ class Solver {
   void refresh_caches(const Cloth& cloth);
   void full_build(const Cloth& cloth, std::vector<std::uint32_t> pins);
   void update_incrementally(const Cloth& cloth);
-  /// Batches `springs` (in increasing index: the sweep order's tie-break) after each family's quads.
+  /// Batches `springs` after each family's quads, in sweep order (ties by spring index; passed in increasing
+  /// index, as every caller does, they are counted into place, otherwise sorted).
   void append_springs(const Cloth& cloth, const std::vector<std::uint32_t>& springs);
   void order_strain_limit(const Cloth& cloth);
   void build_attachments(const Cloth& cloth);

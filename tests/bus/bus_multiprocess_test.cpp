@@ -72,7 +72,10 @@ TEST(BusMultiProcess, AWrittenSampleIsSizedToItselfNotToAReceivedBuffer) {
   bus::Writer<tachi_msg_NodeStatus> kept{dds, kKept};
   const dds_entity_t written = bus::detail::create_reader(dds, dds_get_topic(kept.handle()), bus::QosProfile::Strokes,
                                                           kKept.name);
-  ChildProcess pub(peer("strokes-pub", 23, {"--keys", "1", "--count", "3000", "--rate", "3000"}));
+  // 600 Hz, not faster: the strokes' readers keep the last 256 samples (QosProfile::Strokes), so a reader that
+  // falls behind by more than that loses the oldest, reliable or not. At 3000 Hz a stall of 85 ms under a
+  // loaded ctest -j2 did (2999 received, once in a fresh-clone CI run); at 600 Hz it takes 0.43 s.
+  ChildProcess pub(peer("strokes-pub", 23, {"--keys", "1", "--count", "3000", "--rate", "600"}));
   unsigned received = 0;
   const auto deadline = std::chrono::steady_clock::now() + 30s;
   while (received < 3000 && std::chrono::steady_clock::now() < deadline) {

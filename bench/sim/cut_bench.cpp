@@ -274,14 +274,15 @@ LiveRun time_long_stroke(int n, tachi::sim::CutMode mode, const tachi::sim::Solv
 
 int main(int argc, char** argv) {
   // cut_bench [reps] [repair_per_step] [threads] [substeps] [cut_work_per_step] [long_cut_work_per_step]: the second argument sets the
-  // long strokes' attachment repair budget (SolverParams::repair_per_step) for the measurements in docs/sim.md
+  // long strokes' attachment repair budget (SolverParams::repair_per_step, 0 for the default) for the measurements in docs/sim.md
   // ("Limits"); the third and fourth their solver's threads (given: the frames are timed in wall time) and
   // sub-steps (the third also the exact section's threads); the fifth the exact section's
   // SolverParams::cut_work_per_step (default: the solver's, 1 since 2026-12-05; the figures measured before
   // it without these arguments are 0's); the sixth the long strokes' (default: the solver's).
   const int reps = argc > 1 ? std::max(1, std::atoi(argv[1])) : 30;
   tachi::sim::SolverParams long_stroke_params;
-  if (argc > 2) long_stroke_params.repair_per_step = std::max(1, std::atoi(argv[2]));
+  // 0: the solver's default (one budget for all pin groups since session 27; 2048 per group before).
+  if (argc > 2 && std::atoi(argv[2]) > 0) long_stroke_params.repair_per_step = std::atoi(argv[2]);
   if (argc > 3) long_stroke_params.threads = std::clamp(std::atoi(argv[3]), 1, 64);
   if (argc > 4) long_stroke_params.substeps = std::clamp(std::atoi(argv[4]), 1, 64);
   tachi::sim::SolverParams exact_params;

@@ -30,6 +30,7 @@ std::optional<const char*> validate(const SolverParams& p) {
   if (!(p.max_strain > 0.0F) || !(p.max_strain < 10.0F)) return "max_strain must be in (0, 10)";
   if (p.strain_limit_passes < 1 || p.strain_limit_passes > 100) return "strain_limit_passes must be in [1, 100]";
   if (p.repair_per_step < 1) return "repair_per_step must be at least 1";
+  if (p.repair_share < 0) return "repair_share must be >= 0";
   if (p.cut_work_per_step < 0) return "cut_work_per_step must be >= 0";
   if (p.threads < 1 || p.threads > 64) return "threads must be in [1, 64]";
   return std::nullopt;

@@ -325,7 +325,8 @@ void Solver::build_attachments(const Cloth& cloth) {
       group.heap.emplace_back(0.0F, s);
     }
     const std::size_t block_begin = attachments_.size();
-    search_paths(cloth, group, false, std::numeric_limits<std::size_t>::max());
+    std::size_t unbounded = std::numeric_limits<std::size_t>::max();
+    search_paths(cloth, group, false, unbounded);
     // The group's tethers by particle, not in the order the search settled them: each holds another particle
     // on a pin, so they are independent and the order changes nothing, but a thread can then find the
     // tethers of its range of particles (front_in_bands), and the sweep reads the positions in order.

@@ -360,6 +360,9 @@ TEST(Solver, RejectsBadParameters) {
   p.repair_per_step = 0;
   EXPECT_TRUE(validate(p).has_value());
   p = {};
+  p.repair_share = -1;
+  EXPECT_TRUE(validate(p).has_value());
+  p = {};
   p.cut_work_per_step = -1;
   EXPECT_TRUE(validate(p).has_value());
   p.cut_work_per_step = 0;  // all of a cut's work in its step
@@ -411,6 +414,7 @@ TEST_P(IncrementalAttachments, CutsWhileRepairingEndAsAFullBuildWould) {
       StrokeCutter cutter{cloth, options};
       SolverParams params;
       params.repair_per_step = 50;  // a repair takes several steps here, so later cuts come in the middle of it
+      params.repair_share = 0;
       Solver solver{params};
       solver.step(cloth);
       double t = 0.0;
@@ -449,6 +453,7 @@ TEST(IncrementalAttachments, ACutThatTakesASeededParticlesWayToThePinSeedsItAgai
   Cloth cloth = make(n, PinMode::TopEdge);
   SolverParams params;
   params.repair_per_step = 1;  // seeds four open particles a step; settles one a step, once all are seeded
+  params.repair_share = 0;
   Solver solver{params};
   solver.step(cloth);
   const auto remove_between = [&](auto&& pick) {
@@ -512,6 +517,7 @@ TEST_P(CutOff, AnOpenedParticleKeepsItsTetherAndACutOffPieceLosesItsAllAtOnce) {
     Cloth cloth = make(n, PinMode::TopEdge);
     SolverParams params;
     params.repair_per_step = 1;
+    params.repair_share = 0;
     params.cut_work_per_step = GetParam();
     Solver solver{params};
     solver.step(cloth);
@@ -570,6 +576,7 @@ TEST(CutOff, CutsWorkSpreadOverStepsEndsAsDoneAtOnce) {
     Cloth spread = at_once;
     SolverParams params;
     params.repair_per_step = 64;
+    params.repair_share = 0;
     params.cut_work_per_step = 0;
     Solver solver_at_once{params};
     params.cut_work_per_step = 16;  // small, so the work really spans steps at 32 x 32
@@ -619,6 +626,7 @@ TEST(IncrementalAttachments, ARepairThatAStrokeKeepsReopeningListsWhatIsOpenNotW
   StrokeCutter cutter{cloth, options};
   SolverParams params;
   params.repair_per_step = 256;
+  params.repair_share = 0;
   Solver solver{params};
   std::size_t most = 0;
   bool repaired_while_cutting = false;

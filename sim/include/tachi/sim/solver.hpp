@@ -44,10 +44,17 @@ struct SolverParams {
   /// After a sub-step's first strain-limit pass, each pass reads only the springs a correction moved an end of
   /// since their last check: the same corrections as reading all of them (false: reads all, for comparison).
   bool sparse_strain_limit = true;
-  /// Particles the attachments' repair after a cut settles per step and pin group, at most: a cut that
-  /// re-routes a whole piece is spread over steps (those particles keep their old tethers meanwhile, except
-  /// where the cut separated them from a pin group: Solver::release_cut_off).
-  int repair_per_step = 2048;
+  /// Particles the attachments' repair after a cut settles per step, over all pin groups together: this
+  /// many, or the cloth's particles over repair_share if that is more. A cut that re-routes a whole piece is
+  /// spread over steps (those particles keep their old tethers meanwhile, except where the cut separated
+  /// them from a pin group: Solver::release_cut_off). Until 2026-12-05 it was 2048 per pin group, and the
+  /// repair's first step after a 128 x 128 cut settled all four groups' 2673 particles at once: 1.86-1.95x
+  /// a plain step (docs/benchmarks.md, "The worst of the steps after a cut, traced").
+  int repair_per_step = 1024;
+  /// The share of the particles the repair may settle in a step (1 / repair_share; 0: repair_per_step
+  /// alone). A settle costs ~300 ns, a step ~55 ns a particle, so a sixteenth costs about a third of a step
+  /// at any size, and a large cloth's repair takes as many steps as a small one's.
+  int repair_share = 16;
   /// How much of a cut's tether work is done in the cut's own step, in visits (particles opened, 16 entries of a
   /// settle order passed, particles and springs labelled): opening the particles whose shortest paths the cut
   /// broke (a pass over each pin group's settle order) and labelling what it cut off (floods, then union-find
@@ -196,7 +203,8 @@ class Solver {
   void append_springs(const Cloth& cloth, const std::vector<std::uint32_t>& springs);
   void order_strain_limit(const Cloth& cloth);
   void build_attachments(const Cloth& cloth);
-  bool search_paths(const Cloth& cloth, PinGroup& group, bool repair, std::size_t budget);
+  /// Settles at most `budget` particles and takes what it settled off it.
+  bool search_paths(const Cloth& cloth, PinGroup& group, bool repair, std::size_t& budget);
   void continue_repairs(const Cloth& cloth);
   void refresh_nearest(std::uint32_t i);
   /// `engage`: a repair's tether, which holds the particle where it is and tightens over steps (engage_tethers).
@@ -310,6 +318,7 @@ class Solver {
   bool limit_order_stale_ = false;
   bool pending_limit_order_ = false;
   std::vector<std::pair<std::uint32_t, std::uint32_t>> limit_level_;  // scratch: (level, spring)
+  std::vector<PackedSpring> limit_packed_;  // scratch: the same springs packed, nearer end first
   std::vector<std::uint32_t> limit_start_;
   // Long-range attachments: particle, anchor (a pin, or a particle at a bend of the shortest path around
   // a cut), maximal distance.
@@ -353,6 +362,7 @@ class Solver {
   std::vector<std::uint32_t> cut_touched_;
   std::size_t cut_cursor_ = 0;
   int cut_work_steps_ = 0;
+  std::size_t repair_turn_ = 0;  ///< the pin group whose repair goes first this step (they take turns)
   bool cut_work_fresh_ = false;  ///< left over by this step's cut (its update did this step's slice)
   void clear_cut_work();
   /// The visits the cut's work has left, as advance_cut_work counts them (the release pass not included).

@@ -551,14 +551,15 @@ void StrokeCutter::add_line_to_report(const std::vector<GridCoord>& line) {
   }
 }
 
-TopologyChange StrokeCutter::add_sample(const StrokeSample& sample) {
+TopologyChange StrokeCutter::add_sample(const StrokeSample& sample, bool touching) {
   TopologyChange change;
   if (!sample.position.allFinite()) return change;
   if (!open_) change.merge(begin_stroke());
   const ClothPoint at = locator_.locate(*cloth_, sample.position);
   // Grid mode rounds (u, v) with hysteresis (grid_point); the nearest particle's own grid point flipped
   // between two rows on a stroke between them.
-  const Point point{at.uv, follows_path() ? at.grid : grid_point(at.uv), sample.position, at.inside};
+  const Point point{at.uv, follows_path() ? at.grid : grid_point(at.uv), sample.position, at.inside && touching,
+                    !at.inside};
   if (follows_path() && line_ && previous_ && previous_->inside && point.inside) {
     // The nearest particle can be on another layer of a folded or swinging cloth: the point then jumps
     // across the cloth and back on the next sample, and a cut that followed it would cut out a sliver
@@ -624,12 +625,18 @@ TopologyChange StrokeCutter::add_sample(const StrokeSample& sample) {
   } else if (line_) {
     // Leaving: the cut goes to where the stroke crosses the edge, not along it.
     if (!pending_.empty()) commit(pending_.back().grid, pending_.back().uv, last_direction_, change);
+    if (!point.beyond) {
+      // Off the cloth without crossing its edge (the blade left it): the cut ends at the last sample on it.
+      close_line();
+      previous_ = point;
+      return change;
+    }
     const Eigen::Vector2d from = previous_ ? previous_->uv : anchor_;
     const auto inside_part = clip_to_rectangle(from, point.uv, max_u, max_v);
     const Eigen::Vector2d at_edge = inside_part ? Eigen::Vector2d{from + inside_part->second * (point.uv - from)} : from;
     commit(boundary_point(at_edge), at_edge, last_direction_, change);
     close_line();
-  } else if (previous_ && !previous_->inside) {
+  } else if (previous_ && previous_->beyond && point.beyond) {
     // Both samples beyond the edge: a fast swipe may still cross the cloth between them.
     const auto inside_part = clip_to_rectangle(previous_->uv, point.uv, max_u, max_v);
     if (inside_part && inside_part->second - inside_part->first > 1e-9) {

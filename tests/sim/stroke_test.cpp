@@ -84,6 +84,29 @@ TEST(ClothLocator, FindsTheNearestParticleAndTheContinuousGridCoordinate) {
   EXPECT_FALSE(out.inside);
 }
 
+// The blade off the cloth (the session's BladeContact finds no cloth within reach) cuts nothing, wherever the
+// sample's (u, v) falls: a hand 30 cm from a swinging flap mapped into the grid rectangle and cut a chord.
+TEST(StrokeCutter, SamplesAwayFromTheClothCutNothing) {
+  constexpr int n = 16;
+  for (const CutMode mode : {CutMode::Exact, CutMode::Grid, CutMode::Delete}) {
+    SCOPED_TRACE(to_string(mode));
+    Cloth cloth = flat_cloth(n);
+    StrokeOptions options;
+    options.mode = mode;
+    StrokeCutter cutter{cloth, options};
+    cutter.begin_stroke();
+    double t = 0.0;
+    for (double u = -3.0; u <= 18.0; u += 0.3) {
+      const bool touching = u < 5.0 || u > 10.0;  // lifted off the cloth in between
+      cutter.add_sample({t += 0.01, world(n, u, 8.2)}, touching);
+    }
+    cutter.end_stroke();
+    EXPECT_EQ(cutter.total().lines, 2U);
+    if (mode != CutMode::Delete) EXPECT_EQ(find_pieces(cloth).count(), 1U);  // delete mode: its crumbs are pieces too
+    for (const GridCoord g : cutter.total().cut_line) EXPECT_TRUE(g.u <= 6 || g.u >= 9) << g.u;
+  }
+}
+
 TEST(StrokeCutter, HorizontalSwipeAcrossTheClothCutsItOffAndTheLowerPieceFalls) {
   constexpr int n = 16;
   Cloth cloth = flat_cloth(n);

@@ -85,12 +85,17 @@ struct ClothPoint {
 /// the sheet within a cell of where the descent ended.
 class ClothLocator {
  public:
-  explicit ClothLocator(double inside_margin_cells = 0.5) : margin_(inside_margin_cells) {}
+  /// `lips_meet`: a cut's two lips are one place in rest coordinates (the exact and grid cuts split the cloth
+  /// along a line), so a point over an opened cut is on the cut; not where cutting deletes triangles (its
+  /// hole has an extent of its own).
+  explicit ClothLocator(double inside_margin_cells = 0.5, bool lips_meet = true)
+      : margin_(inside_margin_cells), lips_meet_(lips_meet) {}
   [[nodiscard]] ClothPoint locate(const Cloth& cloth, const Eigen::Vector3f& point);
   void reset() { hint_.reset(); }
 
  private:
   double margin_;
+  bool lips_meet_;
   std::optional<std::uint32_t> hint_;
 };
 

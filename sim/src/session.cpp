@@ -152,7 +152,7 @@ void Session::on_hand(const HandInput& hand) {
   if (verdict == BladeContact::Verdict::Away) {
     // Not touching the cloth (beyond the blade's reach): the stroke goes on as the gate says, so the cutter
     // sees where it came from (a stroke entering across an edge is clipped there); it cuts nothing here.
-    absorb(cutter_.add_sample(sample));
+    absorb(cutter_.add_sample(sample, false));
     approach_.reset();
     return;
   }

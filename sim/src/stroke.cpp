@@ -113,7 +113,11 @@ namespace {
 /// J = d position / d (u, v) is fitted to p's structural springs by least squares, J = E U^T (U U^T)^-1
 /// with E their world vectors and U their rest-coordinate vectors (on the grid: the mean of the springs
 /// along u and along v); the flat rest frame where the springs do not span both directions.
-Eigen::Vector2d grid_offset(const Cloth& cloth, std::uint32_t p, const Eigen::Vector3f& point) {
+struct GridOffset {
+  Eigen::Vector2d cells{0.0, 0.0};
+  double in_plane_m = 0.0;  ///< the offset's length on the sheet (the frame applied to it), metres
+};
+GridOffset grid_offset(const Cloth& cloth, std::uint32_t p, const Eigen::Vector3f& point) {
   Eigen::Matrix<double, 3, 2> eu = Eigen::Matrix<double, 3, 2>::Zero();
   Eigen::Matrix2d uu = Eigen::Matrix2d::Zero();
   for (const std::uint32_t k : cloth.springs_of(p)) {
@@ -129,8 +133,9 @@ Eigen::Vector2d grid_offset(const Cloth& cloth, std::uint32_t p, const Eigen::Ve
   if (std::abs(uu.determinant()) > 1e-6 * std::max(uu.squaredNorm(), 1e-12)) frame = eu * uu.inverse();
   const Eigen::Vector3d r = (point - cloth.position[p]).cast<double>();
   const Eigen::Matrix2d m = frame.transpose() * frame;
-  if (!(std::abs(m.determinant()) > 1e-6 * m.squaredNorm())) return Eigen::Vector2d::Zero();
-  return m.inverse() * (frame.transpose() * r);
+  if (!(std::abs(m.determinant()) > 1e-6 * m.squaredNorm())) return {};
+  const Eigen::Vector2d cells = m.inverse() * (frame.transpose() * r);
+  return {cells, (frame * cells).norm()};
 }
 
 /// The particle nearest to `point`, by looking at every one.
@@ -202,6 +207,145 @@ SegmentMeeting closest_points(const Eigen::Vector2d& p1, const Eigen::Vector2d& 
   return {on_first, on_second, (on_first - on_second).norm()};
 }
 
+/// Whether the edge between rest points a and b lies on one side of the grid rectangle: an edge of the cloth
+/// itself, not of a cut.
+bool on_same_border(const Cloth& cloth, const Eigen::Vector2f& a, const Eigen::Vector2f& b) {
+  constexpr float kOn = 1e-4F;
+  const auto col = static_cast<float>(cloth.columns - 1);
+  const auto row = static_cast<float>(cloth.rows - 1);
+  return (std::abs(a.x()) < kOn && std::abs(b.x()) < kOn) || (std::abs(a.y()) < kOn && std::abs(b.y()) < kOn) ||
+         (std::abs(a.x() - col) < kOn && std::abs(b.x() - col) < kOn) ||
+         (std::abs(a.y() - row) < kOn && std::abs(b.y() - row) < kOn);
+}
+
+/// The live triangle other than `t` with both particles a and b, if any (none across a cut or the cloth's edge).
+std::optional<std::uint32_t> across(const Cloth& cloth, std::uint32_t t, std::uint32_t a, std::uint32_t b) {
+  for (const std::uint32_t k : cloth.triangles_of(a)) {
+    if (k == t) continue;
+    const auto& v = cloth.triangles[k];
+    if (v[0] == b || v[1] == b || v[2] == b) return k;
+  }
+  return std::nullopt;
+}
+
+/// The straight rest-coordinate walk from particle p towards `target` over the triangles it crosses (a few:
+/// the offset from the nearest particle is about a cell). It ends at `target` if the walk stays on the cloth or
+/// leaves it across the cloth's own edge (a hand beyond the edge keeps its (u, v) outside the rectangle, which
+/// clips a stroke there); otherwise where it first leaves the cloth through a cut, with the particles of that
+/// cut edge (both p where the walk leaves p's own triangles at once). If the walk meets a vertex or an edge it
+/// cannot decide, `target` as it was.
+struct Walk {
+  Eigen::Vector2d uv;
+  std::optional<std::array<std::uint32_t, 2>> cut;
+};
+Walk walk_to(const Cloth& cloth, std::uint32_t p, const Eigen::Vector2d& target) {
+  const Eigen::Vector2d start = cloth.rest_uv[p].cast<double>();
+  const Eigen::Vector2d d = target - start;
+  if (d.squaredNorm() < 1e-12 || cloth.triangles_of(p).empty()) return {target, std::nullopt};
+  const auto cross = [](const Eigen::Vector2d& a, const Eigen::Vector2d& b) { return a.x() * b.y() - a.y() * b.x(); };
+  const auto uv = [&](std::uint32_t i) { return Eigen::Vector2d{cloth.rest_uv[i].cast<double>()}; };
+  constexpr double kEps = 1e-9;
+  // The triangle at p whose corner holds the direction d (d = alpha (q - p) + beta (r - p), both >= 0).
+  std::optional<std::uint32_t> tri;
+  std::uint32_t a = 0;
+  std::uint32_t b = 0;
+  double s = 0.0;  // how far along start -> target the walk has come
+  for (const std::uint32_t t : cloth.triangles_of(p)) {
+    const auto& v = cloth.triangles[t];
+    const std::uint32_t q = v[0] == p ? v[1] : v[0];
+    const std::uint32_t r = v[2] == p ? v[1] : v[2];
+    const Eigen::Vector2d e1 = uv(q) - start;
+    const Eigen::Vector2d e2 = uv(r) - start;
+    const double det = cross(e1, e2);
+    if (std::abs(det) < kEps) continue;
+    const double alpha = cross(d, e2) / det;
+    const double beta = cross(e1, d) / det;
+    if (alpha < -kEps || beta < -kEps) continue;
+    if (alpha + beta <= 1.0) return {target, std::nullopt};  // inside p's own triangle
+    tri = t;
+    a = q;
+    b = r;
+    s = 1.0 / (alpha + beta);
+    break;
+  }
+  if (!tri) {
+    // d points out of p's fan at once: into a cut's gap at p, or out over the cloth's edge.
+    const bool beyond_edge = target.x() < 0.0 || target.y() < 0.0 || target.x() > cloth.columns - 1 ||
+                             target.y() > cloth.rows - 1;
+    if (beyond_edge) return {target, std::nullopt};
+    // On the cut: the nearest point of p's edges that no other triangle shares (its lip).
+    Eigen::Vector2d on = start;
+    double nearest = std::numeric_limits<double>::infinity();
+    for (const std::uint32_t t : cloth.triangles_of(p)) {
+      for (const std::uint32_t q : cloth.triangles[t]) {
+        if (q == p || across(cloth, t, p, q)) continue;
+        const auto meet = closest_points(target, target, start, uv(q));
+        if (meet.distance < nearest) {
+          nearest = meet.distance;
+          on = meet.on_second;
+        }
+      }
+    }
+    return {on, std::array<std::uint32_t, 2>{p, p}};
+  }
+  for (int steps = 0; steps < 64; ++steps) {
+    // The walk crosses edge (a, b) of *tri at start + s d.
+    const auto next = across(cloth, *tri, a, b);
+    if (!next) {
+      if (on_same_border(cloth, cloth.rest_uv[a], cloth.rest_uv[b])) return {target, std::nullopt};
+      return {start + s * d, std::array<std::uint32_t, 2>{a, b}};
+    }
+    const auto& v = cloth.triangles[*next];
+    const std::uint32_t o = v[0] != a && v[0] != b ? v[0] : (v[1] != a && v[1] != b ? v[1] : v[2]);
+    // Leaves *next through (a, o) or (b, o) further along, or ends inside it.
+    double best = 2.0;
+    std::uint32_t keep = 0;
+    for (const std::uint32_t w : {a, b}) {
+      const Eigen::Vector2d e = uv(o) - uv(w);
+      const double den = cross(d, e);
+      if (std::abs(den) < kEps) continue;
+      const double t = cross(uv(w) - start, e) / den;  // along start -> target
+      const double u = cross(uv(w) - start, d) / den;  // along w -> o
+      if (t > s + kEps && u >= -kEps && u <= 1.0 + kEps && t < best) {
+        best = t;
+        keep = w;
+      }
+    }
+    if (best >= 1.0) return {target, std::nullopt};  // ends in *next (or the walk lost its way: as it was)
+    tri = *next;
+    a = keep;
+    b = o;
+    s = best;
+  }
+  return {target, std::nullopt};
+}
+
+/// How much farther from the cut the other lip may put a point than this one did, cells (their frames differ).
+constexpr double kLipSlackCells = 0.5;
+
+/// Where `point`, `uv` from particle p's frame, is on the cloth in rest coordinates, given the cuts. If the walk
+/// from p to uv crosses a cut, the point is over the other lip's material (a still cloth: both lips in one
+/// place, and p is just the copy on this side) or over the gap between the opened lips. Seen from the other lip
+/// (a copy of the cut edge's particles) the first has it on its own triangles: that is its (u, v). In the gap
+/// neither has: a point there is extrapolated from one lip's frame beside the cut by up to half the gap, onto
+/// the other's material (a hanging cloth's cut opens by centimetres, a cell and more), but in rest coordinates
+/// the two lips are one place, the cut itself, and that is where the point is.
+Eigen::Vector2d onto_lip(const Cloth& cloth, std::uint32_t p, const Eigen::Vector3f& point, const Eigen::Vector2d& uv) {
+  const Walk walk = walk_to(cloth, p, uv);
+  if (!walk.cut) return uv;
+  for (const std::uint32_t end : *walk.cut) {
+    const Eigen::Vector2f at = cloth.rest_uv[end];
+    for (std::uint32_t q = 0; q < cloth.particle_count(); ++q) {
+      if (q == end || cloth.rest_uv[q] != at || cloth.triangles_of(q).empty()) continue;
+      const Eigen::Vector2d from_q = cloth.rest_uv[q].cast<double>() + grid_offset(cloth, q, point).cells;
+      // Beside the cut: what p put across it by a fraction of a cell, the other lip has on its side by as much.
+      const bool beside = (from_q - walk.uv).norm() <= (uv - walk.uv).norm() + kLipSlackCells;
+      if (beside && !walk_to(cloth, q, from_q).cut) return from_q;
+    }
+  }
+  return walk.uv;
+}
+
 }  // namespace
 
 ClothPoint ClothLocator::locate(const Cloth& cloth, const Eigen::Vector3f& point) {
@@ -236,8 +380,12 @@ ClothPoint ClothLocator::locate(const Cloth& cloth, const Eigen::Vector3f& point
   // The descent's minimum is the nearest particle when the point projects onto the sheet next to it (the
   // hand may be centimetres in front of the cloth). Otherwise (off the edge, a fold, a piece cut off between
   // the hint and the hand) look at every particle.
-  Eigen::Vector2d offset = grid_offset(cloth, p, point);
-  if (!(std::abs(offset.x()) <= 1.0 && std::abs(offset.y()) <= 1.0)) {
+  // Within a cell in the particle's own frame is not enough where that frame is stretched (a lip of an opened
+  // cut, pulled wide: the descent, which cannot cross the cut, stops on it), so the offset must also be within a
+  // cell on the sheet, in metres.
+  const double cell_m = std::max(cloth.spacing_x(), cloth.spacing_y());
+  GridOffset offset = grid_offset(cloth, p, point);
+  if (!(std::abs(offset.cells.x()) <= 1.0 && std::abs(offset.cells.y()) <= 1.0 && offset.in_plane_m <= cell_m)) {
     const std::uint32_t scanned = scan_nearest(cloth, point);
     if (scanned != p) {
       p = scanned;
@@ -248,15 +396,16 @@ ClothPoint ClothLocator::locate(const Cloth& cloth, const Eigen::Vector3f& point
   out.particle = p;
   out.grid = cloth.grid[p];
   out.distance_m = std::sqrt(distance2(p));
-  out.uv = cloth.rest_uv[p].cast<double>() + offset;
+  out.uv = cloth.rest_uv[p].cast<double>() + offset.cells;
+  if (lips_meet_) out.uv = onto_lip(cloth, p, point, out.uv);
   out.inside = out.uv.x() >= -margin_ && out.uv.y() >= -margin_ && out.uv.x() <= cloth.columns - 1 + margin_ &&
                out.uv.y() <= cloth.rows - 1 + margin_;
   return out;
 }
 
 StrokeCutter::StrokeCutter(Cloth& cloth, StrokeOptions options)
-    : cloth_(&cloth), options_(options), cutter_(cloth), locator_(options.inside_margin_cells),
-      backtrack_cells_(options.tolerance_cells) {
+    : cloth_(&cloth), options_(options), cutter_(cloth),
+      locator_(options.inside_margin_cells, options.mode != CutMode::Delete), backtrack_cells_(options.tolerance_cells) {
   if (follows_path()) {
     exact_.emplace(cloth);
     options_.tolerance_cells = options_.exact_tolerance_cells;
@@ -551,14 +700,15 @@ void StrokeCutter::add_line_to_report(const std::vector<GridCoord>& line) {
   }
 }
 
-TopologyChange StrokeCutter::add_sample(const StrokeSample& sample) {
+TopologyChange StrokeCutter::add_sample(const StrokeSample& sample, bool touching) {
   TopologyChange change;
   if (!sample.position.allFinite()) return change;
   if (!open_) change.merge(begin_stroke());
   const ClothPoint at = locator_.locate(*cloth_, sample.position);
   // Grid mode rounds (u, v) with hysteresis (grid_point); the nearest particle's own grid point flipped
   // between two rows on a stroke between them.
-  const Point point{at.uv, follows_path() ? at.grid : grid_point(at.uv), sample.position, at.inside};
+  const Point point{at.uv, follows_path() ? at.grid : grid_point(at.uv), sample.position, at.inside && touching,
+                    !at.inside};
   if (follows_path() && line_ && previous_ && previous_->inside && point.inside) {
     // The nearest particle can be on another layer of a folded or swinging cloth: the point then jumps
     // across the cloth and back on the next sample, and a cut that followed it would cut out a sliver
@@ -624,12 +774,18 @@ TopologyChange StrokeCutter::add_sample(const StrokeSample& sample) {
   } else if (line_) {
     // Leaving: the cut goes to where the stroke crosses the edge, not along it.
     if (!pending_.empty()) commit(pending_.back().grid, pending_.back().uv, last_direction_, change);
+    if (!point.beyond) {
+      // Off the cloth without crossing its edge (the blade left it): the cut ends at the last sample on it.
+      close_line();
+      previous_ = point;
+      return change;
+    }
     const Eigen::Vector2d from = previous_ ? previous_->uv : anchor_;
     const auto inside_part = clip_to_rectangle(from, point.uv, max_u, max_v);
     const Eigen::Vector2d at_edge = inside_part ? Eigen::Vector2d{from + inside_part->second * (point.uv - from)} : from;
     commit(boundary_point(at_edge), at_edge, last_direction_, change);
     close_line();
-  } else if (previous_ && !previous_->inside) {
+  } else if (previous_ && previous_->beyond && point.beyond) {
     // Both samples beyond the edge: a fast swipe may still cross the cloth between them.
     const auto inside_part = clip_to_rectangle(previous_->uv, point.uv, max_u, max_v);
     if (inside_part && inside_part->second - inside_part->first > 1e-9) {

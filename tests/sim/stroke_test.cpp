@@ -84,6 +84,73 @@ TEST(ClothLocator, FindsTheNearestParticleAndTheContinuousGridCoordinate) {
   EXPECT_FALSE(out.inside);
 }
 
+// A cut's two lips are one place in rest coordinates. On a still cloth a point just across the cut is on the
+// other lip's material (the nearest particle may be this lip's copy); once the cut has opened, a point in the
+// gap is on the cut, not extrapolated from one lip's frame onto the other's material (a hand going back over
+// a hanging cloth's cut cut again beside it); beyond the gap it is on the other lip again.
+TEST(ClothLocator, APointOverAnOpenedCutIsOnTheCut) {
+  constexpr int n = 11;
+  Cloth cloth = flat_cloth(n, PinMode::None);
+  ClothCutter cutter{cloth};
+  std::vector<GridCoord> line;
+  for (int u = 0; u < n; ++u) line.push_back({u, 5});
+  static_cast<void>(cutter.cut(line));
+  const Pieces pieces = find_pieces(cloth);
+  ASSERT_EQ(pieces.count(), 2U);
+  for (const double v : {4.7, 5.3}) {
+    ClothLocator locator;
+    const ClothPoint still = locator.locate(cloth, world(n, 4.3, v));
+    EXPECT_NEAR(still.uv.x(), 4.3, 1e-3);
+    EXPECT_NEAR(still.uv.y(), v, 1e-3);
+  }
+  // The lower piece drops by one cell: the cut opens a cell wide.
+  const std::uint32_t lower = pieces.piece_of[cloth.index(0, n - 1)];
+  for (std::size_t i = 0; i < cloth.particle_count(); ++i) {
+    if (pieces.piece_of[i] == lower) cloth.position[i].y() -= cloth.spacing_y();
+  }
+  for (const double across : {0.2, 0.5, 0.8}) {
+    SCOPED_TRACE(across);
+    ClothLocator locator;
+    const ClothPoint gap = locator.locate(cloth, world(n, 4.3, 5.0 + across));
+    EXPECT_NEAR(gap.uv.x(), 4.3, 1e-3);
+    EXPECT_NEAR(gap.uv.y(), 5.0, 1e-3);
+    EXPECT_TRUE(gap.inside);
+  }
+  ClothLocator locator;
+  const ClothPoint below = locator.locate(cloth, world(n, 4.3, 6.3));
+  EXPECT_NEAR(below.uv.y(), 5.3, 1e-3);
+  // Beyond the cloth's own edge (u, v) stays outside the rectangle.
+  const ClothPoint off = locator.locate(cloth, world(n, 4.3, 12.5));
+  EXPECT_NEAR(off.uv.y(), 11.5, 1e-3);
+  EXPECT_FALSE(off.inside);
+  // Where cutting deletes triangles, their hole has an extent of its own: no lips to meet.
+  ClothLocator holes{0.5, false};
+  EXPECT_GT(std::abs(holes.locate(cloth, world(n, 4.3, 5.3)).uv.y() - 5.0), 0.2);
+}
+
+// The blade off the cloth (the session's BladeContact finds no cloth within reach) cuts nothing, wherever the
+// sample's (u, v) falls: a hand 30 cm from a swinging flap mapped into the grid rectangle and cut a chord.
+TEST(StrokeCutter, SamplesAwayFromTheClothCutNothing) {
+  constexpr int n = 16;
+  for (const CutMode mode : {CutMode::Exact, CutMode::Grid, CutMode::Delete}) {
+    SCOPED_TRACE(to_string(mode));
+    Cloth cloth = flat_cloth(n);
+    StrokeOptions options;
+    options.mode = mode;
+    StrokeCutter cutter{cloth, options};
+    cutter.begin_stroke();
+    double t = 0.0;
+    for (double u = -3.0; u <= 18.0; u += 0.3) {
+      const bool touching = u < 5.0 || u > 10.0;  // lifted off the cloth in between
+      cutter.add_sample({t += 0.01, world(n, u, 8.2)}, touching);
+    }
+    cutter.end_stroke();
+    EXPECT_EQ(cutter.total().lines, 2U);
+    if (mode != CutMode::Delete) EXPECT_EQ(find_pieces(cloth).count(), 1U);  // delete mode: its crumbs are pieces too
+    for (const GridCoord g : cutter.total().cut_line) EXPECT_TRUE(g.u <= 6 || g.u >= 9) << g.u;
+  }
+}
+
 TEST(StrokeCutter, HorizontalSwipeAcrossTheClothCutsItOffAndTheLowerPieceFalls) {
   constexpr int n = 16;
   Cloth cloth = flat_cloth(n);

@@ -85,12 +85,17 @@ struct ClothPoint {
 /// the sheet within a cell of where the descent ended.
 class ClothLocator {
  public:
-  explicit ClothLocator(double inside_margin_cells = 0.5) : margin_(inside_margin_cells) {}
+  /// `lips_meet`: a cut's two lips are one place in rest coordinates (the exact and grid cuts split the cloth
+  /// along a line), so a point over an opened cut is on the cut; not where cutting deletes triangles (its
+  /// hole has an extent of its own).
+  explicit ClothLocator(double inside_margin_cells = 0.5, bool lips_meet = true)
+      : margin_(inside_margin_cells), lips_meet_(lips_meet) {}
   [[nodiscard]] ClothPoint locate(const Cloth& cloth, const Eigen::Vector3f& point);
   void reset() { hint_.reset(); }
 
  private:
   double margin_;
+  bool lips_meet_;
   std::optional<std::uint32_t> hint_;
 };
 
@@ -170,8 +175,11 @@ class StrokeCutter {
 
   /// Gate opened: a new stroke. Ends an open stroke first.
   TopologyChange begin_stroke();
-  /// A sample of the open stroke (opens one if none is). Non-finite positions are skipped.
-  TopologyChange add_sample(const StrokeSample& sample);
+  /// A sample of the open stroke (opens one if none is). Non-finite positions are skipped. `touching`: whether
+  /// the blade is at the cloth (the session's BladeContact). A sample away from it cuts nothing, wherever its
+  /// (u, v) falls: extrapolated from the nearest particle's frame, a hand 30 cm from a swinging flap can map into
+  /// the grid rectangle. It ends the cut at the sample before (or at the edge, when it is beyond it).
+  TopologyChange add_sample(const StrokeSample& sample, bool touching = true);
   /// Gate closed: the cut reaches the last sample, the line's end is tidied. Nothing if no stroke is open.
   TopologyChange end_stroke();
 
@@ -192,7 +200,8 @@ class StrokeCutter {
     Eigen::Vector2d uv;
     GridCoord grid;
     Eigen::Vector3f world;
-    bool inside;
+    bool inside;  // on the cloth: touching it, and (u, v) within the grid rectangle (+ margin)
+    bool beyond;  // (u, v) beyond the grid rectangle (+ margin)
   };
   void commit(GridCoord g, const Eigen::Vector2d& uv, const Eigen::Vector3f& direction, TopologyChange& change);
   void start_line(GridCoord g, const Eigen::Vector2d& uv, const Eigen::Vector3f& direction, TopologyChange& change);

@@ -30,8 +30,10 @@ std::filesystem::path scratch(const char* name) {
   return std::filesystem::temp_directory_path() / (std::string{name} + "_" + std::to_string(::getpid()) + ".csv");
 }
 
-// DISABLED: still missed (docs/cutting.md, "Cuts that do not flip": the worn blade's drag bifurcates).
-TEST(CutStability, DISABLED_AStrokeMovedByAHairCutsTheSame) {
+// Ten strokes, every blade and mode. They pass since samples beyond the blade's reach cut nothing (session
+// 27); the acceptance's 500 strokes do not yet: `cut_stability --strokes 500` (docs/cutting.md, "Cuts that do
+// not flip", the 1e-6 m table) still finds strokes that flip, so this guards what holds, not the target.
+TEST(CutStability, AStrokeMovedByAHairCutsTheSame) {
   const auto file = scratch("cut_stability_hair");
   for (int k = 0; k < kStrokes; ++k) {
     const std::uint64_t seed = kFirstSeed + static_cast<std::uint64_t>(k);

@@ -7,6 +7,7 @@
 
 #include <Eigen/Core>
 
+#include <algorithm>
 #include <bit>
 #include <cstddef>
 #include <cstdint>
@@ -44,6 +45,74 @@ void for_chunks(std::size_t n, int threads, const Body& body) {
     const auto parts = static_cast<std::size_t>(threads);
     body(n * chunk / parts, n * (chunk + 1) / parts);
   }
+}
+
+/// A stable counting sort of the indices [0, n) by a small integer key (distribution counting, Knuth, TAOCP
+/// vol. 3, sec. 5.2), split over threads in contiguous chunks: each chunk counts its own keys
+/// (count_keys), then places its indices after the earlier chunks' in each bucket (place_by_keys), so the
+/// order is exactly one thread's. Two passes over the indices, each on every thread: the solver re-sorts its
+/// tethers on each step of a repair (linear, but on one thread 0.13 ms of a 0.6 ms two-thread step at
+/// 128 x 128; 0.10 ms on two). `next` is the caller's scratch: per chunk, per key, the count, then the next
+/// position.
+struct KeyTally {
+  std::size_t buckets = 0;          ///< the largest key seen plus one
+  std::size_t total = 0;            ///< indices counted
+  std::size_t in_first_bucket = 0;  ///< indices with key 0
+};
+
+/// The chunks count_keys and place_by_keys split [0, n) into: body(chunk, begin, end), on threads at once.
+template <typename Body>
+void for_sort_chunks(std::size_t n, int threads, const Body& body) {
+  constexpr std::size_t kWorthSplitting = 4096;
+  const int parts = threads > 1 && n >= kWorthSplitting ? threads : 1;
+  if (parts == 1) {
+    body(std::size_t{0}, std::size_t{0}, n);
+    return;
+  }
+#pragma omp parallel for schedule(static) num_threads(parts)
+  for (int t = 0; t < parts; ++t) {
+    const auto chunk = static_cast<std::size_t>(t);
+    const auto all = static_cast<std::size_t>(parts);
+    body(chunk, n * chunk / all, n * (chunk + 1) / all);
+  }
+}
+
+/// Counts key(i) over [0, n).
+template <typename Key>
+KeyTally count_keys(std::size_t n, int threads, const Key& key, std::vector<std::vector<std::uint32_t>>& next) {
+  next.resize(static_cast<std::size_t>(std::max(threads, 1)));
+  for (auto& counts : next) counts.clear();
+  for_sort_chunks(n, threads, [&](std::size_t chunk, std::size_t begin, std::size_t end) {
+    std::vector<std::uint32_t>& counts = next[chunk];
+    for (std::size_t i = begin; i < end; ++i) {
+      const std::uint32_t b = key(i);
+      if (b >= counts.size()) counts.resize(static_cast<std::size_t>(b) + 1, 0);
+      ++counts[b];
+    }
+  });
+  KeyTally tally;
+  for (const auto& counts : next) tally.buckets = std::max(tally.buckets, counts.size());
+  // Each chunk's count of a bucket becomes where its first index of that bucket goes.
+  for (std::size_t b = 0; b < tally.buckets; ++b) {
+    for (auto& counts : next) {
+      counts.resize(tally.buckets, 0);
+      const std::uint32_t here = counts[b];
+      counts[b] = static_cast<std::uint32_t>(tally.total);
+      tally.total += here;
+    }
+    if (b == 0) tally.in_first_bucket = tally.total;
+  }
+  return tally;
+}
+
+/// Calls place(i, position) for every index in [0, n), position in [0, n): its place in the sorted order.
+template <typename Key, typename Place>
+void place_by_keys(std::size_t n, int threads, const Key& key, const Place& place,
+                   std::vector<std::vector<std::uint32_t>>& next) {
+  for_sort_chunks(n, threads, [&](std::size_t chunk, std::size_t begin, std::size_t end) {
+    std::vector<std::uint32_t>& at = next[chunk];
+    for (std::size_t i = begin; i < end; ++i) place(i, at[key(i)]++);
+  });
 }
 
 /// A set of indices kept as a bit per index, for a log with repeats that is wanted once each and in

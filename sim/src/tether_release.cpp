@@ -269,12 +269,27 @@ bool Solver::advance_cut_work(const Cloth& cloth, std::size_t budget) {
         break;
       }
       case CutPhase::Release: {
-        // In one pass, however large the piece: released in parts, a piece would fall in parts.
-        for (std::uint32_t i = 0; i < n; ++i) {
-          if (flood_open_[i] == 0) continue;
-          const std::uint32_t missing = all & ~flood_met_[flood_sets_.find(i)] & flood_open_[i];
-          for (std::size_t s = 0; s < groups; ++s) {
-            if ((missing & (1U << s)) != 0) release(pin_groups_[s], i);
+        // In one step, however large the piece: released in parts, a piece would fall in parts. Two passes
+        // that split over threads (on one thread, half a 128 x 128 cloth's release was 0.57 ms of a 0.6 ms
+        // two-thread step): each particle's missing groups (into flood_settled_, read for the last time in
+        // Unite), by roots that the Fold pass's finds have made near; then each group's releases, a group
+        // on each thread (release writes only its group's arrays and tethers). The same releases as one pass.
+        std::uint8_t* missing = flood_settled_.data();
+        solver_detail::for_chunks(n, params_.threads, [&](std::size_t begin, std::size_t end) {
+          for (std::size_t i = begin; i < end; ++i) {
+            missing[i] = flood_open_[i] == 0
+                             ? std::uint8_t{0}
+                             : static_cast<std::uint8_t>(all & ~flood_met_[flood_sets_.root(static_cast<std::uint32_t>(i))] &
+                                                         flood_open_[i]);
+          }
+        });
+        const auto group_count = static_cast<int>(groups);
+#pragma omp parallel for schedule(dynamic, 1) num_threads(params_.threads) if (params_.threads > 1)
+        for (int g = 0; g < group_count; ++g) {
+          const auto bit = static_cast<std::uint8_t>(1U << static_cast<unsigned>(g));
+          PinGroup& group = pin_groups_[static_cast<std::size_t>(g)];
+          for (std::uint32_t i = 0; i < n; ++i) {
+            if ((missing[i] & bit) != 0) release(group, i);
           }
         }
         budget -= std::min(budget, n);

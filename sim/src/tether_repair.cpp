@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 
 namespace tachi::sim {
 
@@ -93,7 +94,7 @@ bool Solver::search_paths(const Cloth& cloth, PinGroup& group, bool repair, std:
       if (group.open[i] == 0) continue;
       group.open[i] = 0;
       --group.open_count;
-      refresh_nearest(i);
+      if (!group.apart.active) refresh_nearest(i);  // else run_apart does, once every group is in
     }
     group.order_pos[i] = static_cast<std::uint32_t>(group.order.size());
     group.order.push_back(i);
@@ -141,7 +142,7 @@ void Solver::reopen_shorter(const Cloth& cloth, PinGroup& group, std::uint32_t r
   // is opened first, then the particles below the root are seeded from their settled neighbours (none of
   // them in the subtree any more); the root gets its distance from the caller's relaxation. Each is listed
   // as seeded: it has its heap entry now. Their tethers hold them meanwhile, as any open particle's.
-  auto& subtree = reopen_subtree_;
+  auto& subtree = group.reopen_subtree;
   subtree.assign(1, root);
   for (std::size_t q = 0; q < subtree.size(); ++q) {
     const std::uint32_t i = subtree[q];
@@ -195,11 +196,24 @@ void Solver::continue_repairs(const Cloth& cloth) {
   bool pending = false;
   bool progressed = false;
   const std::size_t groups = pin_groups_.size();
-  for (std::size_t q = 0; q < groups; ++q) {
-    PinGroup& group = pin_groups_[(repair_turn_ + q) % groups];
-    if (group.heap.empty() && group.open_list.empty()) continue;
-    progressed = true;
-    pending = budget == 0 || !search_paths(cloth, group, true, budget) || pending;
+  const auto repairing_group = [](const PinGroup& g) { return !g.heap.empty() || !g.open_list.empty(); };
+  if (params_.threads > 1) {
+    // On several threads the groups repair at once (run_apart), each with an even share of the budget.
+    const std::vector<std::size_t> active = groups_where(repairing_group);
+    const std::size_t share = std::max<std::size_t>(1, budget / std::max<std::size_t>(1, active.size()));
+    run_apart(active, [&](PinGroup& group) {
+      std::size_t left = share;
+      group.apart.done = search_paths(cloth, group, true, left);
+    });
+    progressed = !active.empty();
+    for (const std::size_t g : active) pending = pending || !pin_groups_[g].apart.done;
+  } else {
+    for (std::size_t q = 0; q < groups; ++q) {
+      PinGroup& group = pin_groups_[(repair_turn_ + q) % groups];
+      if (!repairing_group(group)) continue;
+      progressed = true;
+      pending = budget == 0 || !search_paths(cloth, group, true, budget) || pending;
+    }
   }
   if (groups > 0) repair_turn_ = (repair_turn_ + 1) % groups;
   // Settled particles change the strain limit's order (their distance to the pins): redo it once done, on
@@ -254,7 +268,9 @@ void Solver::open_particle(PinGroup& group, std::uint32_t i) {
   // with it and marks the order stale only if the new tether bends differently. Marking it stale here
   // re-sorted every tether on the step after every cut (0.1-0.17 ms at 128 x 128).
   // Once per particle, however many searches open it: its nearest pin is looked up again after all of them.
-  if (opened_mark_[i] == 0) {
+  if (group.apart.active) {
+    group.apart.opened.push_back(i);  // run_apart lists it once
+  } else if (opened_mark_[i] == 0) {
     opened_mark_[i] = 1;
     opened_.push_back(i);
   }
@@ -316,6 +332,12 @@ void Solver::update_attachments(const Cloth& cloth, const std::vector<std::uint3
     for (const std::uint32_t i : touched) {
       if (i >= old_n) {
         if (group.open[i] == 0) open_particle(group, i);
+        // On several threads the repairs cannot append tethers (run_apart): the new particle's slot is
+        // made now, disabled (as a dropped tether) until the repair settles it.
+        if (params_.threads > 1 && group.attachment[i] == kNone) {
+          group.attachment[i] = static_cast<std::uint32_t>(attachments_.size());
+          attachments_.push_back({i, i, kInf, 0, kInf});
+        }
         continue;
       }
       if (group.open[i] != 0 || group.parent[i] == kNone || parent_spring_intact(cloth, group, i)) continue;
@@ -328,45 +350,75 @@ void Solver::update_attachments(const Cloth& cloth, const std::vector<std::uint3
   }
 }
 
+bool Solver::open_group_subtrees(const Cloth& cloth, PinGroup& group, std::size_t& budget) {
+  // While this runs the repairs wait (advance_cut_work), so the order does not grow under the pass.
+  // Budgeted in particles opened, and in 16 entries passed (a load and a test each, where opening one
+  // writes ten arrays): a small cut's pass over most of the order still fits in a step's budget.
+  std::size_t pos = group.scan_from;
+  const std::size_t end = group.order.size();
+  for (std::size_t passed = 0; pos < end && budget > 0; ++pos) {
+    if ((++passed & 15U) == 0) --budget;
+    const std::uint32_t i = group.order[pos];
+    if (group.order_pos[i] != pos) continue;  // stale: it settled again later
+    const std::uint32_t p = group.parent[i];
+    if (p != kNone && group.open[p] != 0) {
+      open_particle(group, i);
+      budget -= std::min<std::size_t>(budget, 1);
+    }
+  }
+  group.scan_from = pos;
+  if (pos < end) return false;
+  // A repair in progress: a particle still open holds a tentative distance through a settled particle
+  // (seeds and relaxations always come from one). If the cuts opened that particle or cut the spring to
+  // it, the distance is gone with it, so it is forgotten and the particle seeded again (only it: seeding
+  // the whole open region again on every cut of a long stroke cost a 256 x 256 step 40 ms). The particles
+  // the cuts opened hold no distance (open_particle), so every entry can be read.
+  const std::size_t listed = group.open_list.size();
+  for (std::size_t k = 0; k < listed; ++k) {
+    const std::uint32_t i = group.open_list[k];
+    const std::uint32_t p = group.parent[i];
+    if (p == kNone || (group.open[p] == 0 && parent_spring_intact(cloth, group, i))) continue;
+    group.dist[i] = kInf;
+    group.parent[i] = kNone;
+    group.parent_spring[i] = kNone;
+    group.owner[i] = kNone;
+    if (k < group.seeded) seed(cloth, group, i);  // else the repair's seeding reaches it
+  }
+  budget -= std::min(budget, listed / 8);
+  group.scan_from = kNoScan;
+  return true;
+}
+
 std::optional<std::size_t> Solver::open_subtrees(const Cloth& cloth, std::size_t budget) {
-  for (PinGroup& group : pin_groups_) {
-    if (group.scan_from == kNoScan) continue;
-    // While this runs the repairs wait (advance_cut_work), so the order does not grow under the pass.
-    // Budgeted in particles opened, and in 16 entries passed (a load and a test each, where opening one
-    // writes ten arrays): a small cut's pass over most of the order still fits in a step's budget.
-    std::size_t pos = group.scan_from;
-    const std::size_t end = group.order.size();
-    for (std::size_t passed = 0; pos < end && budget > 0; ++pos) {
-      if ((++passed & 15U) == 0) --budget;
-      const std::uint32_t i = group.order[pos];
-      if (group.order_pos[i] != pos) continue;  // stale: it settled again later
-      const std::uint32_t p = group.parent[i];
-      if (p != kNone && group.open[p] != 0) {
-        open_particle(group, i);
-        budget -= std::min<std::size_t>(budget, 1);
+  bool done = true;
+  if (params_.threads > 1) {
+    // The groups' passes share nothing but the list of opened particles (kept per group meanwhile: Apart), so
+    // on several threads they run at once, each with an even share of the budget. One thread gives the
+    // groups the budget in turn instead (the first takes what it needs): each is deterministic for its
+    // thread count, as the sweeps are.
+    const std::vector<std::size_t> active = groups_where([](const PinGroup& g) { return g.scan_from != kNoScan; });
+    const std::size_t share = std::max<std::size_t>(1, budget / std::max<std::size_t>(1, active.size()));
+    std::size_t used = 0;
+    run_apart(active, [&](PinGroup& group) {
+      std::size_t left = share;
+      group.apart.done = open_group_subtrees(cloth, group, left);
+      group.apart.used = share - left;
+    });
+    for (const std::size_t g : active) {
+      done = done && pin_groups_[g].apart.done;
+      used += pin_groups_[g].apart.used;
+    }
+    budget -= std::min(budget, used);
+  } else {
+    for (PinGroup& group : pin_groups_) {
+      if (group.scan_from == kNoScan) continue;
+      if (!open_group_subtrees(cloth, group, budget)) {
+        done = false;
+        break;
       }
     }
-    group.scan_from = pos;
-    if (pos < end) return std::nullopt;
-    // A repair in progress: a particle still open holds a tentative distance through a settled particle
-    // (seeds and relaxations always come from one). If the cuts opened that particle or cut the spring to
-    // it, the distance is gone with it, so it is forgotten and the particle seeded again (only it: seeding
-    // the whole open region again on every cut of a long stroke cost a 256 x 256 step 40 ms). The particles
-    // the cuts opened hold no distance (open_particle), so every entry can be read.
-    const std::size_t listed = group.open_list.size();
-    for (std::size_t k = 0; k < listed; ++k) {
-      const std::uint32_t i = group.open_list[k];
-      const std::uint32_t p = group.parent[i];
-      if (p == kNone || (group.open[p] == 0 && parent_spring_intact(cloth, group, i))) continue;
-      group.dist[i] = kInf;
-      group.parent[i] = kNone;
-      group.parent_spring[i] = kNone;
-      group.owner[i] = kNone;
-      if (k < group.seeded) seed(cloth, group, i);  // else the repair's seeding reaches it
-    }
-    budget -= std::min(budget, listed / 8);
-    group.scan_from = kNoScan;
   }
+  if (!done) return std::nullopt;
   for (const std::uint32_t i : opened_) {
     refresh_nearest(i);
     opened_mark_[i] = 0;
@@ -374,6 +426,47 @@ std::optional<std::size_t> Solver::open_subtrees(const Cloth& cloth, std::size_t
   budget -= std::min(budget, opened_.size());
   opened_.clear();
   return budget;
+}
+
+std::vector<std::size_t> Solver::groups_where(const std::function<bool(const PinGroup&)>& wanted) const {
+  std::vector<std::size_t> chosen;
+  for (std::size_t g = 0; g < pin_groups_.size(); ++g) {
+    if (wanted(pin_groups_[g])) chosen.push_back(g);
+  }
+  return chosen;
+}
+
+void Solver::run_apart(const std::vector<std::size_t>& groups, const std::function<void(PinGroup&)>& work) {
+  // Each group on one thread, with what would touch the solver's shared state kept in the group (Apart) and
+  // applied after, in group order: which thread ran which group cannot change the results. Dynamic
+  // scheduling: a group's work is not known in advance (a cut may open one group's whole tree and another's
+  // few particles).
+  for (const std::size_t g : groups) {
+    PinGroup& group = pin_groups_[g];
+    group.apart.active = true;
+    group.apart.settled_from = group.order.size();
+  }
+  const auto count = static_cast<int>(groups.size());
+#pragma omp parallel for schedule(dynamic, 1) num_threads(params_.threads)
+  for (int k = 0; k < count; ++k) work(pin_groups_[groups[static_cast<std::size_t>(k)]]);
+  for (const std::size_t g : groups) {
+    PinGroup& group = pin_groups_[g];
+    Apart& apart = group.apart;
+    apart.active = false;
+    for (const std::uint32_t i : apart.opened) {
+      if (opened_mark_[i] != 0) continue;
+      opened_mark_[i] = 1;
+      opened_.push_back(i);
+    }
+    engaging_.insert(engaging_.end(), apart.engaging.begin(), apart.engaging.end());
+    tether_order_stale_ = tether_order_stale_ || apart.order_stale;
+    // Their nearest pin, which the settling updates as it goes on one thread (refresh_nearest reads every
+    // group's distance: here, once all of them are in).
+    for (std::size_t pos = apart.settled_from; pos < group.order.size(); ++pos) refresh_nearest(group.order[pos]);
+    apart.opened.clear();
+    apart.engaging.clear();
+    apart.order_stale = false;
+  }
 }
 
 }  // namespace tachi::sim

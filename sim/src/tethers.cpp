@@ -10,6 +10,7 @@
 #include "solver_common.hpp"
 
 #include <algorithm>
+#include <cassert>
 #include <cmath>
 #include <limits>
 #include <utility>
@@ -162,7 +163,7 @@ void Solver::attach(const Cloth& cloth, PinGroup& group, std::uint32_t i, bool e
   group.anchor[i] = anchor;
   group.last_bend[i] = last_bend;
   group.bend_checked[i] = cloth.topology_version;
-  if (bends != group.bends[i]) tether_order_stale_ = true;
+  if (bends != group.bends[i]) (group.apart.active ? group.apart.order_stale : tether_order_stale_) = true;
   group.bends[i] = bends;
   std::uint32_t& slot = group.attachment[i];
   // Already in engaging_ (a later repair settling it again): listed once, so it tightens at one speed.
@@ -170,6 +171,9 @@ void Solver::attach(const Cloth& cloth, PinGroup& group, std::uint32_t i, bool e
                       attachments_[slot].reach2 > attachments_[slot].length2;
   if (slot == kNone) {
     if (!std::isfinite(length2)) return;
+    // Never while the groups repair apart (run_apart): a particle a cut appended got its slot then
+    // (update_attachments), and only those come to a repair without one.
+    assert(!group.apart.active);
     slot = static_cast<std::uint32_t>(attachments_.size());
     attachments_.push_back({i, anchor, length2, bends, length2});
     if (bends > 0) tether_order_stale_ = true;
@@ -184,7 +188,7 @@ void Solver::attach(const Cloth& cloth, PinGroup& group, std::uint32_t i, bool e
     const float now2 = (cloth.position[i] - cloth.position[anchor]).squaredNorm();
     if (now2 > length2) {
       attachments_[slot].reach2 = now2;
-      if (!listed) engaging_.push_back(slot);
+      if (!listed) (group.apart.active ? group.apart.engaging : engaging_).push_back(slot);
     }
   }
 }
@@ -231,21 +235,24 @@ std::uint32_t Solver::nearest_bend(const Cloth& cloth, PinGroup& group, std::uin
 }
 
 void Solver::order_tethers() {
-  // A tether is applied after its anchor's own (fewer bends): counting sort by bends, linear in the tethers.
+  // A tether is applied after its anchor's own (fewer bends): a stable counting sort by bends, linear in the
+  // tethers, on every thread (count_keys, place_by_keys: the same order as one thread's). A repair re-sorts on
+  // each of its steps (the bends it settles change): on one thread that was 0.18-0.2 ms of a 0.6 ms
+  // two-thread step at 128 x 128 (docs/benchmarks.md).
   tether_order_stale_ = false;
-  std::uint32_t most = 0;
-  for (const Attachment& a : attachments_) most = std::max(most, a.bends);
-  if (most == 0) {  // none bends: the attachments' own order is fine
+  const std::size_t count = attachments_.size();
+  const auto bends = [this](std::size_t k) { return attachments_[k].bends; };
+  const solver_detail::KeyTally tally = solver_detail::count_keys(count, params_.threads, bends, sort_scratch_);
+  if (tally.buckets <= 1) {  // none bends: the attachments' own order is fine
     tether_order_.clear();
     return;
   }
-  std::vector<std::uint32_t> start(static_cast<std::size_t>(most) + 2, 0);
-  for (const Attachment& a : attachments_) ++start[a.bends + 1];
-  for (std::size_t b = 1; b < start.size(); ++b) start[b] += start[b - 1];
-  unbent_tethers_ = start[1];
+  unbent_tethers_ = tally.in_first_bucket;
   // Every entry is written below: resized, not cleared first (zeroing 265k entries each step of a stroke).
-  tether_order_.resize(attachments_.size());
-  for (std::uint32_t k = 0; k < attachments_.size(); ++k) tether_order_[start[attachments_[k].bends]++] = k;
+  tether_order_.resize(count);
+  solver_detail::place_by_keys(
+      count, params_.threads, bends,
+      [this](std::size_t k, std::uint32_t at) { tether_order_[at] = static_cast<std::uint32_t>(k); }, sort_scratch_);
 }
 
 void Solver::build_attachments(const Cloth& cloth) {

@@ -14,6 +14,7 @@
 #include <random>
 #include <string>
 #include <thread>
+#include <tuple>
 #include <vector>
 
 namespace {
@@ -401,7 +402,9 @@ void expect_distances_of_a_full_build(const Solver& solver, const Cloth& cloth) 
   expect_same_distances(solver, fresh, cloth.particle_count());
 }
 
-class IncrementalAttachments : public ::testing::TestWithParam<CutMode> {};
+// On two threads the pin groups' repairs and opening passes run at once, each with a share of the budget
+// (Solver::run_apart): they must end where one thread's do.
+class IncrementalAttachments : public ::testing::TestWithParam<std::tuple<CutMode, int>> {};
 
 TEST_P(IncrementalAttachments, CutsWhileRepairingEndAsAFullBuildWould) {
   for (const unsigned seed : {11U, 12U, 13U}) {
@@ -410,9 +413,10 @@ TEST_P(IncrementalAttachments, CutsWhileRepairingEndAsAFullBuildWould) {
     for (int trial = 0; trial < 20; ++trial) {
       Cloth cloth = make(24, PinMode::TopEdge);
       StrokeOptions options;
-      options.mode = GetParam();
+      options.mode = std::get<0>(GetParam());
       StrokeCutter cutter{cloth, options};
       SolverParams params;
+      params.threads = std::get<1>(GetParam());
       params.repair_per_step = 50;  // a repair takes several steps here, so later cuts come in the middle of it
       params.repair_share = 0;
       Solver solver{params};
@@ -506,41 +510,46 @@ TEST(RepairBudget, OneBudgetServesEveryPinGroupAndGrowsWithTheCloth) {
   // together, or the particles over repair_share if that is more. A budget per group let the four groups of a
   // top-pinned 128 x 128 cloth settle 2673 particles in one step (1.9x a plain step). A slit from the left
   // edge to the middle re-routes the paths of every group round its tip.
+  // On two threads the groups repair at once, each with an even share of it (Solver::run_apart).
   constexpr int n = 64;
-  const auto slit_and_repair = [&](int per_step, int share) {
-    Cloth cloth = make(n, PinMode::TopEdge);
-    SolverParams params;
-    params.repair_per_step = per_step;
-    params.repair_share = share;
-    Solver solver{params};
-    solver.step(cloth);
-    const auto line = static_cast<float>(n / 2) - 0.5F;
-    cut_along(cloth, -1.0F, line, static_cast<float>(n) / 2.0F - 0.5F, line);
-    solver.update_topology(cloth);
-    for (int s = 0; s < 100 && solver.cut_work_pending(); ++s) solver.step(cloth);
-    EXPECT_FALSE(solver.cut_work_pending());
-    std::vector<std::size_t> settled_per_step;
-    for (int s = 0; s < 400 && solver.repairing(); ++s) {
-      const std::size_t before = solver.open_particles();
+  for (const int threads : {1, 2}) {
+    SCOPED_TRACE(std::to_string(threads) + " threads");
+    const auto slit_and_repair = [&](int per_step, int share) {
+      Cloth cloth = make(n, PinMode::TopEdge);
+      SolverParams params;
+      params.threads = threads;
+      params.repair_per_step = per_step;
+      params.repair_share = share;
+      Solver solver{params};
       solver.step(cloth);
-      settled_per_step.push_back(before - std::min(before, solver.open_particles()));
+      const auto line = static_cast<float>(n / 2) - 0.5F;
+      cut_along(cloth, -1.0F, line, static_cast<float>(n) / 2.0F - 0.5F, line);
+      solver.update_topology(cloth);
+      for (int s = 0; s < 100 && solver.cut_work_pending(); ++s) solver.step(cloth);
+      EXPECT_FALSE(solver.cut_work_pending());
+      std::vector<std::size_t> settled_per_step;
+      for (int s = 0; s < 400 && solver.repairing(); ++s) {
+        const std::size_t before = solver.open_particles();
+        solver.step(cloth);
+        settled_per_step.push_back(before - std::min(before, solver.open_particles()));
+      }
+      EXPECT_FALSE(solver.repairing());
+      return settled_per_step;
+    };
+    {
+      SCOPED_TRACE("repair_per_step 64 alone");
+      const auto settled = slit_and_repair(64, 0);
+      ASSERT_GE(settled.size(), 2U) << "the slit's repair takes steps";
+      EXPECT_LE(*std::max_element(settled.begin(), settled.end()), 64U) << "64 a step over all the groups";
+      EXPECT_EQ(*std::max_element(settled.begin(), settled.end()), 64U) << "and the budget is used";
     }
-    EXPECT_FALSE(solver.repairing());
-    return settled_per_step;
-  };
-  {
-    SCOPED_TRACE("repair_per_step 64 alone");
-    const auto settled = slit_and_repair(64, 0);
-    ASSERT_GE(settled.size(), 2U) << "the slit's repair takes steps";
-    EXPECT_LE(*std::max_element(settled.begin(), settled.end()), 64U) << "64 a step over all the groups";
-    EXPECT_EQ(*std::max_element(settled.begin(), settled.end()), 64U) << "and the budget is used";
-  }
-  {
-    SCOPED_TRACE("a sixteenth of the particles");
-    const auto settled = slit_and_repair(1, 16);
-    const std::size_t share = static_cast<std::size_t>(n * n) / 16;
-    EXPECT_LE(*std::max_element(settled.begin(), settled.end()), share);
-    EXPECT_GT(*std::max_element(settled.begin(), settled.end()), 1U) << "the share, not repair_per_step, bounds it";
+    {
+      SCOPED_TRACE("a sixteenth of the particles");
+      const auto settled = slit_and_repair(1, 16);
+      const std::size_t share = static_cast<std::size_t>(n * n) / 16;
+      EXPECT_LE(*std::max_element(settled.begin(), settled.end()), share);
+      EXPECT_GT(*std::max_element(settled.begin(), settled.end()), 1U) << "the share, not repair_per_step, bounds it";
+    }
   }
 }
 
@@ -696,5 +705,9 @@ TEST(IncrementalAttachments, ARepairThatAStrokeKeepsReopeningListsWhatIsOpenNotW
 }
 
 INSTANTIATE_TEST_SUITE_P(CutModes, IncrementalAttachments,
-                         ::testing::Values(CutMode::Exact, CutMode::Grid, CutMode::Delete),
-                         [](const auto& param) { return std::string{to_string(param.param)}; });
+                         ::testing::Combine(::testing::Values(CutMode::Exact, CutMode::Grid, CutMode::Delete),
+                                            ::testing::Values(1, 2)),
+                         [](const auto& param) {
+                           return std::string{to_string(std::get<0>(param.param))} + "_" +
+                                  std::to_string(std::get<1>(param.param)) + "_threads";
+                         });

@@ -25,6 +25,7 @@
 
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <optional>
 #include <vector>
 
@@ -155,6 +156,17 @@ class Solver {
     std::uint8_t family = 0;
   };
   static constexpr std::size_t kNoScan = static_cast<std::size_t>(-1);
+  /// What a pin group's repair or opening pass, run on a thread of its own (Solver::run_apart), would have
+  /// written to the solver's shared state: kept here, applied after in group order.
+  struct Apart {
+    bool active = false;
+    std::vector<std::uint32_t> opened;    ///< particles opened (opened_)
+    std::vector<std::uint32_t> engaging;  ///< tethers to tighten (engaging_)
+    bool order_stale = false;             ///< a tether's bends changed (tether_order_stale_)
+    std::size_t settled_from = 0;         ///< where this run's settles begin in `order` (their nearest pin)
+    bool done = false;                    ///< the pass or repair finished
+    std::size_t used = 0;                 ///< budget it used
+  };
   /// A pin group of the long-range attachments (one pin when there are few, else an end or a half of the
   /// pinned line: build_attachments) with its shortest-path tree over the springs (Dijkstra, search_paths) and
   /// the state of its repair after a cut.
@@ -189,6 +201,10 @@ class Solver {
     std::vector<std::uint32_t> order_pos;  ///< per particle: its live place in order (none: not settled)
     /// Where the pass over `order` that opens a cut's orphaned subtrees goes on (none: no pass to make).
     std::size_t scan_from = kNoScan;
+    /// While the groups work at once on several threads (run_apart): what the group would write to the
+    /// solver's shared state, applied after in group order.
+    Apart apart;
+    std::vector<std::uint32_t> reopen_subtree;  ///< scratch of reopen_shorter
   };
   /// A cut's tether work, in the order it is done: the orphans' subtrees opened (per pin group), then what the
   /// cut separated from a pin group found by floods from the touched particles and, past their cap, by
@@ -226,6 +242,12 @@ class Solver {
   /// The subtrees of the orphans: one pass over each group's settle order (update_attachments). Returns the
   /// budget left, or nothing when it ran out first.
   std::optional<std::size_t> open_subtrees(const Cloth& cloth, std::size_t budget);
+  /// One group's part of it; takes what it used off `budget`. Returns true when the group's pass is done.
+  bool open_group_subtrees(const Cloth& cloth, PinGroup& group, std::size_t& budget);
+  /// The pin groups for which `wanted` holds, by index.
+  [[nodiscard]] std::vector<std::size_t> groups_where(const std::function<bool(const PinGroup&)>& wanted) const;
+  /// Runs `work` on each of `groups` at once (params_.threads), each group's shared writes kept apart.
+  void run_apart(const std::vector<std::size_t>& groups, const std::function<void(PinGroup&)>& work);
   /// Returns whether every open particle's verdict is in (else the components are labelled instead).
   bool release_cut_off(const Cloth& cloth, const std::vector<std::uint32_t>& touched);
   /// Particle i has no path to `group` any more: its tether of that group goes (kept disabled,
@@ -333,6 +355,8 @@ class Solver {
   std::vector<Attachment> attachments_;
   std::vector<std::uint32_t> tether_order_;  ///< attachments by bends; empty while none bends
   bool tether_order_stale_ = false;
+  /// Scratch of order_tethers' counting sort: per thread's chunk, per key.
+  std::vector<std::vector<std::uint32_t>> sort_scratch_;
   void order_tethers();
   void engage_tethers();
   std::vector<PinGroup> pin_groups_;
@@ -349,7 +373,6 @@ class Solver {
   std::vector<std::uint8_t> flood_settled_;
   std::vector<std::uint8_t> flood_met_;
   UnionFind<std::uint32_t> flood_sets_;
-  std::vector<std::uint32_t> reopen_subtree_;  ///< scratch of reopen_shorter
   // Scratch of the incremental update: a bit per spring (edited by the cut) and per particle (touched by the
   // edited springs), cleared as read; the same once each, in increasing order.
   std::vector<std::uint64_t> edited_bits_;

@@ -40,6 +40,12 @@ class UnionFind {
     while (parent_[i] != i) i = parent_[i] = parent_[parent_[i]];
     return i;
   }
+  /// The same representative as find, without shortening the path on the way: it writes nothing, so several
+  /// threads may ask at once (after finds have shortened the paths, it is about as quick).
+  [[nodiscard]] Index root(Index i) const {
+    while (parent_[i] != i) i = parent_[i];
+    return i;
+  }
   /// Joins the sets of a and b; false when they were one already. The larger root goes under the smaller,
   /// so a set's representative is the smallest root it absorbed (the result does not depend on the order
   /// of the unions' arguments).

@@ -346,6 +346,7 @@ int speakers_main(VoiceConfig config, const std::string& set, unsigned seed_offs
   config.verify_min_margin = 0.0;
   config.verify_min_phrase_margin = 0.0;
   config.verify_min_level_db.reset();
+  config.verify_min_garbage_margin.reset();
   std::vector<std::vector<std::int16_t>> librivox;
   for (const auto& clip : fixture::librivox_clips()) librivox.push_back(read_wav_file(clip).samples);
   // Jobs: every speaker (base voice, pitch-shifted, tempo-changed) of the set, then the corpora
@@ -426,8 +427,9 @@ int speakers_main(VoiceConfig config, const std::string& set, unsigned seed_offs
                       return p.phrase == run.placed[u].phrase;
                     })->command == d.command;
           }
-        std::fprintf(f, "D\t%zu\t%d\t%d\t%s\t%.3f\t%.3f\t%.3f\t%.3f\t%.3f\t%.3f\n", r, utterance, right ? 1 : 0, d.phrase.c_str(),
-                     d.time_s, d.verification_score, d.command_margin, d.phrase_score, d.phrase_margin, d.level_db);
+        std::fprintf(f, "D\t%zu\t%d\t%d\t%s\t%.3f\t%.3f\t%.3f\t%.3f\t%.3f\t%.3f\t%.3f\t%.3f\n", r, utterance, right ? 1 : 0,
+                     d.phrase.c_str(), d.time_s, d.verification_score, d.command_margin, d.phrase_score, d.phrase_margin, d.level_db,
+                     d.garbage_score, d.garbage_margin);
       }
     }
     std::fclose(f);

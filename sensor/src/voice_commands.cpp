@@ -70,6 +70,8 @@ std::optional<std::string> validate(const VoiceConfig& config) {
   if (!std::isfinite(config.verify_min_phrase_margin) || config.verify_min_phrase_margin < 0.0)
     return "verify_min_phrase_margin must be a number >= 0 (e.g. 2)";
   if (config.verify_min_level_db && std::isnan(*config.verify_min_level_db)) return "verify_min_level_db must be a number (or null)";
+  if (config.verify_min_garbage_margin && std::isnan(*config.verify_min_garbage_margin))
+    return "verify_min_garbage_margin must be a number (or null)";
   return std::nullopt;
 }
 
@@ -90,7 +92,8 @@ VoiceConfig parse_voice_config(const std::string& json_text) {
   for (const auto& item : root.items())
     if (item.key() != "model_dir" && item.key() != "dictionary" && item.key() != "phrases" && item.key() != "phone_loop_probability" &&
         item.key() != "verify_min_log_ratio" && item.key() != "verify_min_margin" && item.key() != "verify_min_phrase_log_ratio" &&
-        item.key() != "verify_min_phrase_margin" && item.key() != "verify_min_level_db")
+        item.key() != "verify_min_phrase_margin" && item.key() != "verify_min_level_db" &&
+        item.key() != "verify_min_garbage_margin")
       fail("unknown key " + item.key());
   try {
     if (root.contains("model_dir")) c.model_dir = root.at("model_dir").get<std::string>();
@@ -107,7 +110,8 @@ VoiceConfig parse_voice_config(const std::string& json_text) {
     }
     if (root.contains("verify_min_margin")) c.verify_min_margin = root.at("verify_min_margin").get<double>();
     for (const auto& [key, target] : {std::pair{"verify_min_phrase_log_ratio", &c.verify_min_phrase_log_ratio},
-                                      std::pair{"verify_min_level_db", &c.verify_min_level_db}}) {
+                                      std::pair{"verify_min_level_db", &c.verify_min_level_db},
+                                      std::pair{"verify_min_garbage_margin", &c.verify_min_garbage_margin}}) {
       if (!root.contains(key)) continue;
       const auto& v = root.at(key);
       if (v.is_null())

@@ -5,6 +5,7 @@
 #include <pocketsphinx.h>
 #include <cmn.h>
 #include <feat.h>
+#include <fsg_model.h>
 
 #include <algorithm>
 #include <array>
@@ -30,6 +31,11 @@ struct KeywordSpotter::Impl {
   // shifted the frames of its later hits by the frames the other searches had read.
   cmd_ln_t* verifier_cmdln = nullptr;
   ps_decoder_t* verifier = nullptr;
+  // The garbage-model grammars have a decoder of their own with beams wide enough that a phrase the
+  // audio does not hold still reaches the grammar's end (with the default beams the free phone loop
+  // outscores it in every frame and the path is pruned: no score at all).
+  cmd_ln_t* garbage_cmdln = nullptr;
+  ps_decoder_t* garbage_verifier = nullptr;
   long samples = 0;
   long utterance_start = 0;         // sample at which the current utterance began
   long frames_before_utterance = 0;  // frames the decoder read in earlier utterances
@@ -63,6 +69,11 @@ struct KeywordSpotter::Impl {
     double phrase_margin = std::numeric_limits<double>::infinity();
     /// The phrase's level above the background's floor, dB (level_above_floor_db).
     double level_db = std::numeric_limits<double>::quiet_NaN();
+    /// The ratio with a phone loop before and after the phrase (the words around it explained), and
+    /// the phrase's margin so scored over the best phrase of another command (negative: the garbage
+    /// grammar prefers the other command).
+    double garbage_log_ratio = -std::numeric_limits<double>::infinity();
+    double garbage_margin = std::numeric_limits<double>::infinity();
   };
   Verdict verify(long begin, long end, long before);
 
@@ -74,6 +85,8 @@ struct KeywordSpotter::Impl {
     if (cmdln != nullptr) cmd_ln_free_r(cmdln);
     if (verifier != nullptr) ps_free(verifier);
     if (verifier_cmdln != nullptr) cmd_ln_free_r(verifier_cmdln);
+    if (garbage_verifier != nullptr) ps_free(garbage_verifier);
+    if (garbage_cmdln != nullptr) cmd_ln_free_r(garbage_cmdln);
   }
 };
 
@@ -90,6 +103,13 @@ constexpr long kVerifyWideBeforeSamples = 8 * kVoiceSampleRate / 10;
 constexpr const char* kKeywordSearch = "commands";
 const std::string kPhoneLoopSearch = "verify-phone-loop";
 std::string grammar_search(std::size_t phrase) { return "verify-phrase-" + std::to_string(phrase); }
+std::string garbage_search(std::size_t phrase) { return "verify-garbage-" + std::to_string(phrase); }
+// The garbage model around a phrase: one dictionary word per context-independent phone of the en-us
+// model (CMU's 39 phones), in a free loop before and after the phrase.
+constexpr std::array<const char*, 39> kGarbagePhones{"AA", "AE", "AH", "AO", "AW", "AY", "B",  "CH", "D",  "DH", "EH", "ER", "EY",
+                                                     "F",  "G",  "HH", "IH", "IY", "JH", "K",  "L",  "M",  "N",  "NG", "OW", "OY",
+                                                     "P",  "R",  "S",  "SH", "T",  "TH", "UH", "UW", "V",  "W",  "Y",  "Z",  "ZH"};
+constexpr const char* kGarbagePrefix = "tachi_garbage_";
 /// One word (or filler, or phone) of a decoder's best path.
 struct PathSegment {
   std::string word;
@@ -174,17 +194,17 @@ KeywordSpotter::Impl::Verdict KeywordSpotter::Impl::verify(long begin, long end,
   cmn_t* cmn = ps_get_feat(decoder)->cmn_struct;
   std::vector<mfcc_t> cepstral_mean(static_cast<std::size_t>(cmn->veclen));
   cmn_live_get(cmn, cepstral_mean.data());
-  const auto decode = [&](const char* search) {
-    if (ps_set_search(verifier, search) < 0) throw std::runtime_error(std::string("pocketsphinx has no search ") + search);
-    cmn_live_set(ps_get_feat(verifier)->cmn_struct, cepstral_mean.data());
-    ps_start_utt(verifier);
-    if (ps_process_raw(verifier, audio.data() + (from - audio_start), static_cast<std::size_t>(to - from), FALSE, FALSE) < 0)
+  const auto decode = [&](const char* search, ps_decoder_t* ps) {
+    if (ps_set_search(ps, search) < 0) throw std::runtime_error(std::string("pocketsphinx has no search ") + search);
+    cmn_live_set(ps_get_feat(ps)->cmn_struct, cepstral_mean.data());
+    ps_start_utt(ps);
+    if (ps_process_raw(ps, audio.data() + (from - audio_start), static_cast<std::size_t>(to - from), FALSE, FALSE) < 0)
       throw std::runtime_error("pocketsphinx failed to process audio");
-    ps_end_utt(verifier);
-    return best_path(verifier);
+    ps_end_utt(ps);
+    return best_path(ps);
   };
   double loop_score = 0.0;
-  auto loop_path = decode(kPhoneLoopSearch.c_str());
+  auto loop_path = decode(kPhoneLoopSearch.c_str(), verifier);
   // The decoder numbers frames on from earlier utterances: frames relative to the window's start.
   const int loop_base = loop_path.empty() ? 0 : loop_path.front().first_frame;
   for (const auto& seg : loop_path) loop_score += seg.acoustic;
@@ -203,7 +223,7 @@ KeywordSpotter::Impl::Verdict KeywordSpotter::Impl::verify(long begin, long end,
   for (std::size_t i = 0; i < config.phrases.size(); ++i) {
     double phrase_score = 0.0, words_score = 0.0;
     int phrase_frames = 0;
-    const auto path = decode(grammar_search(i).c_str());
+    const auto path = decode(grammar_search(i).c_str(), verifier);
     const int base = path.empty() ? 0 : path.front().first_frame;
     for (const auto& seg : path) {
       phrase_score += seg.acoustic;
@@ -224,6 +244,25 @@ KeywordSpotter::Impl::Verdict KeywordSpotter::Impl::verify(long begin, long end,
     return verify(begin, end, kVerifyWideBeforeSamples);
   const auto best = static_cast<std::size_t>(std::max_element(log_ratio.begin(), log_ratio.end()) - log_ratio.begin());
   if (!std::isfinite(log_ratio[best])) return verdict;
+  // The same phrases with a garbage model (a free phone loop) before and after them instead of the
+  // silence and noise fillers alone: the filler-model keyword verification of Rose & Paul (ICASSP
+  // 1990), where the fillers explain the non-keyword speech. With silence fillers only, the words
+  // around a phrase must be explained by the phrase itself: in "that is enough, stop cutting" the
+  // grammar of "begin cutting" stretches "begin" over "enough" ("-nough" ends like "-gin") and beats
+  // "stop cutting", whose grammar leaves "that is enough" to the silence model. With the phone loop
+  // around both, each phrase is aligned where it fits best and the commands compete on the phrase.
+  // Score: the ratio of the whole window against the free phone loop, per frame of the phrase, as above.
+  std::vector<double> garbage_ratio(config.phrases.size(), -std::numeric_limits<double>::infinity());
+  for (std::size_t i = 0; i < config.phrases.size(); ++i) {
+    double score = 0.0;
+    int frames = 0;
+    const auto gpath = decode(garbage_search(i).c_str(), garbage_verifier);
+    for (const auto& seg : gpath) {
+      score += seg.acoustic;
+      if (!is_filler(seg.word) && seg.word.rfind(kGarbagePrefix, 0) != 0) frames += seg.last_frame - seg.first_frame + 1;
+    }
+    if (frames > 0) garbage_ratio[i] = (score - loop_score) / frames;
+  }
   verdict.phrase = config.phrases[best];
   verdict.log_ratio = log_ratio[best];
   for (std::size_t i = 0; i < config.phrases.size(); ++i)
@@ -235,6 +274,10 @@ KeywordSpotter::Impl::Verdict KeywordSpotter::Impl::verify(long begin, long end,
   for (std::size_t i = 0; i < config.phrases.size(); ++i)
     if (config.phrases[i].command != config.phrases[best].command && std::isfinite(phrase_only[i]))
       verdict.phrase_margin = std::min(verdict.phrase_margin, phrase_only[best] - phrase_only[i]);
+  verdict.garbage_log_ratio = garbage_ratio[best];
+  for (std::size_t i = 0; i < config.phrases.size(); ++i)
+    if (config.phrases[i].command != config.phrases[best].command && std::isfinite(garbage_ratio[i]))
+      verdict.garbage_margin = std::min(verdict.garbage_margin, garbage_ratio[best] - garbage_ratio[i]);
   if (phrase_span[best].first >= 0) {
     const long p0 = from + phrase_span[best].first * kSamplesPerFrame, p1 = from + (phrase_span[best].second + 1) * kSamplesPerFrame;
     verdict.level_db = level_above_floor_db(audio, audio_start, p0, p1);
@@ -283,6 +326,44 @@ KeywordSpotter::KeywordSpotter(const VoiceConfig& config) : impl_(std::make_uniq
       const std::string grammar = "#JSGF V1.0;\ngrammar phrase" + std::to_string(i) + ";\npublic <phrase> = " + config.phrases[i].phrase + ";\n";
       if (ps_set_jsgf_string(impl_->verifier, grammar_search(i).c_str(), grammar.c_str()) < 0)
         throw std::runtime_error("pocketsphinx rejected the grammar " + grammar);
+    }
+    // The garbage words, then per phrase a finite-state grammar: a free loop of them, the phrase's
+    // words, a free loop again. Built as an FSG rather than JSGF because JSGF gives each of the 39
+    // alternatives probability 1/39, and with the language weight that penalty per phone made the
+    // decoder stretch the phrase over the words around it (or lose the path in the beam) instead of
+    // using the loop. A garbage phone here costs no grammar probability, as a phone costs nothing in
+    // the allphone background loop it is compared with.
+    impl_->garbage_cmdln = cmd_ln_init(nullptr, ps_args(), TRUE, "-hmm", config.model_dir.c_str(), "-dict", config.dictionary.c_str(),
+                                       "-remove_silence", "no", "-beam", "1e-300", "-pbeam", "1e-300", "-wbeam", "1e-300", "-logfn",
+                                       "/dev/null", nullptr);
+    if (impl_->garbage_cmdln != nullptr) impl_->garbage_verifier = ps_init(impl_->garbage_cmdln);
+    if (impl_->garbage_verifier == nullptr) throw std::runtime_error("pocketsphinx could not load " + config.model_dir + " for the garbage model");
+    std::vector<std::string> garbage_words;
+    for (const char* phone : kGarbagePhones) {
+      std::string word = kGarbagePrefix + std::string(phone);
+      std::transform(word.begin(), word.end(), word.begin(), [](unsigned char ch) { return static_cast<char>(std::tolower(ch)); });
+      if (ps_add_word(impl_->garbage_verifier, word.c_str(), phone, FALSE) < 0)
+        throw std::runtime_error(std::string("the acoustic model has no phone ") + phone + " for the garbage model");
+      garbage_words.push_back(std::move(word));
+    }
+    const auto lw = static_cast<float>(cmd_ln_float32_r(impl_->garbage_cmdln, "-lw"));
+    for (std::size_t i = 0; i < config.phrases.size(); ++i) {
+      std::vector<std::string> words;
+      std::istringstream in(config.phrases[i].phrase);
+      for (std::string w; in >> w;) words.push_back(w);
+      const auto n = static_cast<int>(words.size());
+      fsg_model_t* fsg = fsg_model_init(garbage_search(i).c_str(), ps_get_logmath(impl_->garbage_verifier), lw, n + 1);
+      fsg->start_state = 0;
+      fsg->final_state = n;
+      for (int k = 0; k < n; ++k) fsg_model_trans_add(fsg, k, k + 1, 0, fsg_model_word_add(fsg, words[static_cast<std::size_t>(k)].c_str()));
+      for (const auto& g : garbage_words) {
+        const int wid = fsg_model_word_add(fsg, g.c_str());
+        fsg_model_trans_add(fsg, 0, 0, 0, wid);
+        fsg_model_trans_add(fsg, n, n, 0, wid);
+      }
+      const int set = ps_set_fsg(impl_->garbage_verifier, garbage_search(i).c_str(), fsg);
+      fsg_model_free(fsg);  // the search keeps its own reference
+      if (set < 0) throw std::runtime_error("pocketsphinx rejected the garbage grammar of \"" + config.phrases[i].phrase + "\"");
     }
     if (ps_set_allphone(impl_->verifier, kPhoneLoopSearch.c_str(), nullptr) < 0) throw std::runtime_error("pocketsphinx could not set up a phone loop");
   }
@@ -384,6 +465,8 @@ void KeywordSpotter::Impl::verify_pending(long ended_by, std::vector<VoiceDetect
     d.phrase_score = verdict.phrase_log_ratio;
     d.phrase_margin = verdict.phrase_margin;
     d.level_db = verdict.level_db;
+    d.garbage_score = verdict.garbage_log_ratio;
+    d.garbage_margin = verdict.garbage_margin;
     if (verification_accepts(config, d)) accepted.push_back(d);
   }
 }
@@ -394,6 +477,9 @@ bool verification_accepts(const VoiceConfig& config, const VoiceDetection& d) {
   if (!(d.command_margin >= config.verify_min_margin)) return false;
   if (config.verify_min_phrase_margin > 0.0 && !(d.phrase_margin >= config.verify_min_phrase_margin)) return false;
   if (config.verify_min_level_db && !(d.level_db >= *config.verify_min_level_db)) return false;
+  // The same margin with the words around the phrase explained by the garbage model: a phrase that wins
+  // only because it stretched over a neighbouring word loses here.
+  if (config.verify_min_garbage_margin && !(d.garbage_margin >= *config.verify_min_garbage_margin)) return false;
   return d.verification_score >= *config.verify_min_log_ratio ||
          (config.verify_min_phrase_log_ratio && d.phrase_score >= *config.verify_min_phrase_log_ratio);
 }

@@ -100,6 +100,7 @@ TEST(VoiceCommands, TheShippedConfigFileMatchesTheDefaults) {
   EXPECT_EQ(file.verify_min_phrase_log_ratio, defaults.verify_min_phrase_log_ratio);
   EXPECT_EQ(file.verify_min_phrase_margin, defaults.verify_min_phrase_margin);
   EXPECT_EQ(file.verify_min_level_db, defaults.verify_min_level_db);
+  EXPECT_EQ(file.verify_min_garbage_margin, defaults.verify_min_garbage_margin);
 }
 
 TEST(VoiceCommands, ThePhraseRatioMarginAndLevelKeysParseAndAreValidated) {
@@ -121,6 +122,9 @@ TEST(VoiceCommands, ThePhraseRatioMarginAndLevelKeysParseAndAreValidated) {
   EXPECT_NE(error_of(R"({"verify_min_level_db": "loud"})").find("verify_min_level_db"), std::string::npos);
   EXPECT_NE(error_of(R"({"verify_min_phrase_log_ratio": [1]})").find("verify_min_phrase_log_ratio"), std::string::npos);
   EXPECT_NE(error_of(R"({"verify_min_phrase_margin": -1})").find("verify_min_phrase_margin"), std::string::npos);
+  EXPECT_EQ(parse_voice_config(R"({"verify_min_garbage_margin": 1.5})").verify_min_garbage_margin, 1.5);
+  EXPECT_FALSE(parse_voice_config(R"({"verify_min_garbage_margin": null})").verify_min_garbage_margin.has_value());
+  EXPECT_NE(error_of(R"({"verify_min_garbage_margin": "x"})").find("verify_min_garbage_margin"), std::string::npos);
 }
 
 TEST(VoiceCommands, TheSecondPassMarginIsValidated) {

@@ -193,6 +193,7 @@ TEST(VoiceSpotter, TheSecondPassDecisionNeedsTheLevelTheMarginsAndOneOfTheTwoRat
   c.verify_min_phrase_log_ratio = -5.0;
   c.verify_min_phrase_margin = 2.0;
   c.verify_min_level_db = 8.0;
+  c.verify_min_garbage_margin.reset();
   VoiceDetection d;
   d.verification_score = -10.0;  // said alone: the whole window passes
   d.command_margin = 6.0;
@@ -223,10 +224,30 @@ TEST(VoiceSpotter, TheSecondPassDecisionNeedsTheLevelTheMarginsAndOneOfTheTwoRat
   before.verify_min_margin = 4.0;
   before.verify_min_phrase_margin = 0.0;
   before.verify_min_level_db.reset();
+  before.verify_min_garbage_margin.reset();
   EXPECT_TRUE(verification_accepts(before, quiet));
   EXPECT_FALSE(verification_accepts(before, in_sentence));
   before.verify_min_log_ratio.reset();  // one pass: every hit
   EXPECT_TRUE(verification_accepts(before, close));
+}
+
+TEST(VoiceSpotter, TheGarbageMarginDropsAPhraseThatWinsOnlyByStretchingOverTheWordsAroundIt) {
+  VoiceConfig c;  // the shipped gates, plus the garbage-model margin
+  c.verify_min_garbage_margin = 1.0;
+  VoiceDetection d;
+  d.verification_score = -10.0;
+  d.command_margin = 9.0;  // "begin cutting" beats "stop cutting" with silence fillers around them...
+  d.phrase_margin = 3.0;
+  d.level_db = 20.0;
+  d.garbage_margin = -4.0;  // ...but not once a phone loop explains "that is enough" before it
+  EXPECT_FALSE(verification_accepts(c, d));
+  d.garbage_margin = std::nan("");  // not scored: refused, never a wrong command
+  EXPECT_FALSE(verification_accepts(c, d));
+  d.garbage_margin = 2.0;
+  EXPECT_TRUE(verification_accepts(c, d));
+  c.verify_min_garbage_margin.reset();  // not checked
+  d.garbage_margin = -4.0;
+  EXPECT_TRUE(verification_accepts(c, d));
 }
 
 TEST(VoiceSpotter, UnknownWordsAndMissingModelsAreClearErrors) {

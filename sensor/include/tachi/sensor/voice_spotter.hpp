@@ -32,6 +32,12 @@ struct VoiceDetection {
   double phrase_margin = std::numeric_limits<double>::quiet_NaN();
   /// The phrase's level above the background's floor (dB); NaN without a second pass.
   double level_db = std::numeric_limits<double>::quiet_NaN();
+  /// The second pass's score with a garbage model (a phone loop) before and after the phrase instead of
+  /// silence alone, and its margin over the best phrase of another command so scored (negative: the
+  /// garbage grammar prefers another command; VoiceConfig::verify_min_garbage_margin); NaN without a
+  /// second pass.
+  double garbage_score = std::numeric_limits<double>::quiet_NaN();
+  double garbage_margin = std::numeric_limits<double>::quiet_NaN();
 };
 
 /// The second pass's decision on one scored hit (VoiceConfig's verify_* thresholds): a command when

@@ -10,7 +10,8 @@
 // threads > 1 (OpenMP): the springs' sweeps run over bands of rows, the even bands at once, then the odd
 // ones (bands share no particle: a two-colouring of a partition, docs/sim.md "Threads"); the tethers, the
 // per-particle loops and the strain limit's scan for its first violation are split with the same results
-// as one thread. One thread runs the single-threaded code as before.
+// as one thread; after a cut the pin groups' repairs run at once, a group per thread, each with a share of
+// the budget (run_apart). One thread runs the single-threaded code as before.
 // Why this and not semi-implicit + Provot or an implicit solver: docs/sim.md (with the figures).
 // Where each part is (sim/src): the step and sub-steps solver_step.cpp; the caches solver_caches.cpp; the
 // springs' quads and bands spring_batches.cpp (steps 3-4); the tethers tethers.cpp (step 2), their repair after a
@@ -71,7 +72,8 @@ struct SolverParams {
   bool soft_every_substep = true;  ///< shear/bend in every sub-step (false: cheaper, but never fully at rest)
   /// Threads of the sweeps (OpenMP). The positions are a function of this number, not of how many threads the
   /// system actually grants: 1 gives the single-threaded results bit for bit; > 1 sweeps the springs in
-  /// 2 x threads bands of rows (even bands together, then odd), the same for every run with that number.
+  /// 2 x threads bands of rows (even bands together, then odd) and repairs the pin groups' tethers after a
+  /// cut at once, each with an even share of the budget: the same for every run with that number.
   int threads = 1;
 };
 

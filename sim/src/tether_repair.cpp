@@ -440,7 +440,8 @@ void Solver::run_apart(const std::vector<std::size_t>& groups, const std::functi
   // Each group on one thread, with what would touch the solver's shared state kept in the group (Apart) and
   // applied after, in group order: which thread ran which group cannot change the results. Dynamic
   // scheduling: a group's work is not known in advance (a cut may open one group's whole tree and another's
-  // few particles).
+  // few particles). Nothing to do (the repairs' usual state, every step): no parallel region either.
+  if (groups.empty()) return;
   for (const std::size_t g : groups) {
     PinGroup& group = pin_groups_[g];
     group.apart.active = true;

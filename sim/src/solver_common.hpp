@@ -29,22 +29,29 @@ using Vec4 = Eigen::Vector4f;
 /// Masks the inverse mass out of a difference of two Vec4.
 inline const Vec4 kXyz{1.0F, 1.0F, 1.0F, 0.0F};
 
-/// Runs body(begin, end) over [0, n) in `threads` contiguous chunks at once (OpenMP, static: chunk t on
-/// thread t), or in one call for one thread or a short range. For loops whose iterations are independent
-/// (each particle on its own, or tethers of distinct particles), so the results do not depend on the split.
+/// Runs body(chunk, begin, end) over [0, n) in `threads` contiguous chunks at once (OpenMP, static: chunk t
+/// on thread t), or in one call (chunk 0) for one thread or a short range. For loops whose iterations are
+/// independent (each particle on its own, or tethers of distinct particles), so the results do not depend on
+/// the split; the chunk's number lets a loop keep something per chunk (count_keys).
 template <typename Body>
-void for_chunks(std::size_t n, int threads, const Body& body) {
+void for_numbered_chunks(std::size_t n, int threads, const Body& body) {
   constexpr std::size_t kWorthSplitting = 2048;  // below this the threads' wake-up costs more than the loop
   if (threads <= 1 || n < kWorthSplitting) {
-    body(std::size_t{0}, n);
+    body(std::size_t{0}, std::size_t{0}, n);
     return;
   }
 #pragma omp parallel for schedule(static) num_threads(threads)
   for (int t = 0; t < threads; ++t) {
     const auto chunk = static_cast<std::size_t>(t);
     const auto parts = static_cast<std::size_t>(threads);
-    body(n * chunk / parts, n * (chunk + 1) / parts);
+    body(chunk, n * chunk / parts, n * (chunk + 1) / parts);
   }
+}
+
+/// for_numbered_chunks without the chunk's number: body(begin, end).
+template <typename Body>
+void for_chunks(std::size_t n, int threads, const Body& body) {
+  for_numbered_chunks(n, threads, [&](std::size_t, std::size_t begin, std::size_t end) { body(begin, end); });
 }
 
 /// A stable counting sort of the indices [0, n) by a small integer key (distribution counting, Knuth, TAOCP
@@ -60,29 +67,12 @@ struct KeyTally {
   std::size_t in_first_bucket = 0;  ///< indices with key 0
 };
 
-/// The chunks count_keys and place_by_keys split [0, n) into: body(chunk, begin, end), on threads at once.
-template <typename Body>
-void for_sort_chunks(std::size_t n, int threads, const Body& body) {
-  constexpr std::size_t kWorthSplitting = 4096;
-  const int parts = threads > 1 && n >= kWorthSplitting ? threads : 1;
-  if (parts == 1) {
-    body(std::size_t{0}, std::size_t{0}, n);
-    return;
-  }
-#pragma omp parallel for schedule(static) num_threads(parts)
-  for (int t = 0; t < parts; ++t) {
-    const auto chunk = static_cast<std::size_t>(t);
-    const auto all = static_cast<std::size_t>(parts);
-    body(chunk, n * chunk / all, n * (chunk + 1) / all);
-  }
-}
-
 /// Counts key(i) over [0, n).
 template <typename Key>
 KeyTally count_keys(std::size_t n, int threads, const Key& key, std::vector<std::vector<std::uint32_t>>& next) {
   next.resize(static_cast<std::size_t>(std::max(threads, 1)));
   for (auto& counts : next) counts.clear();
-  for_sort_chunks(n, threads, [&](std::size_t chunk, std::size_t begin, std::size_t end) {
+  for_numbered_chunks(n, threads, [&](std::size_t chunk, std::size_t begin, std::size_t end) {
     std::vector<std::uint32_t>& counts = next[chunk];
     for (std::size_t i = begin; i < end; ++i) {
       const std::uint32_t b = key(i);
@@ -109,7 +99,7 @@ KeyTally count_keys(std::size_t n, int threads, const Key& key, std::vector<std:
 template <typename Key, typename Place>
 void place_by_keys(std::size_t n, int threads, const Key& key, const Place& place,
                    std::vector<std::vector<std::uint32_t>>& next) {
-  for_sort_chunks(n, threads, [&](std::size_t chunk, std::size_t begin, std::size_t end) {
+  for_numbered_chunks(n, threads, [&](std::size_t chunk, std::size_t begin, std::size_t end) {
     std::vector<std::uint32_t>& at = next[chunk];
     for (std::size_t i = begin; i < end; ++i) place(i, at[key(i)]++);
   });

@@ -9,7 +9,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <functional>
 
 namespace tachi::sim {
 
@@ -186,6 +185,51 @@ void Solver::refresh_nearest(std::uint32_t i) {
   nearest_[i] = d;
 }
 
+template <typename Wanted>
+const std::vector<std::size_t>& Solver::groups_where(const Wanted& wanted) {
+  // Into a scratch that keeps its room: the repair asks on every step on several threads.
+  apart_groups_.clear();
+  for (std::size_t g = 0; g < pin_groups_.size(); ++g) {
+    if (wanted(pin_groups_[g])) apart_groups_.push_back(g);
+  }
+  return apart_groups_;
+}
+
+template <typename Work>
+void Solver::run_apart(const std::vector<std::size_t>& groups, const Work& work) {
+  // Each group on one thread, with what would touch the solver's shared state kept in the group (Apart) and
+  // applied after, in group order: which thread ran which group cannot change the results. Dynamic
+  // scheduling: a group's work is not known in advance (a cut may open one group's whole tree and another's
+  // few particles). Nothing to do (the repairs' usual state, every step): no parallel region either.
+  if (groups.empty()) return;
+  for (const std::size_t g : groups) {
+    PinGroup& group = pin_groups_[g];
+    group.apart.active = true;
+    group.apart.settled_from = group.order.size();
+  }
+  const auto count = static_cast<int>(groups.size());
+#pragma omp parallel for schedule(dynamic, 1) num_threads(params_.threads)
+  for (int k = 0; k < count; ++k) work(pin_groups_[groups[static_cast<std::size_t>(k)]]);
+  for (const std::size_t g : groups) {
+    PinGroup& group = pin_groups_[g];
+    Apart& apart = group.apart;
+    apart.active = false;
+    for (const std::uint32_t i : apart.opened) {
+      if (opened_mark_[i] != 0) continue;
+      opened_mark_[i] = 1;
+      opened_.push_back(i);
+    }
+    engaging_.insert(engaging_.end(), apart.engaging.begin(), apart.engaging.end());
+    tether_order_stale_ = tether_order_stale_ || apart.order_stale;
+    // Their nearest pin, which the settling updates as it goes on one thread (refresh_nearest reads every
+    // group's distance: here, once all of them are in).
+    for (std::size_t pos = apart.settled_from; pos < group.order.size(); ++pos) refresh_nearest(group.order[pos]);
+    apart.opened.clear();
+    apart.engaging.clear();
+    apart.order_stale = false;
+  }
+}
+
 void Solver::continue_repairs(const Cloth& cloth) {
   // One budget for all pin groups (SolverParams::repair_per_step): a cut across a top-pinned cloth opens
   // particles in each of its groups, and a budget per group let the four of a 128 x 128 cloth settle 2673
@@ -199,7 +243,7 @@ void Solver::continue_repairs(const Cloth& cloth) {
   const auto repairing_group = [](const PinGroup& g) { return !g.heap.empty() || !g.open_list.empty(); };
   if (params_.threads > 1) {
     // On several threads the groups repair at once (run_apart), each with an even share of the budget.
-    const std::vector<std::size_t> active = groups_where(repairing_group);
+    const std::vector<std::size_t>& active = groups_where(repairing_group);
     const std::size_t share = std::max<std::size_t>(1, budget / std::max<std::size_t>(1, active.size()));
     run_apart(active, [&](PinGroup& group) {
       std::size_t left = share;
@@ -396,7 +440,7 @@ std::optional<std::size_t> Solver::open_subtrees(const Cloth& cloth, std::size_t
     // on several threads they run at once, each with an even share of the budget. One thread gives the
     // groups the budget in turn instead (the first takes what it needs): each is deterministic for its
     // thread count, as the sweeps are.
-    const std::vector<std::size_t> active = groups_where([](const PinGroup& g) { return g.scan_from != kNoScan; });
+    const std::vector<std::size_t>& active = groups_where([](const PinGroup& g) { return g.scan_from != kNoScan; });
     const std::size_t share = std::max<std::size_t>(1, budget / std::max<std::size_t>(1, active.size()));
     std::size_t used = 0;
     run_apart(active, [&](PinGroup& group) {
@@ -428,46 +472,5 @@ std::optional<std::size_t> Solver::open_subtrees(const Cloth& cloth, std::size_t
   return budget;
 }
 
-std::vector<std::size_t> Solver::groups_where(const std::function<bool(const PinGroup&)>& wanted) const {
-  std::vector<std::size_t> chosen;
-  for (std::size_t g = 0; g < pin_groups_.size(); ++g) {
-    if (wanted(pin_groups_[g])) chosen.push_back(g);
-  }
-  return chosen;
-}
-
-void Solver::run_apart(const std::vector<std::size_t>& groups, const std::function<void(PinGroup&)>& work) {
-  // Each group on one thread, with what would touch the solver's shared state kept in the group (Apart) and
-  // applied after, in group order: which thread ran which group cannot change the results. Dynamic
-  // scheduling: a group's work is not known in advance (a cut may open one group's whole tree and another's
-  // few particles). Nothing to do (the repairs' usual state, every step): no parallel region either.
-  if (groups.empty()) return;
-  for (const std::size_t g : groups) {
-    PinGroup& group = pin_groups_[g];
-    group.apart.active = true;
-    group.apart.settled_from = group.order.size();
-  }
-  const auto count = static_cast<int>(groups.size());
-#pragma omp parallel for schedule(dynamic, 1) num_threads(params_.threads)
-  for (int k = 0; k < count; ++k) work(pin_groups_[groups[static_cast<std::size_t>(k)]]);
-  for (const std::size_t g : groups) {
-    PinGroup& group = pin_groups_[g];
-    Apart& apart = group.apart;
-    apart.active = false;
-    for (const std::uint32_t i : apart.opened) {
-      if (opened_mark_[i] != 0) continue;
-      opened_mark_[i] = 1;
-      opened_.push_back(i);
-    }
-    engaging_.insert(engaging_.end(), apart.engaging.begin(), apart.engaging.end());
-    tether_order_stale_ = tether_order_stale_ || apart.order_stale;
-    // Their nearest pin, which the settling updates as it goes on one thread (refresh_nearest reads every
-    // group's distance: here, once all of them are in).
-    for (std::size_t pos = apart.settled_from; pos < group.order.size(); ++pos) refresh_nearest(group.order[pos]);
-    apart.opened.clear();
-    apart.engaging.clear();
-    apart.order_stale = false;
-  }
-}
 
 }  // namespace tachi::sim

@@ -26,7 +26,6 @@
 
 #include <array>
 #include <cstdint>
-#include <functional>
 #include <optional>
 #include <vector>
 
@@ -246,10 +245,13 @@ class Solver {
   std::optional<std::size_t> open_subtrees(const Cloth& cloth, std::size_t budget);
   /// One group's part of it; takes what it used off `budget`. Returns true when the group's pass is done.
   bool open_group_subtrees(const Cloth& cloth, PinGroup& group, std::size_t& budget);
-  /// The pin groups for which `wanted` holds, by index.
-  [[nodiscard]] std::vector<std::size_t> groups_where(const std::function<bool(const PinGroup&)>& wanted) const;
-  /// Runs `work` on each of `groups` at once (params_.threads), each group's shared writes kept apart.
-  void run_apart(const std::vector<std::size_t>& groups, const std::function<void(PinGroup&)>& work);
+  /// The pin groups for which `wanted(group)` holds, by index (in apart_groups_, until the next call).
+  template <typename Wanted>
+  const std::vector<std::size_t>& groups_where(const Wanted& wanted);
+  /// Runs `work(group)` on each of `groups` at once (params_.threads), each group's shared writes kept apart.
+  template <typename Work>
+  void run_apart(const std::vector<std::size_t>& groups, const Work& work);
+  std::vector<std::size_t> apart_groups_;  ///< scratch of groups_where
   /// Returns whether every open particle's verdict is in (else the components are labelled instead).
   bool release_cut_off(const Cloth& cloth, const std::vector<std::uint32_t>& touched);
   /// Particle i has no path to `group` any more: its tether of that group goes (kept disabled,

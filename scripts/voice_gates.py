@@ -10,10 +10,24 @@ kept detections near no utterance are false alarms.
 """
 import argparse
 import itertools
+import json
 import math
+import os
 import sys
 
-DEFAULT = dict(ratio=-20.0, margin=8.0, phrase_margin=2.0, level=14.0, garbage_margin=None, phrase_ratio=None, garbage_ratio=None)
+
+def shipped_gates():
+    """The gates config/voice.json ships (what tachi-voice and tachi-voice-eval use by default), read rather
+    than copied here so that the two cannot drift. garbage_ratio is a search-only gate with no config key."""
+    path = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "config", "voice.json")
+    with open(path) as f:
+        c = json.load(f)
+    return dict(ratio=c["verify_min_log_ratio"], margin=c["verify_min_margin"], phrase_margin=c.get("verify_min_phrase_margin", 0.0),
+                level=c.get("verify_min_level_db"), garbage_margin=c.get("verify_min_garbage_margin"),
+                phrase_ratio=c.get("verify_min_phrase_log_ratio"), garbage_ratio=None)
+
+
+DEFAULT = shipped_gates()
 
 
 def load(path):

@@ -59,6 +59,7 @@ void Solver::full_build(const Cloth& cloth, std::vector<std::uint32_t> pins) {
   ++full_builds_;
   clear_cut_work();  // the new pin groups' searches start from scratch
   for (auto& g : quads_) g.clear();
+  banded_ = false;  // the bands are drawn over the new batches (build_bands), not the old ones
   // As much room as the cloth reserved for its cuts (Cloth::reserve): the first cut then grows the solver's
   // per-particle arrays in place instead of reallocating (and faulting in) every one of them at once, which
   // made the step of the first cut at 256 x 256 take ~50 ms.

@@ -116,10 +116,11 @@ bool Solver::front_in_bands(Vec4* x, std::size_t n, const Predict& predict, bool
   const std::size_t count = ordered ? tether_order_.size() : attachments_.size();
   const std::size_t rest = block[blocks];
   const int bands = static_cast<int>(bands_[0].size()) - 1;
-  // With no cut's springs to sweep after the bands, the strain limit's first reading (mark_over_limit) joins
-  // the region: one wait for the other thread fewer per sub-step.
+  // With no cut's springs to sweep after the bands (each went to the band of its rows: place_cut_quads),
+  // the strain limit's first reading (mark_over_limit) joins the region: one wait for the other thread fewer
+  // per sub-step.
   bool mark = limit > 0.0F;
-  for (std::size_t f = 0; f < 3; ++f) mark = mark && bands_[f].back() == quads_[f].size();
+  for (std::size_t f = 0; f < 3; ++f) mark = mark && unbanded_runs_[f].empty();
   const auto words = static_cast<std::ptrdiff_t>(limit_dirty_.size());
   const auto run = [&](const auto& at) {
     // The first place in [from, to) of a block (sorted by particle) whose tether holds `particle` or a later one.
@@ -160,9 +161,7 @@ bool Solver::front_in_bands(Vec4* x, std::size_t n, const Predict& predict, bool
           // function's locals in a lambda inside an OpenMP region of a template.
           Vec4* const band_padded = padded;
           const auto band = [this, band_padded, j](std::size_t family, float alpha) {
-            const SpringQuad* g = quads_[family].data();
-            sweep_near_rest(band_padded, g + bands_[family][static_cast<std::size_t>(j)],
-                            g + bands_[family][static_cast<std::size_t>(j) + 1], alpha);
+            sweep_band(band_padded, family, static_cast<std::size_t>(j), alpha);
           };
           if (soft) {
             band(1, shear_alpha);
@@ -182,16 +181,12 @@ bool Solver::front_in_bands(Vec4* x, std::size_t n, const Predict& predict, bool
   } else {
     run([this](std::size_t k) -> const Attachment& { return attachments_[k]; });
   }
-  // A cut's springs, appended after the bands: in order, family after family.
-  const auto tail = [&](std::size_t family, float alpha) {
-    const SpringQuad* g = quads_[family].data();
-    sweep_near_rest(padded, g + bands_[family].back(), g + quads_[family].size(), alpha);
-  };
+  // A cut's springs that fit no band: after the bands, in order, family after family.
   if (soft) {
-    tail(1, shear_alpha);
-    tail(2, bend_alpha);
+    sweep_unbanded(padded, 1, shear_alpha);
+    sweep_unbanded(padded, 2, bend_alpha);
   }
-  for (int it = 0; it < params_.iterations; ++it) tail(0, structural_alpha);
+  for (int it = 0; it < params_.iterations; ++it) sweep_unbanded(padded, 0, structural_alpha);
   return mark;
 }
 

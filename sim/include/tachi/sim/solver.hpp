@@ -111,6 +111,12 @@ class Solver {
   /// Whether the springs are swept in bands of rows on several threads (threads > 1 and at least three rows
   /// a band; else in the single-threaded order): each step then runs its steps 1-4 in one parallel region.
   [[nodiscard]] bool banded() const { return banded_; }
+  /// Quads of a cut's springs that fit no band (their particles reach into another band of their parity):
+  /// swept after the bands on one thread. The others are swept with the band of their rows.
+  [[nodiscard]] std::size_t unbanded_cut_quads() const;
+  /// Whether every two bands of one parity share no particle, the cuts' springs in them included: what lets
+  /// them be swept at once. Reads every quad (for tests).
+  [[nodiscard]] bool bands_independent() const;
   /// Number of long-range attachments in use (0 when disabled or nothing is pinned).
   [[nodiscard]] std::size_t attachment_count() const;
   /// Full cache builds so far (the first step's included), and incremental updates after cuts.
@@ -266,6 +272,13 @@ class Solver {
   /// Splits each family's batches, as fully built, into 2 x threads bands of rows that share no particle with
   /// the other bands of their parity (none: too few rows, or a band's particles reach past its neighbour).
   void build_bands(const Cloth& cloth);
+  /// Gives quads_[family]'s quads from `first` on (a cut's, just appended, in row order) to the band of
+  /// their rows where that keeps the band apart from the others of its parity, else to the unbanded tail.
+  void place_cut_quads(const Cloth& cloth, std::size_t family, std::size_t first);
+  /// A band's batches, then the cut's quads placed in it, in the order they came.
+  void sweep_band(Eigen::Vector4f* padded, std::size_t family, std::size_t band, float alpha) const;
+  /// The cut's quads that fit no band, in the order they came (one thread, after the bands).
+  void sweep_unbanded(Eigen::Vector4f* padded, std::size_t family, float alpha) const;
   /// Returns whether it also read which springs are over `limit` into limit_dirty_ (limit > 0, no cut's
   /// springs after the bands).
   template <typename Predict>
@@ -311,6 +324,18 @@ class Solver {
   /// over the batches of the last full build (a cut's springs, appended after them, go in order after).
   std::array<std::vector<std::size_t>, 3> bands_;
   bool banded_ = false;
+  /// A run of quads_ entries [begin, end).
+  struct QuadRun {
+    std::uint32_t begin;
+    std::uint32_t end;
+  };
+  /// Per family and band: the runs of a cut's quads swept with that band (place_cut_quads); per family, the
+  /// runs that fit no band. Per band: its first row, and the rows its particles span (the full build's and
+  /// the cuts' placed since), which must not meet another band of its parity's.
+  std::array<std::vector<std::vector<QuadRun>>, 3> band_cut_runs_;
+  std::array<std::vector<QuadRun>, 3> unbanded_runs_;
+  std::vector<int> band_first_row_;
+  std::vector<std::pair<int, int>> band_rows_;
   /// Where each pin group's block of tethers ends in attachments_, as the full build made them (in a block
   /// every tether holds a different particle; those with no bend hang on a pin, which never moves).
   std::vector<std::size_t> tether_block_end_;

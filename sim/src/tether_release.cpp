@@ -121,6 +121,10 @@ void Solver::clear_cut_work() {
   cut_cursor_ = 0;
   cut_work_steps_ = 0;
   cut_work_fresh_ = false;
+  for (PinGroup& group : pin_groups_) {
+    group.unchecked.clear();
+    group.unchecked_from = 0;
+  }
   for (const std::uint32_t i : opened_) opened_mark_[i] = 0;
   opened_.clear();
 }
@@ -141,6 +145,7 @@ std::size_t Solver::cut_work_left(const Cloth& cloth) const {
       for (const PinGroup& group : pin_groups_) {
         if (group.scan_from == kNoScan) continue;
         left += group.order.size() - std::min(group.scan_from, group.order.size()) + group.open_list.size() / 8;
+        left += (group.unchecked.size() - group.unchecked_from) / 2;  // looked at, some opened
       }
       return left + flood + labelling;
     }

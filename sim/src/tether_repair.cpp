@@ -344,7 +344,7 @@ void Solver::update_attachments(const Cloth& cloth, const std::vector<std::uint3
   if (pin_groups_.empty()) return;
   // Decremental shortest paths (Ramalingam and Reps 1996): a particle is affected when the spring to its
   // parent on the shortest-path tree is gone, or it is new; so is everything below it on the tree. They are
-  // opened here (distance off, old tether kept); the repair that searches them again from the distances of their
+  // opened by the cut's work (open_group_subtrees: distance off, old tether kept); the repair that searches them again from the distances of their
   // settled neighbours runs within each step's budget (continue_repairs).
   // A cut may also make a path shorter (an exact cut's new triangles' edges cut across a cell): that is not
   // searched for, so a repaired distance may exceed a full build's by a few per cent (up to 10 % after a
@@ -372,32 +372,57 @@ void Solver::update_attachments(const Cloth& cloth, const std::vector<std::uint3
     group.order_pos.resize(n, kNone);
     if (group.scan_from == kNoScan) compact_order(group, n);  // not under a pass that is going on
     compact_open_list(group);
-    std::uint32_t first = kNone;
-    for (const std::uint32_t i : touched) {
-      if (i >= old_n) {
-        if (group.open[i] == 0) open_particle(group, i);
-        // On several threads the repairs cannot append tethers (run_apart): the new particle's slot is
-        // made now, disabled (as a dropped tether) until the repair settles it.
-        if (params_.threads > 1 && group.attachment[i] == kNone) {
-          group.attachment[i] = static_cast<std::uint32_t>(attachments_.size());
-          attachments_.push_back({i, i, kInf, 0, kInf});
-        }
-        continue;
+    // Which of them the cut orphaned is looked at by the pass (open_group_subtrees), a cut's work that may
+    // go on over the next steps: done here, the look at the touched particles was half of the update after
+    // cut_bench's 64-segment exact cut at 128 x 128 (0.2 of 0.33 ms on two threads), paid in the cut's step.
+    // Until the pass ends the repairs wait and every particle keeps its tether, orphaned or not.
+    const auto fresh = std::lower_bound(touched.begin(), touched.end(), static_cast<std::uint32_t>(old_n));
+    group.unchecked.insert(group.unchecked.end(), touched.begin(), fresh);
+    for (auto it = fresh; it != touched.end(); ++it) {
+      const std::uint32_t i = *it;
+      group.unchecked.push_back(i | kFreshParticle);
+      // On several threads the repairs cannot append tethers (run_apart): the new particle's slot is
+      // made now, disabled (as a dropped tether) until the repair settles it.
+      if (params_.threads > 1 && group.attachment[i] == kNone) {
+        group.attachment[i] = static_cast<std::uint32_t>(attachments_.size());
+        attachments_.push_back({i, i, kInf, 0, kInf});
       }
-      if (group.open[i] != 0 || group.parent[i] == kNone || parent_spring_intact(cloth, group, i)) continue;
-      first = std::min(first, group.order_pos[i]);
-      open_particle(group, i);
     }
-    if (first != kNone) group.scan_from = std::min(group.scan_from, static_cast<std::size_t>(first) + 1);
-    // With no orphan there is no pass, but the repair's tentative distances are still looked at (open_subtrees).
+    // With no orphan the pass has no subtree to open, but the repair's tentative distances are still looked
+    // at (open_group_subtrees); an orphan found moves its start back.
     if (group.scan_from == kNoScan) group.scan_from = group.order.size();
   }
 }
 
 bool Solver::open_group_subtrees(const Cloth& cloth, PinGroup& group, std::size_t& budget) {
   // While this runs the repairs wait (advance_cut_work), so the order does not grow under the pass.
-  // Budgeted in particles opened, and in 16 entries passed (a load and a test each, where opening one
-  // writes ten arrays): a small cut's pass over most of the order still fits in a step's budget.
+  // Budgeted in particles opened, in 4 touched particles looked at (a few loads from the spring arrays) and
+  // in 16 entries passed (a load and a test each, where opening one writes ten arrays): a small cut's pass
+  // over most of the order still fits in a step's budget.
+  // First the particles the cuts touched (update_attachments): a new one is opened; an old one whose parent
+  // spring is gone is an orphan, opened, and the pass over the order starts after it (its subtree follows it
+  // there). All of them before the pass goes on, so it meets no orphan it has not opened yet.
+  while (group.unchecked_from < group.unchecked.size() && budget > 0) {
+    const std::uint32_t entry = group.unchecked[group.unchecked_from++];
+    if ((group.unchecked_from & 3U) == 0) --budget;
+    const std::uint32_t i = entry & ~kFreshParticle;
+    if ((entry & kFreshParticle) != 0) {
+      if (group.open[i] == 0) {
+        open_particle(group, i);
+        budget -= std::min<std::size_t>(budget, 1);
+      }
+      continue;
+    }
+    if (group.open[i] != 0 || group.parent[i] == kNone || parent_spring_intact(cloth, group, i)) continue;
+    if (group.order_pos[i] != kNone) {
+      group.scan_from = std::min(group.scan_from, static_cast<std::size_t>(group.order_pos[i]) + 1);
+    }
+    open_particle(group, i);
+    budget -= std::min<std::size_t>(budget, 1);
+  }
+  if (group.unchecked_from < group.unchecked.size()) return false;
+  group.unchecked.clear();
+  group.unchecked_from = 0;
   std::size_t pos = group.scan_from;
   const std::size_t end = group.order.size();
   for (std::size_t passed = 0; pos < end && budget > 0; ++pos) {

@@ -163,6 +163,8 @@ class Solver {
     std::uint8_t family = 0;
   };
   static constexpr std::size_t kNoScan = static_cast<std::size_t>(-1);
+  /// Marks a particle a cut made in PinGroup::unchecked (particle indices stay below 2^31).
+  static constexpr std::uint32_t kFreshParticle = 1U << 31U;
   /// What a pin group's repair or opening pass, run on a thread of its own (Solver::run_apart), would have
   /// written to the solver's shared state: kept here, applied after in group order.
   struct Apart {
@@ -208,6 +210,11 @@ class Solver {
     std::vector<std::uint32_t> order_pos;  ///< per particle: its live place in order (none: not settled)
     /// Where the pass over `order` that opens a cut's orphaned subtrees goes on (none: no pass to make).
     std::size_t scan_from = kNoScan;
+    /// The particles the cuts touched that this group has yet to look at, from `unchecked_from` on: whether
+    /// the cut took the spring to their parent (an orphan, opened, and the pass above starts at it), or are
+    /// new (kFreshParticle set: opened). The first part of the pass, so it is a cut's work too.
+    std::vector<std::uint32_t> unchecked;
+    std::size_t unchecked_from = 0;
     /// While the groups work at once on several threads (run_apart): what the group would write to the
     /// solver's shared state, applied after in group order.
     Apart apart;

@@ -104,42 +104,39 @@ void Solver::full_build(const Cloth& cloth, std::vector<std::uint32_t> pins) {
 
 void Solver::update_incrementally(const Cloth& cloth) {
   ++incremental_updates_;
-  slot_.resize(cloth.spring_count(), Slot{});
-  // The springs the cut edited, once each and in increasing order; the particles they touched before and
-  // after, likewise (bit sets: mark_index, take_marked).
-  edited_bits_.resize((cloth.spring_count() + 63) / 64, 0);
-  for (std::size_t e = edits_read_; e < cloth.spring_edits.size(); ++e) mark_index(edited_bits_, cloth.spring_edits[e]);
   std::vector<std::uint32_t>& edited = edited_;
-  edited.clear();
-  take_marked(edited_bits_, edited);
-  touched_bits_.resize((cloth.particle_count() + 63) / 64, 0);
-  const auto touch = [&](std::uint32_t i) { mark_index(touched_bits_, i); };
-  for (const std::uint32_t k : edited) {
-    Slot& s = slot_[k];
-    if (s.quad != kNone) {
-      SpringQuad& g = quads_[s.family][s.quad];
-      touch(g.a[s.lane] - 1);
-      touch(g.b[s.lane] - 1);
-      g.a[s.lane] = 0;  // blanked: both ends on the fixed particle, so the lane does nothing
-      g.b[s.lane] = 0;
-      g.rest2[s.lane] = 1.0F;
-      s = Slot{};
-      ++blanked_;
-    }
-    if (cloth.alive[k] != 0) {
-      touch(cloth.spring_a[k]);
-      touch(cloth.spring_b[k]);
-    }
-  }
-  for (std::size_t i = cached_particles_; i < cloth.particle_count(); ++i) touch(static_cast<std::uint32_t>(i));
   std::vector<std::uint32_t>& touched = touched_;
-  touched.clear();
-  take_marked(touched_bits_, touched);
-  // The tethers' part and the batching of the cut's springs share no state (pin groups, opened particles and
-  // tethers; slots and quads) and both only read the cloth, so on two threads or more they run at once: the
-  // update after cut_bench's 64-segment exact cut is single-threaded otherwise, and on two threads it was
-  // half of the 0.8 ms median step (the step after the cut 1.67x the median). On one thread they run in
-  // this order, as before. Nothing either does depends on the other, so the results are the same.
+  // The springs the cut edited, once each and in increasing order; the particles they touched before and
+  // after, likewise (bit sets: mark_index, take_marked). Each edited spring's lane is blanked.
+  const auto collect_edits = [&] {
+    slot_.resize(cloth.spring_count(), Slot{});
+    edited_bits_.resize((cloth.spring_count() + 63) / 64, 0);
+    for (std::size_t e = edits_read_; e < cloth.spring_edits.size(); ++e) mark_index(edited_bits_, cloth.spring_edits[e]);
+    edited.clear();
+    take_marked(edited_bits_, edited);
+    touched_bits_.resize((cloth.particle_count() + 63) / 64, 0);
+    const auto touch = [&](std::uint32_t i) { mark_index(touched_bits_, i); };
+    for (const std::uint32_t k : edited) {
+      Slot& s = slot_[k];
+      if (s.quad != kNone) {
+        SpringQuad& g = quads_[s.family][s.quad];
+        touch(g.a[s.lane] - 1);
+        touch(g.b[s.lane] - 1);
+        g.a[s.lane] = 0;  // blanked: both ends on the fixed particle, so the lane does nothing
+        g.b[s.lane] = 0;
+        g.rest2[s.lane] = 1.0F;
+        s = Slot{};
+        ++blanked_;
+      }
+      if (cloth.alive[k] != 0) {
+        touch(cloth.spring_a[k]);
+        touch(cloth.spring_b[k]);
+      }
+    }
+    for (std::size_t i = cached_particles_; i < cloth.particle_count(); ++i) touch(static_cast<std::uint32_t>(i));
+    touched.clear();
+    take_marked(touched_bits_, touched);
+  };
   const auto update_tethers = [&] {
     update_attachments(cloth, touched);
     if (!pin_groups_.empty()) {
@@ -160,37 +157,63 @@ void Solver::update_incrementally(const Cloth& cloth) {
       cut_work_fresh_ = !advance_cut_work(cloth, now);
     }
   };
+  // The strain limit: the cut's springs leave their places (never over the limit: skipped) and its new
+  // ones go last, each from its end nearer a pin (nearest_, which update_tethers sizes and may refresh).
+  // Re-ordering outwards from the pins (the distances behind a cut grow) is linear in the springs, so it
+  // waits for the attachments' repair to settle (continue_repairs) or the next compaction.
+  const auto append_to_strain_limit = [&] {
+    limit_slot_.resize(cloth.spring_count(), kNone);
+    for (const std::uint32_t k : edited) {
+      if (limit_slot_[k] != kNone) {
+        strain_limit_[limit_slot_[k]].rest = kInf;
+        limit_slot_[k] = kNone;
+      }
+      if (cloth.alive[k] == 0 || cloth.kind[k] != SpringKind::Structural) continue;
+      std::uint32_t na = cloth.spring_a[k];
+      std::uint32_t nb = cloth.spring_b[k];
+      if (nearest_[nb] < nearest_[na]) std::swap(na, nb);
+      limit_slot_[k] = static_cast<std::uint32_t>(strain_limit_.size());
+      strain_limit_.push_back({na, nb, cloth.rest_length[k]});
+    }
+    limit_order_stale_ = true;
+    // Re-ordered once no repair is going on (continue_repairs): at once if the cut opened nothing.
+    pending_limit_order_ = true;
+  };
+  // The tethers' part and the strain limit's, and the batching of the cut's springs, share no state (pin
+  // groups, opened particles, tethers and the strain limit; slots and quads, a family's own) and only read
+  // the cloth, so on two threads they run at once: on one thread the update after cut_bench's 64-segment
+  // exact cut at 128 x 128 was half of the 0.8 ms median step. The springs' families are batched apart
+  // (append_family): the bend springs beside the tethers' part, which is the lighter since the cut's work
+  // looks at the touched particles (open_group_subtrees). The region starts before the edits are read on
+  // one thread, so that the other wakes meanwhile: after a large cut it has often gone to sleep (a 64-segment
+  // stroke cut at once takes ~2 ms), and waking it took ~0.05 ms. On one thread they run in order, as
+  // before; nothing either part does depends on the other, so the results are the same.
   if (params_.threads > 1) {
-#pragma omp parallel sections num_threads(2)
+#pragma omp parallel num_threads(2)
     {
+#pragma omp single
+      collect_edits();
+#pragma omp sections
+      {
 #pragma omp section
-      update_tethers();
+        {
+          update_tethers();
+          append_to_strain_limit();
+          append_family(cloth, edited, 2);
+        }
 #pragma omp section
-      append_springs(cloth, edited);
+        {
+          append_family(cloth, edited, 0);
+          append_family(cloth, edited, 1);
+        }
+      }
     }
   } else {
+    collect_edits();
     update_tethers();
     append_springs(cloth, edited);
+    append_to_strain_limit();
   }
-  // The strain limit: the cut's springs leave their places (never over the limit: skipped) and its new
-  // ones go last. Re-ordering outwards from the pins (the distances behind a cut grow) is linear in the
-  // springs, so it waits for the attachments' repair to settle (continue_repairs) or the next compaction.
-  limit_slot_.resize(cloth.spring_count(), kNone);
-  for (const std::uint32_t k : edited) {
-    if (limit_slot_[k] != kNone) {
-      strain_limit_[limit_slot_[k]].rest = kInf;
-      limit_slot_[k] = kNone;
-    }
-    if (cloth.alive[k] == 0 || cloth.kind[k] != SpringKind::Structural) continue;
-    std::uint32_t na = cloth.spring_a[k];
-    std::uint32_t nb = cloth.spring_b[k];
-    if (nearest_[nb] < nearest_[na]) std::swap(na, nb);
-    limit_slot_[k] = static_cast<std::uint32_t>(strain_limit_.size());
-    strain_limit_.push_back({na, nb, cloth.rest_length[k]});
-  }
-  limit_order_stale_ = true;
-  // Re-ordered once no repair is going on (continue_repairs): at once if the cut opened nothing.
-  pending_limit_order_ = true;
 }
 
 }  // namespace tachi::sim

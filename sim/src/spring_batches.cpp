@@ -80,95 +80,95 @@ void Solver::pack_quads(const std::vector<PackedSpring>& springs, const std::vec
 }
 
 void Solver::append_springs(const Cloth& cloth, const std::vector<std::uint32_t>& springs) {
-  // In sweep order: by (family, sweep key, spring index). The springs come in increasing index (a full
-  // build's every live spring, an update's edits read out of a bit set), so a stable counting sort by key
-  // gives that order in one pass, where std::sort on packed (key, index) was ~0.1 ms of the update after a
-  // 64-segment exact cut at 128 x 128. The keys are the rows times a few colours: their range is small.
-  // Springs not in increasing index (no caller passes them so) are sorted as (key, index) pairs instead.
-  std::array<std::vector<std::uint32_t>, 3>& family_springs = batch_springs_;
-  std::array<std::vector<std::uint32_t>, 3>& family_keys = batch_keys_;
-  for (std::size_t f = 0; f < 3; ++f) {
-    family_springs[f].clear();
-    family_keys[f].clear();
-  }
+  for (std::size_t f = 0; f < 3; ++f) append_family(cloth, springs, f);
+}
+
+void Solver::append_family(const Cloth& cloth, const std::vector<std::uint32_t>& springs, std::size_t f) {
+  // In sweep order: by (sweep key, spring index). The springs come in increasing index (a full build's every
+  // live spring, an update's edits read out of a bit set), so a stable counting sort by key gives that order
+  // in one pass, where std::sort on packed (key, index) was ~0.1 ms of the update after a 64-segment exact
+  // cut at 128 x 128. The keys are the rows times a few colours: their range is small. Springs not in
+  // increasing index (no caller passes them so) are sorted as (key, index) pairs instead. Each family has
+  // its own scratch and writes only its own quads and its springs' slots, so the update may batch the
+  // families on different threads.
+  BatchScratch& scratch = batch_scratch_[f];
+  std::vector<std::uint32_t>& from = scratch.springs;
+  std::vector<std::uint32_t>& from_keys = scratch.keys;
+  from.clear();
+  from_keys.clear();
   bool increasing = true;
   for (std::size_t j = 0; j < springs.size(); ++j) {
     const std::uint32_t k = springs[j];
     increasing = increasing && (j == 0 || springs[j - 1] < k);
-    if (cloth.alive[k] == 0) continue;
-    const auto f = static_cast<std::size_t>(cloth.kind[k]);
-    family_springs[f].push_back(k);
-    family_keys[f].push_back(sweep_key(cloth.kind[k], cloth.grid[cloth.spring_a[k]], cloth.grid[cloth.spring_b[k]]));
+    if (cloth.alive[k] == 0 || static_cast<std::size_t>(cloth.kind[k]) != f) continue;
+    from.push_back(k);
+    from_keys.push_back(sweep_key(cloth.kind[k], cloth.grid[cloth.spring_a[k]], cloth.grid[cloth.spring_b[k]]));
   }
-  std::vector<std::uint32_t>& order = batch_order_;
-  std::vector<PackedSpring>& packed = batch_packed_;
-  std::vector<std::uint32_t>& keys = batch_sorted_keys_;
-  std::vector<SpringQuad>& fresh = batch_fresh_;
-  std::vector<std::uint32_t>& count = batch_count_;
-  for (std::size_t f = 0; f < 3; ++f) {
-    const std::vector<std::uint32_t>& from = family_springs[f];
-    const std::vector<std::uint32_t>& from_keys = family_keys[f];
-    order.resize(from.size());
-    keys.resize(from.size());
-    if (!from.empty()) {
-      const auto [lo, hi] = std::minmax_element(from_keys.begin(), from_keys.end());
-      const std::uint32_t low = *lo;
-      const std::size_t range = static_cast<std::size_t>(*hi - low) + 1;
-      if (increasing && range <= 4 * from.size() + 4096) {
-        count.assign(range + 1, 0);
-        for (const std::uint32_t key : from_keys) ++count[key - low + 1];
-        for (std::size_t c = 1; c <= range; ++c) count[c] += count[c - 1];
-        for (std::size_t j = 0; j < from.size(); ++j) {
-          const std::uint32_t at = count[from_keys[j] - low]++;
-          order[at] = from[j];
-          keys[at] = from_keys[j];
-        }
-      } else {
-        // Keys spread too far for a count (a particle's grid row far off), or the springs out of index
-        // order: sorted as (key, index) pairs.
-        std::vector<std::uint64_t> pairs(from.size());
-        for (std::size_t j = 0; j < from.size(); ++j) {
-          pairs[j] = (static_cast<std::uint64_t>(from_keys[j]) << 32U) | from[j];
-        }
-        std::sort(pairs.begin(), pairs.end());
-        for (std::size_t j = 0; j < pairs.size(); ++j) {
-          order[j] = static_cast<std::uint32_t>(pairs[j] & 0xFFFFFFFFU);
-          keys[j] = static_cast<std::uint32_t>(pairs[j] >> 32U);
-        }
+  std::vector<std::uint32_t>& order = scratch.order;
+  std::vector<PackedSpring>& packed = scratch.packed;
+  std::vector<std::uint32_t>& keys = scratch.sorted_keys;
+  std::vector<SpringQuad>& fresh = scratch.fresh;
+  std::vector<std::uint32_t>& count = scratch.count;
+  order.resize(from.size());
+  keys.resize(from.size());
+  if (!from.empty()) {
+    const auto [lo, hi] = std::minmax_element(from_keys.begin(), from_keys.end());
+    const std::uint32_t low = *lo;
+    const std::size_t range = static_cast<std::size_t>(*hi - low) + 1;
+    if (increasing && range <= 4 * from.size() + 4096) {
+      count.assign(range + 1, 0);
+      for (const std::uint32_t key : from_keys) ++count[key - low + 1];
+      for (std::size_t c = 1; c <= range; ++c) count[c] += count[c - 1];
+      for (std::size_t j = 0; j < from.size(); ++j) {
+        const std::uint32_t at = count[from_keys[j] - low]++;
+        order[at] = from[j];
+        keys[at] = from_keys[j];
+      }
+    } else {
+      // Keys spread too far for a count (a particle's grid row far off), or the springs out of index
+      // order: sorted as (key, index) pairs.
+      std::vector<std::uint64_t> pairs(from.size());
+      for (std::size_t j = 0; j < from.size(); ++j) {
+        pairs[j] = (static_cast<std::uint64_t>(from_keys[j]) << 32U) | from[j];
+      }
+      std::sort(pairs.begin(), pairs.end());
+      for (std::size_t j = 0; j < pairs.size(); ++j) {
+        order[j] = static_cast<std::uint32_t>(pairs[j] & 0xFFFFFFFFU);
+        keys[j] = static_cast<std::uint32_t>(pairs[j] >> 32U);
       }
     }
-    packed.clear();
-    for (const std::uint32_t k : order) packed.push_back({cloth.spring_a[k], cloth.spring_b[k], cloth.rest_length[k]});
-    fresh.clear();
-    pack_quads(packed, keys, fresh);
-    // Find where each spring landed (pack_quads keeps the order, filling lanes in sequence).
-    const auto base = static_cast<std::uint32_t>(quads_[f].size());
-    std::size_t next = 0;
-    for (std::uint32_t g = 0; g < fresh.size(); ++g) {
-      for (std::uint8_t l = 0; l < 4 && next < order.size(); ++l) {
-        const std::uint32_t k = order[next];
-        if (fresh[g].a[l] != cloth.spring_a[k] + 1 || fresh[g].b[l] != cloth.spring_b[k] + 1) continue;
-        slot_[k] = {base + g, l, static_cast<std::uint8_t>(f)};
-        ++next;
-      }
-    }
-    quads_[f].insert(quads_[f].end(), fresh.begin(), fresh.end());
-    if (banded_) place_cut_quads(cloth, f, base);
   }
+  packed.clear();
+  for (const std::uint32_t k : order) packed.push_back({cloth.spring_a[k], cloth.spring_b[k], cloth.rest_length[k]});
+  fresh.clear();
+  pack_quads(packed, keys, fresh);
+  // Find where each spring landed (pack_quads keeps the order, filling lanes in sequence).
+  const auto base = static_cast<std::uint32_t>(quads_[f].size());
+  std::size_t next = 0;
+  for (std::uint32_t g = 0; g < fresh.size(); ++g) {
+    for (std::uint8_t l = 0; l < 4 && next < order.size(); ++l) {
+      const std::uint32_t k = order[next];
+      if (fresh[g].a[l] != cloth.spring_a[k] + 1 || fresh[g].b[l] != cloth.spring_b[k] + 1) continue;
+      slot_[k] = {base + g, l, static_cast<std::uint8_t>(f)};
+      ++next;
+    }
+  }
+  quads_[f].insert(quads_[f].end(), fresh.begin(), fresh.end());
+  if (banded_) place_cut_quads(cloth, f, base);
 }
 
 void Solver::place_cut_quads(const Cloth& cloth, std::size_t family, std::size_t first) {
   // A cut's springs join the band of their rows, swept with it, instead of all going after the bands on
-  // one thread: there an exact cut's 1,500 quads at 128 x 128 cost the step after it ~0.08 ms, and kept the
-  // strain limit's reading out of the parallel region (another ~0.07 ms). A quad may join band j only if
-  // the rows its particles span keep band j apart from every other band of j's parity; a cut's particles
-  // carry a grid row (a duplicate its original's, an exact cut's vertex its nearest), fixed once made.
-  // Both what a band spans and what is placed depend on the cuts alone, not on the threads that run them,
-  // so the positions stay a function of the thread count.
+  // one thread: there an exact cut's 1,500 quads at 128 x 128 cost each step after it ~0.07 ms, and kept the
+  // strain limit's first reading out of the parallel region (another ~0.07 ms). A quad joins band j only if
+  // its particles' rows lie within the rows band j may reach (band_reach_, fixed by build_bands: apart from
+  // every other band of j's parity), else it goes after the bands. A cut's particles carry a grid row (a
+  // duplicate its original's, an exact cut's vertex its nearest), fixed once made. What is placed depends on
+  // the quad alone, not on the other families' quads or the threads, so the families may be placed at once
+  // and the positions stay a function of the thread count.
   const std::vector<SpringQuad>& quads = quads_[family];
   std::vector<std::vector<QuadRun>>& runs = band_cut_runs_[family];
   std::vector<QuadRun>& unbanded = unbanded_runs_[family];
-  const auto count = band_rows_.size();
   const auto add = [](std::vector<QuadRun>& to, std::size_t q) {
     const auto at = static_cast<std::uint32_t>(q);
     if (!to.empty() && to.back().end == at) {
@@ -191,15 +191,7 @@ void Solver::place_cut_quads(const Cloth& cloth, std::size_t family, std::size_t
     const auto j = static_cast<std::size_t>(
         std::max<std::ptrdiff_t>(0, std::upper_bound(band_first_row_.begin(), band_first_row_.end(), low) -
                                         band_first_row_.begin() - 1));
-    const int from = std::min(band_rows_[j].first, low);
-    const int to = std::max(band_rows_[j].second, high);
-    bool apart = true;
-    for (std::size_t k = j % 2; k < count && apart; k += 2) {
-      if (k == j || band_rows_[k].first > band_rows_[k].second) continue;  // itself, or a band with no spring
-      apart = to < band_rows_[k].first || from > band_rows_[k].second;
-    }
-    if (apart) {
-      band_rows_[j] = {from, to};
+    if (low >= band_reach_[j].first && high <= band_reach_[j].second) {
       add(runs[j], q);
     } else {
       add(unbanded, q);
@@ -217,7 +209,7 @@ std::size_t Solver::unbanded_cut_quads() const {
 
 bool Solver::bands_independent() const {
   if (!banded_) return true;
-  const std::size_t count = band_rows_.size();
+  const std::size_t count = band_reach_.size();
   std::vector<std::uint32_t> owner;  // per padded particle: 1 + the band that last touched it, per parity
   for (std::size_t parity = 0; parity < 2; ++parity) {
     owner.assign(work_.size() + 1, 0);
@@ -256,7 +248,7 @@ void Solver::build_bands(const Cloth& cloth) {
   for (auto& runs : band_cut_runs_) runs.clear();
   for (auto& runs : unbanded_runs_) runs.clear();
   band_first_row_.clear();
-  band_rows_.clear();
+  band_reach_.clear();
   const int threads = params_.threads;
   if (threads <= 1) return;
   const auto row_of = [&](std::uint32_t padded) { return cloth.grid[padded - 1].v; };
@@ -300,8 +292,18 @@ void Solver::build_bands(const Cloth& cloth) {
     }
   }
   banded_ = true;
+  // The rows a cut's springs in band j may reach: those its own rows' springs may (a spring of row v touches
+  // v .. v + 2), and none that another band of its parity reaches. Fixed until the next build, so each
+  // quad's place depends on it alone (place_cut_quads).
   for (int j = 0; j < count; ++j) band_first_row_.push_back(rows * j / count);
-  band_rows_ = std::move(reach);
+  band_reach_.resize(static_cast<std::size_t>(count));
+  for (std::size_t j = 0; j < reach.size(); ++j) {
+    int from = band_first_row_[j];
+    int to = j + 1 < reach.size() ? band_first_row_[j + 1] + 1 : std::numeric_limits<int>::max();
+    if (j >= 2) from = std::max(from, reach[j - 2].second + 1);
+    if (j + 2 < reach.size()) to = std::min(to, reach[j + 2].first - 1);
+    band_reach_[j] = {from, to};
+  }
   for (auto& runs : band_cut_runs_) runs.assign(static_cast<std::size_t>(count), {});
 }
 

@@ -231,6 +231,9 @@ class Solver {
   /// Batches `springs` after each family's quads, in sweep order (ties by spring index; passed in increasing
   /// index, as every caller does, they are counted into place, otherwise sorted).
   void append_springs(const Cloth& cloth, const std::vector<std::uint32_t>& springs);
+  /// append_springs for one family (0 structural, 1 shear, 2 bend): it touches only that family's quads and
+  /// scratch and its springs' slots, so families may be batched on different threads.
+  void append_family(const Cloth& cloth, const std::vector<std::uint32_t>& springs, std::size_t family);
   void order_strain_limit(const Cloth& cloth);
   void build_attachments(const Cloth& cloth);
   /// Settles at most `budget` particles and takes what it settled off it.
@@ -337,26 +340,29 @@ class Solver {
     std::uint32_t end;
   };
   /// Per family and band: the runs of a cut's quads swept with that band (place_cut_quads); per family, the
-  /// runs that fit no band. Per band: its first row, and the rows its particles span (the full build's and
-  /// the cuts' placed since), which must not meet another band of its parity's.
+  /// runs that fit no band. Per band: its first row, and the rows a cut's quad in it may reach (apart from
+  /// every other band of its parity; build_bands).
   std::array<std::vector<std::vector<QuadRun>>, 3> band_cut_runs_;
   std::array<std::vector<QuadRun>, 3> unbanded_runs_;
   std::vector<int> band_first_row_;
-  std::vector<std::pair<int, int>> band_rows_;
+  std::vector<std::pair<int, int>> band_reach_;
   /// Where each pin group's block of tethers ends in attachments_, as the full build made them (in a block
   /// every tether holds a different particle; those with no bend hang on a pin, which never moves).
   std::vector<std::size_t> tether_block_end_;
   std::size_t unbent_tethers_ = 0;  ///< leading entries of tether_order_ with no bend (when it is in use)
   std::vector<Slot> slot_;                    ///< per spring
-  // Scratch of append_springs: per family the springs in the order given and their sweep keys; one
-  // family's springs in sweep order, their keys, their ends, their quads; the counting sort's counts.
-  std::array<std::vector<std::uint32_t>, 3> batch_springs_;
-  std::array<std::vector<std::uint32_t>, 3> batch_keys_;
-  std::vector<std::uint32_t> batch_order_;
-  std::vector<std::uint32_t> batch_sorted_keys_;
-  std::vector<PackedSpring> batch_packed_;
-  std::vector<SpringQuad> batch_fresh_;
-  std::vector<std::uint32_t> batch_count_;
+  /// Scratch of append_family, one per family: the family's springs in the order given and their sweep keys;
+  /// in sweep order, their keys, their ends, their quads; the counting sort's counts.
+  struct BatchScratch {
+    std::vector<std::uint32_t> springs;
+    std::vector<std::uint32_t> keys;
+    std::vector<std::uint32_t> order;
+    std::vector<std::uint32_t> sorted_keys;
+    std::vector<PackedSpring> packed;
+    std::vector<SpringQuad> fresh;
+    std::vector<std::uint32_t> count;
+  };
+  std::array<BatchScratch, 3> batch_scratch_;
   std::size_t lanes_ = 0;                     ///< lanes in use when last fully built, and blanked since
   std::size_t blanked_ = 0;
   // Structural springs again, ordered outwards from the pins, for the strain limit; per spring its place

@@ -754,9 +754,7 @@ TopologyChange StrokeCutter::add_sample(const StrokeSample& sample, bool touchin
   // between two rows on a stroke between them.
   const Point point{at.uv, follows_path() ? at.grid : grid_point(at.uv), sample.position, at.inside && touching,
                     !at.inside};
-  // Checked for a point the locator puts beyond the cloth's edge too: the cut would go straight to the edge from
-  // where it is (a flap swung over the hand in a re-cut pass: 9 cells to the edge in 1/60 s, 23 triangles).
-  if (follows_path() && line_ && previous_ && previous_->inside && (point.inside || point.beyond)) {
+  if (follows_path() && line_ && previous_ && previous_->inside && point.inside) {
     // The nearest particle can be on another layer of a folded or swinging cloth: the point then jumps
     // across the cloth and back on the next sample, and a cut that followed it would cut out a sliver
     // (the straight_cut recording at 128 x 128: a 17-cell spike, 8 pieces). On the cloth the blade moves

@@ -468,7 +468,13 @@ void StrokeCutter::commit(GridCoord g, const Eigen::Vector2d& uv, const Eigen::V
   // A hand slowing down at the end of a stroke wobbles around one spot; along the path that is a small
   // knot, and each of its loops would cut out an island (the straight_cut recording: 3-10 pieces instead
   // of one slit). Such a point does not join the cut; the next one goes on from where the cut ends.
-  if (follows_path() && path_end_ && closes_small_loop(*path_end_, to)) return;
+  // A segment wholly along cuts already made cuts nothing and closes no loop: the hand going back over its cut
+  // runs along its own path, and its way back "closed" a loop with the cut just made at every commit, so the
+  // cut's end stayed at the turn and a later pass never cut the stretch the first pass left uncut there.
+  if (follows_path() && path_end_ && closes_small_loop(*path_end_, to) &&
+      (options_.mode != CutMode::Delete || (to - *path_end_).norm() <= 1e-9 || !recut_parts(*path_end_, to).empty())) {
+    return;
+  }
   // For the same reason a step shorter than the wobble does not join the cut either, unless it reaches the
   // cloth's edge (a cut across the cloth must get there to separate it) or ends a stroke that has cut (the cut
   // reaches the stroke's end point; a pass going back over the cut would otherwise cut that last step then).
@@ -480,8 +486,14 @@ void StrokeCutter::commit(GridCoord g, const Eigen::Vector2d& uv, const Eigen::V
     if (!on_edge && !ends_a_cut && (to - *path_end_).norm() < min_step) return;
   }
   const bool moved = !path_end_ || (to - *path_end_).norm() > 1e-9;
-  if (!path_end_) paths_.emplace_back();
-  if (moved) paths_.back().push_back(to.cast<float>());
+  if (!path_end_) {
+    paths_.emplace_back();
+    path_cuts_.clear();
+  }
+  if (moved) {
+    paths_.back().push_back(to.cast<float>());
+    path_cuts_.push_back(0);
+  }
   const std::optional<Eigen::Vector2d> from = path_end_;
   path_end_ = to;
   if (!from) {
@@ -497,7 +509,21 @@ void StrokeCutter::commit(GridCoord g, const Eigen::Vector2d& uv, const Eigen::V
   if (from && moved) {
     // Whether this segment ends along a cut (the next one then goes on along it).
     arrived_on_cut_ = parts.empty() || (parts.back().second - to).norm() > 1e-9;
-    for (const auto& sample : recent_) extend_track(sample);
+    path_cuts_.back() = parts.empty() ? 0 : 1;
+    // Only the samples this segment was cut along (within the going-over reach of it) join the track. Where the
+    // hand turned back, the samples out to the turn were never cut along: the chord fit commits the sample
+    // before the one that no longer fits, on the way back, so up to max_lag_cells at the turn stay uncut. Kept
+    // in the track, they made a later pass over that stretch count as going over a cut, and it never cut
+    // what the stroke ending there cuts (delete mode: the removed triangles' crumbs at the turn). Delete mode
+    // only, with the two small-loop exemptions below: in exact and grid modes the stretch left at a turn is a
+    // slit a little shorter (no piece more or fewer), while the later pass that cuts it joins a new part onto
+    // the slit's end (exact: a particle and a triangle more at the joint), and through the offline driver
+    // exact mode differed on more strokes with them (razor re-cut, seeds 1-300: 32 -> 34 of 300).
+    const double reach = kRecutCells + options_.tolerance_cells;
+    for (const auto& sample : recent_) {
+      const Eigen::Vector2d s = sample.cast<double>();
+      if (options_.mode != CutMode::Delete || closest_points(s, s, *from, to).distance <= reach) extend_track(sample);
+    }
     extend_track(to.cast<float>());
     recent_.clear();
   }
@@ -664,6 +690,10 @@ bool StrokeCutter::closes_small_loop(const Eigen::Vector2d& from, const Eigen::V
     const Eigen::Vector2d b = path[k - 1].cast<double>();
     const Eigen::Vector2d a = path[k - 2].cast<double>();
     walked += (path[k].cast<double>() - b).norm();
+    // A segment that cut nothing (it went over a cut already made) bounds no island: meeting it closes no loop.
+    // A stroke going over its cut again runs back along its own path; each segment would otherwise "close" a
+    // loop with the way back, and the stretch at the turn that the first pass left uncut was never cut.
+    if (options_.mode == CutMode::Delete && k - 1 < path_cuts_.size() && path_cuts_[k - 1] == 0) continue;
     const auto meet = closest_points(from, to, a, b);
     if (meet.distance > kMeet) continue;
     const double perimeter = walked + (b - meet.on_second).norm() + (meet.on_first - from).norm();

@@ -338,6 +338,55 @@ TEST(StrokeCutter, GoingOverACutAgainChangesNothing) {
   }
 }
 
+// Going over a cut again within one stroke, as a hand does (docs/cutting.md, "Going over a cut again"): there,
+// back and there again without lifting the blade, on a cloth that does not move, gives the same cloth as the
+// stroke once, in every mode. Where the hand turns back the chord fit leaves up to max_lag_cells uncut (the stroke
+// once cuts to its end); the way back ran along its own fresh cut, which the small-loop rule took for a knot at
+// every commit, and the samples out to the turn joined the cut's track, so the last pass, which ends there, never
+// cut that stretch (delete mode: a row of triangles fewer; 7 of these 40 strokes before the change). Exact and grid
+// modes are not held to it yet: in exact mode the way back's first tenths of a cell (the line's own tail, which
+// does not count as along the cut) still cut back over the slit's end, a particle and a triangle more in 13 of 20
+// such strokes (as before the change), and one grid stroke of 20 gives a particle fewer, with or without it.
+TEST(StrokeCutter, ThereBackAndThereInOneStrokeCutsAsOnce) {
+  constexpr int n = 33;
+  std::mt19937 rng{77};
+  std::uniform_real_distribution<double> in{3.0, n - 4.0};
+  std::uniform_real_distribution<double> bend{-4.0, 4.0};
+  int differ = 0;
+  for (const CutMode mode : {CutMode::Delete}) {
+    for (int k = 0; k < 40; ++k) {
+      SCOPED_TRACE(std::string{to_string(mode)} + " stroke " + std::to_string(k));
+      const Eigen::Vector2d a{in(rng), in(rng)};
+      Eigen::Vector2d b{in(rng), in(rng)};
+      if ((b - a).norm() < 8.0) b = a + 8.0 * (b - a).normalized();
+      const Eigen::Vector2d mid = 0.5 * (a + b) + bend(rng) * Eigen::Vector2d{-(b - a).y(), (b - a).x()}.normalized();
+      std::vector<Eigen::Vector2d> path;
+      for (int i = 0; i <= 12; ++i) {
+        const double s = i / 12.0;
+        path.push_back((1 - s) * (1 - s) * a + 2 * (1 - s) * s * mid + s * s * b);
+      }
+      std::vector<Eigen::Vector2d> thrice = path;
+      thrice.insert(thrice.end(), path.rbegin() + 1, path.rend());
+      thrice.insert(thrice.end(), path.begin() + 1, path.end());
+      StrokeOptions options;
+      options.mode = mode;
+      options.grid_hysteresis_cells = kGridHysteresisCells;
+      Cloth once_cloth = flat_cloth(n, PinMode::None);
+      StrokeCutter once{once_cloth, options};
+      stroke_through(once, n, path, 0.45);
+      Cloth thrice_cloth = flat_cloth(n, PinMode::None);
+      StrokeCutter again{thrice_cloth, options};
+      stroke_through(again, n, thrice, 0.45);
+      ASSERT_GT(once.total().cut_length_m, 0.0F);
+      EXPECT_EQ(thrice_cloth.particle_count(), once_cloth.particle_count());
+      EXPECT_EQ(live_triangles(thrice_cloth), live_triangles(once_cloth));
+      EXPECT_EQ(find_pieces(thrice_cloth).count(), find_pieces(once_cloth).count());
+      differ += live_triangles(thrice_cloth) != live_triangles(once_cloth) ? 1 : 0;
+    }
+  }
+  EXPECT_EQ(differ, 0);
+}
+
 // A session that goes over its cuts for hours (the soak loops one stroke ~13 times a minute): a pass that changes
 // nothing leaves no history behind (no track, path, cut-line cell, line or length), so memory stays flat and
 // `cuts` counts what cut. And the zone that counts as "along a cut" is the cuts made, not the passes: passes

@@ -241,6 +241,7 @@ class StrokeCutter {
   std::optional<ExactCutter> exact_;
   std::optional<Eigen::Vector2d> path_end_;  // exact/delete: where the open line's cut ends
   std::vector<std::vector<Eigen::Vector2f>> paths_;
+  std::vector<char> path_cuts_;  // exact/delete: per point of the open line's path, whether the segment to it cut
   std::vector<std::vector<Eigen::Vector2f>> tracks_;  // exact/delete: the samples (uv) the cuts so far were made along
   std::vector<Eigen::AlignedBox2f> track_boxes_;       // ... the box of each track's samples
   std::vector<Eigen::Vector2f> recent_;               // ... and those since the last point that joined the cut

@@ -381,6 +381,33 @@ struct HandFinder::Impl {
     const int m = params.nearest_border_cells;
     return m >= 0 && touches_border(cv::Rect(seed.x - m, seed.y - m, 2 * m + 1, 2 * m + 1));
   }
+  /// HandFinderParams::head_shoulders_half_m: a body's shoulders beneath the palm circle (a head).
+  bool shoulders_below(const Palm& palm) const {
+    if (params.head_shoulders_half_m <= 0 || palm.z <= 0) return false;
+    const auto& k = model.intrinsics();
+    const double half_px = params.head_shoulders_half_m * k.fx / palm.z;
+    // Where the image's side cuts the span (a person walking in from the side), the part in view, if
+    // it is at least half the span (seeds 320, 466: the head at the image's left edge).
+    const int gx0 = std::max(left_border_cell(), static_cast<int>(std::floor((palm.u - half_px) / kStep)));
+    const int gx1 = std::min(kGridW - 1, static_cast<int>(std::ceil((palm.u + half_px) / kStep)));
+    if (gx1 - gx0 + 1 < static_cast<int>(half_px / kStep)) return false;
+    const int gy0 = static_cast<int>((palm.v + 0.25 * k.fy / palm.z) / kStep);
+    const int gy1 = std::min(kGridH - 1, static_cast<int>((palm.v + 0.45 * k.fy / palm.z) / kStep));
+    for (int gy = std::max(0, gy0); gy <= gy1; ++gy) {
+      const auto* g = grid.ptr<std::uint16_t>(gy);
+      int near = 0, readings = 0;
+      bool broken = false;
+      for (int gx = gx0; gx <= gx1 && !broken; ++gx) {
+        if (g[gx] == 0 || g[gx] >= kNoReading) continue;  // a dropout: neither for nor against
+        ++readings;
+        if (std::abs(model.metres(g[gx]) - palm.z) <= params.head_depth_m) ++near;
+        else broken = true;
+      }
+      // Across the whole span at the palm's depth (dropouts aside: at most a quarter of the cells).
+      if (!broken && readings * 4 >= (gx1 - gx0 + 1) * 3 && near == readings) return true;
+    }
+    return false;
+  }
   bool palm_sized(const Palm& palm) const {
     return palm.radius_m >= params.min_palm_radius_m && palm.radius_m <= params.max_palm_radius_m;
   }
@@ -1505,7 +1532,8 @@ bool HandFinder::Impl::arm_end_candidate(std::span<const std::uint16_t> raw, cv:
       !measure(raw, box, near_raw, seed, palm, two_sided, Candidate::kNewTrack))
     return false;
   const auto new_palm = [&](const Palm& p) {
-    return palm_accepted(p) && p.radius_m <= params.max_new_palm_radius_m && p.ridge_m <= params.max_palm_ridge_m && !is_dome(p);
+    return palm_accepted(p) && p.radius_m <= params.max_new_palm_radius_m && p.ridge_m <= params.max_palm_ridge_m && !is_dome(p) &&
+           !shoulders_below(p);
   };
   if (!new_palm(palm)) {
     if (!params.second_look_near_nearest || params.palm_from_nearest_m <= 0) return false;
@@ -1608,7 +1636,7 @@ bool HandFinder::Impl::follow_component(std::span<const std::uint16_t> raw, int 
     const bool found =
         palm_accepted(palm) && !jump &&
         (continuing || (palm.radius_m <= params.max_new_palm_radius_m && palm.ridge_m <= params.max_palm_ridge_m && !is_dome(palm) &&
-                        ((palm.z <= params.max_acquire_depth_m && !take_over) ||
+                        !shoulders_below(palm) && ((palm.z <= params.max_acquire_depth_m && !take_over) ||
                          (palm.z <= params.max_track_depth_m && reaches_back(seed, near_raw, at_end))) &&
                         !is_joint(seed, near_raw) && !nearest_at_border(arm_nearest) &&
                         !front_crosses_border_beyond_hand(seed, near_raw, at_end, palm)));

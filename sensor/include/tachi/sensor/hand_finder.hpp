@@ -150,6 +150,16 @@ struct HandFinderParams {
   /// at its depth has its widest place at the elbow. Tuning seeds 1-100 and 101-200: visible frames
   /// tracked 91.78 -> 92.39 % and 92.69 -> 93.27 %, nothing else changed. false: the first look only.
   bool second_look_near_nearest = true;
+  /// A head is no hand: a new track does not start on a palm circle with a body's shoulders beneath
+  /// it, i.e. readings within head_depth_m of the palm's depth that span head_shoulders_half_m to
+  /// each side of its column along some grid row 25-45 cm below its centre (a head's centre is
+  /// 20-30 cm above the shoulder line; an adult's chest is >= 30 cm wide). Below a raised hand lies
+  /// its forearm (~6 cm wide) and, bent, the upper arm running to one side only; a hand held in front
+  /// of the chest is >= 8 cm before it to be foreground at all. A second person walking behind the
+  /// user, whose head was taken as a new track before the user's hand was up (tuning seeds 53, 320,
+  /// 459, 466: runs of 8-21 frames). <= 0: no such test.
+  double head_shoulders_half_m = 0.10;
+  double head_depth_m = 0.06;
 };
 
 struct HandObservation {

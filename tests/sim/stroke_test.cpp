@@ -291,6 +291,23 @@ TEST(StrokeCutter, AbsurdlyFarSamplesDoNotBreakTheCut) {
   }
 }
 
+/// A random curved stroke over an n x n cloth: a quadratic Bezier through 13 points, its ends at least 8
+/// cells apart and its middle bowed sideways by up to `bow` cells. Draws the ends, then the bow, from `rng`.
+std::vector<Eigen::Vector2d> random_curved_path(std::mt19937& rng, int n, double bow) {
+  std::uniform_real_distribution<double> in{3.0, n - 4.0};
+  std::uniform_real_distribution<double> bend{-bow, bow};
+  const Eigen::Vector2d a{in(rng), in(rng)};
+  Eigen::Vector2d b{in(rng), in(rng)};
+  if ((b - a).norm() < 8.0) b = a + 8.0 * (b - a).normalized();
+  const Eigen::Vector2d mid = 0.5 * (a + b) + bend(rng) * Eigen::Vector2d{-(b - a).y(), (b - a).x()}.normalized();
+  std::vector<Eigen::Vector2d> path;
+  for (int i = 0; i <= 12; ++i) {
+    const double s = i / 12.0;
+    path.push_back((1 - s) * (1 - s) * a + 2 * (1 - s) * s * mid + s * s * b);
+  }
+  return path;
+}
+
 std::size_t live_triangles(const Cloth& cloth) {
   return static_cast<std::size_t>(std::count(cloth.triangle_alive.begin(), cloth.triangle_alive.end(), 1));
 }
@@ -301,8 +318,6 @@ std::size_t live_triangles(const Cloth& cloth) {
 TEST(StrokeCutter, GoingOverACutAgainChangesNothing) {
   constexpr int n = 33;
   std::mt19937 rng{2024};
-  std::uniform_real_distribution<double> in{3.0, n - 4.0};
-  std::uniform_real_distribution<double> bend{-6.0, 6.0};
   std::uniform_real_distribution<double> hair{-0.05, 0.05};
   for (const CutMode mode : {CutMode::Exact, CutMode::Grid, CutMode::Delete}) {
     for (int k = 0; k < 20; ++k) {
@@ -312,15 +327,7 @@ TEST(StrokeCutter, GoingOverACutAgainChangesNothing) {
       options.mode = mode;
       options.grid_hysteresis_cells = kGridHysteresisCells;
       StrokeCutter cutter{cloth, options};
-      const Eigen::Vector2d a{in(rng), in(rng)};
-      Eigen::Vector2d b{in(rng), in(rng)};
-      if ((b - a).norm() < 8.0) b = a + 8.0 * (b - a).normalized();
-      const Eigen::Vector2d mid = 0.5 * (a + b) + bend(rng) * Eigen::Vector2d{-(b - a).y(), (b - a).x()}.normalized();
-      std::vector<Eigen::Vector2d> path;
-      for (int i = 0; i <= 12; ++i) {
-        const double s = i / 12.0;
-        path.push_back((1 - s) * (1 - s) * a + 2 * (1 - s) * s * mid + s * s * b);
-      }
+      const std::vector<Eigen::Vector2d> path = random_curved_path(rng, n, 6.0);
       stroke_through(cutter, n, path, 0.3);
       const std::size_t particles = cloth.particle_count();
       const std::size_t triangles = live_triangles(cloth);
@@ -350,21 +357,11 @@ TEST(StrokeCutter, GoingOverACutAgainChangesNothing) {
 TEST(StrokeCutter, ThereBackAndThereInOneStrokeCutsAsOnce) {
   constexpr int n = 33;
   std::mt19937 rng{77};
-  std::uniform_real_distribution<double> in{3.0, n - 4.0};
-  std::uniform_real_distribution<double> bend{-4.0, 4.0};
   int differ = 0;
   for (const CutMode mode : {CutMode::Delete}) {
     for (int k = 0; k < 40; ++k) {
       SCOPED_TRACE(std::string{to_string(mode)} + " stroke " + std::to_string(k));
-      const Eigen::Vector2d a{in(rng), in(rng)};
-      Eigen::Vector2d b{in(rng), in(rng)};
-      if ((b - a).norm() < 8.0) b = a + 8.0 * (b - a).normalized();
-      const Eigen::Vector2d mid = 0.5 * (a + b) + bend(rng) * Eigen::Vector2d{-(b - a).y(), (b - a).x()}.normalized();
-      std::vector<Eigen::Vector2d> path;
-      for (int i = 0; i <= 12; ++i) {
-        const double s = i / 12.0;
-        path.push_back((1 - s) * (1 - s) * a + 2 * (1 - s) * s * mid + s * s * b);
-      }
+      const std::vector<Eigen::Vector2d> path = random_curved_path(rng, n, 4.0);
       std::vector<Eigen::Vector2d> thrice = path;
       thrice.insert(thrice.end(), path.rbegin() + 1, path.rend());
       thrice.insert(thrice.end(), path.begin() + 1, path.end());

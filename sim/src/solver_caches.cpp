@@ -106,17 +106,28 @@ void Solver::update_incrementally(const Cloth& cloth) {
   ++incremental_updates_;
   std::vector<std::uint32_t>& edited = edited_;
   std::vector<std::uint32_t>& touched = touched_;
-  // The springs the cut edited, once each and in increasing order; the particles they touched before and
-  // after, likewise (bit sets: mark_index, take_marked). Each edited spring's lane is blanked.
-  const auto collect_edits = [&] {
-    slot_.resize(cloth.spring_count(), Slot{});
-    edited_bits_.resize((cloth.spring_count() + 63) / 64, 0);
-    for (std::size_t e = edits_read_; e < cloth.spring_edits.size(); ++e) mark_index(edited_bits_, cloth.spring_edits[e]);
+  // The springs the cut edited, once each and in increasing order (bit sets: mark_index, take_marked): the
+  // edits [from, to) of the cloth's log marked in `bits`, then every mark taken.
+  const auto mark_edits = [&](std::size_t from, std::size_t to, std::vector<std::uint64_t>& bits) {
+    for (std::size_t e = from; e < to; ++e) mark_index(bits, cloth.spring_edits[e]);
+  };
+  const auto take_edits = [&] {
     edited.clear();
     take_marked(edited_bits_, edited);
+  };
+  const auto size_scratch = [&] {
+    slot_.resize(cloth.spring_count(), Slot{});
+    edited_bits_.resize((cloth.spring_count() + 63) / 64, 0);
     touched_bits_.resize((cloth.particle_count() + 63) / 64, 0);
-    const auto touch = [&](std::uint32_t i) { mark_index(touched_bits_, i); };
-    for (const std::uint32_t k : edited) {
+  };
+  // Blanks the lanes of edited springs [from, to) and marks in `bits` the particles they touched, before
+  // and after; returns how many lanes it blanked. Each spring has a lane of its own, so two threads may
+  // blank two ranges at once.
+  const auto blank_edits = [&](std::size_t from, std::size_t to, std::vector<std::uint64_t>& bits) {
+    std::size_t blanked = 0;
+    const auto touch = [&](std::uint32_t i) { mark_index(bits, i); };
+    for (std::size_t e = from; e < to; ++e) {
+      const std::uint32_t k = edited[e];
       Slot& s = slot_[k];
       if (s.quad != kNone) {
         SpringQuad& g = quads_[s.family][s.quad];
@@ -126,14 +137,20 @@ void Solver::update_incrementally(const Cloth& cloth) {
         g.b[s.lane] = 0;
         g.rest2[s.lane] = 1.0F;
         s = Slot{};
-        ++blanked_;
+        ++blanked;
       }
       if (cloth.alive[k] != 0) {
         touch(cloth.spring_a[k]);
         touch(cloth.spring_b[k]);
       }
     }
-    for (std::size_t i = cached_particles_; i < cloth.particle_count(); ++i) touch(static_cast<std::uint32_t>(i));
+    return blanked;
+  };
+  // The particles touched, once each and in increasing order: the edited springs' ends and the new particles.
+  const auto take_touched = [&] {
+    for (std::size_t i = cached_particles_; i < cloth.particle_count(); ++i) {
+      mark_index(touched_bits_, static_cast<std::uint32_t>(i));
+    }
     touched.clear();
     take_marked(touched_bits_, touched);
   };
@@ -183,34 +200,82 @@ void Solver::update_incrementally(const Cloth& cloth) {
   // groups, opened particles, tethers and the strain limit; slots and quads, a family's own) and only read
   // the cloth, so on two threads they run at once: on one thread the update after cut_bench's 64-segment
   // exact cut at 128 x 128 was half of the 0.8 ms median step. The springs' families are batched apart
-  // (append_family): the bend springs beside the tethers' part, which is the lighter since the cut's work
-  // looks at the touched particles (open_group_subtrees). The region starts before the edits are read on
-  // one thread, so that the other wakes meanwhile: after a large cut it has often gone to sleep (a 64-segment
-  // stroke cut at once takes ~2 ms), and the first region after such a cut took ~0.05-0.08 ms more than its
-  // work. On one thread they run in order, as before; nothing either part does depends on the other, so the
-  // results are the same.
+  // (append_family): the shear springs beside the tethers' part, the structural and bend ones on the other
+  // thread (timed at 0.04-0.08 ms for the tethers, 0.04 for the strain limit, 0.06-0.1 for each family).
+  // Before them, reading the edits and blanking their lanes is split in halves, each with a set of marks of
+  // its own: the exact cut's 5,233 springs' lanes lie at random places in 1 MB of batches, and that took
+  // 0.16 ms on one thread. Every part is an OpenMP section, taken by whichever thread is free: after a
+  // large cut the other thread has often gone to sleep (a 64-segment stroke cut at once takes ~2 ms), and
+  // the first thread goes on meanwhile. On one thread they run in order, as before; nothing either part
+  // does depends on the other, and the marks are the same however they are split, so the results are the
+  // same.
   if (params_.threads > 1) {
-#pragma omp parallel num_threads(2)
+    // The halves of the blanking: of the springs that have a lane (those before the cut's new ones, in
+    // increasing order) and of the new ones, which only mark their particles.
+    std::size_t blanked = 0;
+    const std::size_t edits = cloth.spring_edits.size();
+    const std::size_t edits_middle = edits_read_ + (edits - edits_read_) / 2;
+    std::size_t first_new = 0;
+    size_scratch();
+    edited_bits_apart_.assign(edited_bits_.size(), 0);
+    touched_bits_apart_.assign(touched_bits_.size(), 0);
+#pragma omp parallel num_threads(2) reduction(+ : blanked)
     {
+#pragma omp sections
+      {
+#pragma omp section
+        mark_edits(edits_read_, edits_middle, edited_bits_);
+#pragma omp section
+        mark_edits(edits_middle, edits, edited_bits_apart_);
+      }
 #pragma omp single
-      collect_edits();
+      {
+        for (std::size_t w = 0; w < edited_bits_.size(); ++w) edited_bits_[w] |= edited_bits_apart_[w];
+        take_edits();
+        first_new = static_cast<std::size_t>(
+            std::lower_bound(edited.begin(), edited.end(), static_cast<std::uint32_t>(cached_springs_)) -
+            edited.begin());
+      }
+#pragma omp sections
+      {
+#pragma omp section
+        {
+          blanked += blank_edits(0, first_new / 2, touched_bits_);
+          blanked += blank_edits(first_new, first_new + (edited.size() - first_new) / 2, touched_bits_);
+        }
+#pragma omp section
+        {
+          blanked += blank_edits(first_new / 2, first_new, touched_bits_apart_);
+          blanked += blank_edits(first_new + (edited.size() - first_new) / 2, edited.size(), touched_bits_apart_);
+        }
+      }
+#pragma omp single
+      {
+        for (std::size_t w = 0; w < touched_bits_.size(); ++w) touched_bits_[w] |= touched_bits_apart_[w];
+        take_touched();
+      }
 #pragma omp sections
       {
 #pragma omp section
         {
           update_tethers();
           append_to_strain_limit();
-          append_family(cloth, edited, 2);
+          append_family(cloth, edited, 1);
         }
 #pragma omp section
         {
           append_family(cloth, edited, 0);
-          append_family(cloth, edited, 1);
+          append_family(cloth, edited, 2);
         }
       }
     }
+    blanked_ += blanked;
   } else {
-    collect_edits();
+    size_scratch();
+    mark_edits(edits_read_, cloth.spring_edits.size(), edited_bits_);
+    take_edits();
+    blanked_ += blank_edits(0, edited.size(), touched_bits_);
+    take_touched();
     update_tethers();
     append_springs(cloth, edited);
     append_to_strain_limit();

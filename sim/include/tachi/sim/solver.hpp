@@ -419,6 +419,9 @@ class Solver {
   // edited springs), cleared as read; the same once each, in increasing order.
   std::vector<std::uint64_t> edited_bits_;
   std::vector<std::uint64_t> touched_bits_;
+  // The second thread's marks, while the update reads the edits on two threads.
+  std::vector<std::uint64_t> edited_bits_apart_;
+  std::vector<std::uint64_t> touched_bits_apart_;
   std::vector<std::uint32_t> edited_;
   std::vector<std::uint32_t> touched_;
   // The cuts' tether work spread over steps (advance_cut_work): its phase, the particles every cut since it

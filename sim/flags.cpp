@@ -122,6 +122,15 @@ void add_offline_flags(CLI::App& app, OfflineOptions& o) {
                  "0: all of it in the step of the cut")
       ->check(CLI::Range(0, 1 << 30))
       ->capture_default_str();
+  app.add_option("--repair-per-step", o.solver.repair_per_step,
+                 "Particles the tethers' repair after a cut settles per step, all pin groups together, or the "
+                 "cloth's particles over --repair-share if that is more (docs/sim.md \"Caches\")")
+      ->check(CLI::Range(1, 1 << 30))
+      ->capture_default_str();
+  app.add_option("--repair-share", o.solver.repair_share,
+                 "The share of the particles the repair may settle in a step, 1/N (0: --repair-per-step alone)")
+      ->check(CLI::Range(0, 1 << 20))
+      ->capture_default_str();
   app.add_option_function<std::vector<float>>(
          "--sphere",
          [&o](const std::vector<float>& v) {

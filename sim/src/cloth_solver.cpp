@@ -33,6 +33,11 @@ void ClothSolver::prepare(const Cloth& cloth) {
   if (auto* pbd = std::get_if<Solver>(&solver_)) pbd->prepare(cloth);
 }
 
+bool ClothSolver::repairing() const {
+  const auto* pbd = std::get_if<Solver>(&solver_);
+  return pbd != nullptr && pbd->repairing();
+}
+
 float ClothSolver::dt() const {
   return std::visit([](const auto& solver) { return solver.params().dt; }, solver_);
 }

@@ -187,6 +187,7 @@ void Session::step() {
   colliders.point_cloud = object_.get();
   solver_.step(cloth_, colliders);
   ++steps_;
+  if (solver_.repairing()) ++repair_steps_;
 }
 
 std::optional<TopologyChange> Session::take_topology_change() {

@@ -84,6 +84,7 @@ void add_session_summary(Summary& summary, const Session& session) {
   // Counted where the cuts are made: a stroke that cut nothing is no cut, one still open at the end is.
   summary.extra["strokes"] = session.strokes();
   summary.extra["cuts"] = session.cuts();
+  summary.extra["tether_repair_steps"] = session.repair_steps();
   const Cloth& cloth = session.cloth();
   float lowest = std::numeric_limits<float>::infinity();
   for (std::size_t i = 0; i < cloth.particle_count(); ++i) lowest = std::min(lowest, cloth.position[i].y());

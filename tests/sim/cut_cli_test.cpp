@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <map>
 #include <string>
 #include <unistd.h>
 
@@ -35,6 +36,16 @@ class CutCli : public ::testing::Test {
     out << "t,x,y,z\n" << extra_rows;
     for (int i = 0; i <= 60; ++i) out << 0.2 + i / 60.0 << ',' << -0.6 + 1.2 * i / 60.0 << ',' << y << ",0.01\n";
     return file;
+  }
+
+  /// The run's summary, checked for a cut that left two pieces, one fallen, the held one within the limit.
+  static nlohmann::json one_piece_fell_and_rests(const fs::path& out) {
+    std::ifstream in{out / "summary.json"};
+    auto j = nlohmann::json::parse(in);
+    EXPECT_EQ(j.at("pieces").get<int>(), 2);
+    EXPECT_EQ(j.at("fallen_pieces").get<int>(), 1) << "the cut-off piece fell";
+    EXPECT_LE(j.at("max_strain").get<double>(), 0.10);
+    return j;
   }
 
   tachi::test::RunResult sim(const std::vector<std::string>& args) {
@@ -209,15 +220,39 @@ TEST_F(CutCli, ACutsTetherWorkSpreadOverStepsStillDropsThePiece) {
     const auto r = sim({"--offline", "--cut-mode", "exact", "--grid", "64", "--pin", "top-edge", "--stroke", stroke.string(),
                         "--steps", "300", "--cut-work-per-step", budget, "--export", out.string()});
     ASSERT_EQ(r.exit_code, 0) << r.err;
-    std::ifstream in{out / "summary.json"};
-    const auto j = nlohmann::json::parse(in);
-    EXPECT_EQ(j.at("pieces").get<int>(), 2);
-    EXPECT_EQ(j.at("fallen_pieces").get<int>(), 1) << "the cut-off piece fell";
-    EXPECT_LE(j.at("max_strain").get<double>(), 0.10);
+    one_piece_fell_and_rests(out);
   }
   const auto bad = sim({"--offline", "--grid", "8", "--steps", "1", "--cut-work-per-step", "-5"});
   EXPECT_EQ(bad.exit_code, 2);
   EXPECT_NE(bad.err.find("--cut-work-per-step"), std::string::npos) << bad.err;
+}
+
+TEST_F(CutCli, TheRepairsBudgetSpreadsTheTethersRepairOverMoreSteps) {
+  // --repair-per-step / --repair-share: how many particles the tethers' repair after a cut settles a step
+  // (docs/sim.md "Caches"). A budget of one particle a step must stretch the repair over most of the run
+  // (summary: tether_repair_steps), and the piece must still fall and the cloth come to rest within the limit.
+  const fs::path stroke = write_stroke(0.25);
+  std::map<std::string, std::int64_t> repair_steps;
+  for (const std::string budget : {"default", "1"}) {
+    SCOPED_TRACE(budget);
+    const fs::path out = dir_ / ("out_" + budget);
+    std::vector<std::string> args{"--offline", "--cut-mode", "exact", "--grid", "64", "--pin", "top-edge",
+                                  "--stroke", stroke.string(), "--steps", "300", "--export", out.string()};
+    if (budget != "default") args.insert(args.end(), {"--repair-per-step", budget, "--repair-share", "0"});
+    const auto r = sim(args);
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const nlohmann::json j = one_piece_fell_and_rests(out);
+    repair_steps[budget] = j.at("tether_repair_steps").get<std::int64_t>();
+  }
+  // Measured: 60 steps (the stroke's second, while its cuts go on) against 281 of 300.
+  EXPECT_GT(repair_steps["default"], 0);
+  EXPECT_LT(repair_steps["default"], 120);
+  EXPECT_GT(repair_steps["1"], 200);
+  for (const std::string flag : {"--repair-per-step", "--repair-share"}) {
+    const auto bad = sim({"--offline", "--grid", "8", "--steps", "1", flag, "-1"});
+    EXPECT_EQ(bad.exit_code, 2) << flag;
+    EXPECT_NE(bad.err.find(flag), std::string::npos) << bad.err;
+  }
 }
 
 TEST_F(CutCli, BadCutModeIsAUsageError) {

@@ -34,6 +34,9 @@ class ClothSolver {
   /// one; Provot's solver keeps none.
   void prepare(const Cloth& cloth);
   [[nodiscard]] float dt() const;
+  /// Whether the position-based solver's tether work after a cut is still going on (Solver::repairing);
+  /// Provot's solver has none.
+  [[nodiscard]] bool repairing() const;
   [[nodiscard]] SolverKind kind() const { return solver_.index() == 0 ? SolverKind::Pbd : SolverKind::Provot; }
 
  private:

@@ -108,6 +108,9 @@ class Session {
   /// The particle the hand holds (grab), if any.
   [[nodiscard]] std::optional<std::uint32_t> held_particle() const { return grab_.held(); }
   [[nodiscard]] std::uint64_t steps() const { return steps_; }
+  /// Steps that ended with the tethers' work after a cut still going on (the cut's work and the repair,
+  /// SolverParams::cut_work_per_step, repair_per_step and repair_share): how far their budgets spread it.
+  [[nodiscard]] std::uint64_t repair_steps() const { return repair_steps_; }
   /// Strokes the cloth received (opened by a cutting sample), whatever their source: the hand's
   /// filter or the viewer's mouse blade.
   [[nodiscard]] std::uint64_t strokes() const { return strokes_; }
@@ -147,6 +150,7 @@ class Session {
   std::optional<TopologyChange> pending_;
   std::vector<CutReport> reports_;
   std::uint64_t steps_ = 0;
+  std::uint64_t repair_steps_ = 0;
   std::uint64_t strokes_ = 0;
   std::uint64_t closed_cuts_ = 0;  ///< closed strokes that cut
 };

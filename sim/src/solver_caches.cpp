@@ -77,6 +77,11 @@ void Solver::full_build(const Cloth& cloth, std::vector<std::uint32_t> pins) {
   reserve_touched(old_work_, particle_room);
   reserve_touched(slot_, cloth.spring_a.capacity());
   reserve_touched(limit_slot_, cloth.spring_a.capacity());
+  // The update's scratch, as big as the cloth's room: the first cut's update would otherwise allocate them.
+  reserve_touched(edited_bits_, cloth.spring_a.capacity() / 64 + 1);
+  reserve_touched(edited_bits_apart_, cloth.spring_a.capacity() / 64 + 1);
+  reserve_touched(touched_bits_, particle_room / 64 + 1);
+  reserve_touched(touched_bits_apart_, particle_room / 64 + 1);
   slot_.assign(cloth.spring_count(), Slot{});
   lanes_ = 0;
   blanked_ = 0;
@@ -200,8 +205,9 @@ void Solver::update_incrementally(const Cloth& cloth) {
   // groups, opened particles, tethers and the strain limit; slots and quads, a family's own) and only read
   // the cloth, so on two threads they run at once: on one thread the update after cut_bench's 64-segment
   // exact cut at 128 x 128 was half of the 0.8 ms median step. The springs' families are batched apart
-  // (append_family): the shear springs beside the tethers' part, the structural and bend ones on the other
-  // thread (timed at 0.04-0.08 ms for the tethers, 0.04 for the strain limit, 0.06-0.1 for each family).
+  // (append_family), each a section of its own after the tethers' part (timed at 0.04-0.10 ms, then
+  // 0.03-0.05 for the strain limit's appends; 0.06-0.10 for each family), taken in turn by whichever thread
+  // is free: their costs vary from cut to cut, and a fixed pairing left one thread idle for up to 0.07 ms.
   // Before them, reading the edits and blanking their lanes is split in halves, each with a set of marks of
   // its own: the exact cut's 5,233 springs' lanes lie at random places in 1 MB of batches, and that took
   // 0.16 ms on one thread. Every part is an OpenMP section, taken by whichever thread is free: after a
@@ -260,13 +266,13 @@ void Solver::update_incrementally(const Cloth& cloth) {
         {
           update_tethers();
           append_to_strain_limit();
-          append_family(cloth, edited, 1);
         }
 #pragma omp section
-        {
-          append_family(cloth, edited, 0);
-          append_family(cloth, edited, 2);
-        }
+        append_family(cloth, edited, 0);
+#pragma omp section
+        append_family(cloth, edited, 1);
+#pragma omp section
+        append_family(cloth, edited, 2);
       }
     }
     blanked_ += blanked;

@@ -20,7 +20,7 @@ int parse_flags(int argc, char** argv, Flags& flags) {
   app.add_option("--config", config_file, "Filter config JSON (see config/filter.json); defaults built in")
       ->check(CLI::ExistingFile);
   app.add_option("--smoother", smoother, "Override the config's smoother")
-      ->check(CLI::IsMember({"wiener", "one-euro", "moving-average", "none"}));
+      ->check(CLI::IsMember({"wiener-bank", "wiener", "one-euro", "moving-average", "none"}));
   app.add_option("--gate", gate, "Override the config's gate mode")->check(CLI::IsMember({"threshold", "voice", "either"}));
   app.add_flag("--camera-frame", o.camera_frame, "Offline: write camera-frame positions instead of world-frame ones");
   app.add_flag("--print-config", print_config, "Print the effective config as JSON and exit");

@@ -18,6 +18,8 @@
 #include <sstream>
 #include <algorithm>
 #include <numeric>
+#include <array>
+#include <tuple>
 
 namespace {
 
@@ -154,11 +156,13 @@ struct TremorResult {
   double lag_median = 0, lag_p95 = 0, lag_max = 0, same_frame_vs_ceiling = 0;
 };
 
-TremorResult evaluate(const TremorSet& set, const tachi::filter::SmootherParams& p) {
+/// Scores, clip by clip, what `smooth(i)` makes of clip i against the clip's ceiling.
+template <typename Smooth>
+TremorResult evaluate_outputs(const TremorSet& set, const Smooth& smooth) {
   std::vector<double> ratio, lag;
   double err2 = 0, ceil2 = 0, raw2 = 0, same2 = 0;
   for (std::size_t i = 0; i < set.clips.size(); ++i) {
-    const auto s = tachi::filter::score_causal(set.clips[i], tachi::filter::run_smoother(set.clips[i], p));
+    const auto s = tachi::filter::score_causal(set.clips[i], smooth(i));
     ratio.push_back(s.rms_m / set.ceiling_m[i]);
     lag.push_back(s.lag_frames);
     err2 += s.rms_m * s.rms_m;
@@ -177,6 +181,10 @@ TremorResult evaluate(const TremorSet& set, const tachi::filter::SmootherParams&
   r.lag_p95 = quantile(lag, 0.95);
   r.lag_max = quantile(lag, 1.0);
   return r;
+}
+
+TremorResult evaluate(const TremorSet& set, const tachi::filter::SmootherParams& p) {
+  return evaluate_outputs(set, [&](std::size_t i) { return tachi::filter::run_smoother(set.clips[i], p); });
 }
 
 void print_tremor_header() {
@@ -231,6 +239,152 @@ int fit_wiener(std::pair<std::uint64_t, std::uint64_t> range, int taps, double d
   return 0;
 }
 
+/// A causal FIR `h` (newest first) over the clip's measured samples; the first taps - 1 frames pass raw.
+std::vector<Eigen::Vector3d> apply_fir(const tachi::filter::TremorClip& clip, const std::vector<double>& h) {
+  std::vector<Eigen::Vector3d> out = clip.measured;
+  for (std::size_t n = h.size() - 1; n < clip.measured.size(); ++n) {
+    Eigen::Vector3d acc = Eigen::Vector3d::Zero();
+    for (std::size_t k = 0; k < h.size(); ++k) acc += h[k] * clip.measured[n - k];
+    out[n] = acc;
+  }
+  return out;
+}
+
+/// The causal FIR's least-squares normal equations (translation-invariant form of fit_fir) for frame i of a
+/// clip, per axis, added with weight `weight` to rows [at, at + 11) of `ata` / `atb`.
+void add_fir_rows(const tachi::filter::TremorClip& c, int i, double delay, double weight, Eigen::Index at,
+                  Eigen::MatrixXd& ata, Eigen::VectorXd& atb) {
+  const double t = i - delay;
+  const int f = static_cast<int>(std::floor(t));
+  const double w = t - f;
+  const Eigen::Vector3d target = (1 - w) * c.intended[f] + w * c.intended[f + 1] - c.measured[i];
+  for (int a = 0; a < 3; ++a) {
+    Eigen::VectorXd row(11);
+    for (int k = 1; k <= 11; ++k) row[k - 1] = c.measured[i - k][a] - c.measured[i][a];
+    ata.block(at, at, 11, 11) += weight * row * row.transpose();
+    atb.segment(at, 11) += weight * row * target[a];
+  }
+}
+
+/// A 12-tap FIR in fit_fir's form (out = y_n + sum_k g_k (y_{n-k} - y_n)), chosen per frame by `taps_at(n)`.
+template <typename TapsAt>
+std::vector<Eigen::Vector3d> apply_scheduled(const std::vector<Eigen::Vector3d>& y, const TapsAt& taps_at) {
+  std::vector<Eigen::Vector3d> out = y;
+  for (int n = 12; n < static_cast<int>(y.size()); ++n) {
+    const Eigen::VectorXd& g = taps_at(n);
+    Eigen::Vector3d acc = y[n];
+    for (int k = 1; k <= 11; ++k) acc += g[k - 1] * (y[n - k] - y[n]);
+    out[n] = acc;
+  }
+  return out;
+}
+
+/// How close a causal 12-tap FIR (at most ~1 frame of delay) can come to the ceiling, and how much of that
+/// adapting to the hand buys, on the clips of `range`; the banks are fitted on the tuning seeds 1..1000:
+/// - each clip's own least-squares FIR: an oracle that knows the clip's truth (and, fitted on the clip's
+///   first half, how much of that is the fit learning the clip's noise). For roughly Gaussian signals the
+///   causal MMSE estimator is linear (Wiener 1949), so this bounds adapting a linear filter to the hand;
+/// - a bank of FIRs, one per bin of the clip's drawn speed, tremor frequency and amplitude, chosen by them
+///   (the choice is an oracle);
+/// - the wiener-bank smoother's bank (wiener_bank.hpp), fitted in this run on 1..1000 with 3-5 centres per
+///   feature: what the scheduling buys without an oracle.
+int oracle_fir(std::pair<std::uint64_t, std::uint64_t> range) {
+  const TremorSet set = make_set(range.first, range.second);
+  std::printf("tremor clips %llu..%llu (%zu): causal 12-tap FIRs adapted to the hand (docs/filter.md)\n",
+              static_cast<unsigned long long>(range.first), static_cast<unsigned long long>(range.second), set.clips.size());
+  print_tremor_header();
+  for (const double delay : {0.5, 0.9, 1.0}) {
+    const auto result = evaluate_outputs(set, [&](std::size_t i) {
+      TremorSet one;
+      one.clips.push_back(set.clips[i]);
+      return apply_fir(set.clips[i], fit_fir(one, 12, delay));
+    });
+    char label[96];
+    std::snprintf(label, sizeof label, "each clip's own FIR (oracle), delay %.1f frame", delay);
+    print_tremor_row(label, result);
+  }
+  print_tremor_row("each clip's own FIR fitted on its first half, delay 0.9", evaluate_outputs(set, [&](std::size_t i) {
+                     TremorSet one;
+                     tachi::filter::TremorClip first = set.clips[i];
+                     const std::size_t n = first.measured.size() / 2 + tachi::filter::kScoreMargin;
+                     first.measured.resize(n);
+                     first.intended.resize(n);
+                     one.clips.push_back(first);
+                     return apply_fir(set.clips[i], fit_fir(one, 12, 0.9));
+                   }));
+  TremorSet tuning;
+  for (std::uint64_t seed = 1; seed <= 1000; ++seed) tuning.clips.push_back(tachi::filter::make_tremor_clip(seed));
+  constexpr double kDelay = 0.9;
+  // Bins of the drawn parameters: speed 0.03-1.2 m/s and amplitude 1-8 mm log-spaced, frequency 4-12 Hz.
+  const auto drawn_bin = [](const tachi::filter::TremorClip& c, int speeds, int freqs, int amps) {
+    const auto at = [](double x, double lo, double hi, int n) {
+      return std::clamp(static_cast<int>(std::floor((x - lo) / (hi - lo) * n)), 0, n - 1);
+    };
+    return (at(std::log(c.speed_mps), std::log(0.03), std::log(1.2), speeds) * freqs + at(c.tremor_hz, 4.0, 12.0, freqs)) * amps +
+           at(std::log(c.tremor_rms_m), std::log(0.001), std::log(0.008), amps);
+  };
+  for (const auto& [speeds, freqs, amps] : std::vector<std::tuple<int, int, int>>{{1, 4, 1}, {3, 4, 3}}) {
+    const int bins = speeds * freqs * amps;
+    std::vector<Eigen::MatrixXd> ata(bins, Eigen::MatrixXd::Zero(11, 11));
+    std::vector<Eigen::VectorXd> atb(bins, Eigen::VectorXd::Zero(11));
+    for (const auto& c : tuning.clips) {
+      const int b = drawn_bin(c, speeds, freqs, amps);
+      for (int i = tachi::filter::kScoreMargin; i < static_cast<int>(c.measured.size()) - static_cast<int>(tachi::filter::kScoreMargin); ++i)
+        add_fir_rows(c, i, kDelay, 1.0, 0, ata[b], atb[b]);
+    }
+    std::vector<Eigen::VectorXd> g(bins);
+    for (int b = 0; b < bins; ++b) g[b] = (ata[b] + 1e-12 * Eigen::MatrixXd::Identity(11, 11)).ldlt().solve(atb[b]);
+    char label[96];
+    std::snprintf(label, sizeof label, "bank by drawn speed x freq x amp %dx%dx%d (oracle choice)", speeds, freqs, amps);
+    print_tremor_row(label, evaluate_outputs(set, [&](std::size_t i) {
+                       const Eigen::VectorXd& taps = g[static_cast<std::size_t>(drawn_bin(set.clips[i], speeds, freqs, amps))];
+                       return apply_scheduled(set.clips[i].measured, [&](int) -> const Eigen::VectorXd& { return taps; });
+                     }));
+  }
+  for (const std::size_t bins : {3, 4, 5}) {
+    const std::vector<tachi::filter::TremorClip> clips(tuning.clips.begin(), tuning.clips.end());
+    const tachi::filter::WienerBank bank = tachi::filter::fit_wiener_bank(clips, bins, kDelay);
+    char label[96];
+    std::snprintf(label, sizeof label, "wiener-bank, %zu centres a feature (fitted on 1..1000 now)", bins);
+    print_tremor_row(label, evaluate_outputs(set, [&](std::size_t i) {
+                       tachi::filter::BankedWiener filter{bank};
+                       std::vector<Eigen::Vector3d> out = set.clips[i].measured;
+                       for (std::size_t n = 0; n < out.size(); ++n) {
+                         if (const auto y = filter.filter(set.clips[i].measured[n].cast<float>())) out[n] = y->cast<double>();
+                       }
+                       return out;
+                     }));
+    std::fflush(stdout);
+  }
+  return 0;
+}
+
+/// Fits the wiener-bank smoother's bank on the clips of `range` and prints it as the source of
+/// filter/src/wiener_bank_table.cpp (what tremor_wiener_bank() returns).
+int fit_wiener_bank(std::pair<std::uint64_t, std::uint64_t> range, std::size_t bins, double delay) {
+  std::vector<tachi::filter::TremorClip> clips;
+  for (std::uint64_t seed = range.first; seed <= range.second; ++seed) clips.push_back(tachi::filter::make_tremor_clip(seed));
+  const tachi::filter::WienerBank bank = tachi::filter::fit_wiener_bank(clips, bins, delay);
+  std::printf("// Generated by `tachi-filter-bench --fit-wiener-bank %llu..%llu --bins %zu --delay %.2f` (docs/filter.md); a test\n"
+              "// checks that the fit still gives it. The wiener-bank smoother's bank (wiener_bank.hpp).\n"
+              "#include \"tachi/filter/wiener_bank.hpp\"\n\nnamespace tachi::filter {\n\nconst WienerBank& tremor_wiener_bank() {\n"
+              "  static const WienerBank bank{\n      {{\n",
+              static_cast<unsigned long long>(range.first), static_cast<unsigned long long>(range.second), bins, delay);
+  for (const auto& centres : bank.centres) {
+    std::printf("          {");
+    for (std::size_t b = 0; b < centres.size(); ++b) std::printf("%s%.9g", b ? ", " : "", centres[b]);
+    std::printf("},\n");
+  }
+  std::printf("      }},\n      {\n");
+  for (const auto& g : bank.gains) {
+    std::printf("          {");
+    for (std::size_t k = 0; k < g.size(); ++k) std::printf("%s%.9g", k ? ", " : "", g[k]);
+    std::printf("},\n");
+  }
+  std::printf("      }};\n  return bank;\n}\n\n}  // namespace tachi::filter\n");
+  return 0;
+}
+
 tachi::filter::SmootherParams with_kind(tachi::filter::SmootherKind kind) {
   tachi::filter::SmootherParams p;
   p.kind = kind;
@@ -263,6 +417,8 @@ int tremor_table(std::pair<std::uint64_t, std::uint64_t> range, const tachi::fil
   print_tremor_row(one_euro_label("given", p.one_euro), evaluate(set, p));
   p.kind = SmootherKind::Wiener;
   print_tremor_row("wiener (12 taps fitted on seeds 1..1000)", evaluate(set, p));
+  p.kind = SmootherKind::WienerBank;
+  print_tremor_row("wiener-bank (5^3 bins fitted on seeds 1..1000)", evaluate(set, p));
   return 0;
 }
 
@@ -302,9 +458,18 @@ int main(int argc, char** argv) try {
   double delay = 0.9;
   app.add_option("--fit-wiener", fit_range, "Fit the Wiener smoother's taps on clips FIRST..LAST (tuning: 1..1000) and print them");
   app.add_option("--taps", taps, "With --fit-wiener: the number of taps")->capture_default_str()->check(CLI::Range(2, 64));
-  app.add_option("--delay", delay, "With --fit-wiener: the intended path's delay the taps aim at (frames)")->capture_default_str()
+  app.add_option("--delay", delay, "With --fit-wiener or --fit-wiener-bank: the intended path's delay the taps aim at (frames)")->capture_default_str()
       ->check(CLI::Range(0.0, 5.0));
   app.add_option("--tune", tune_range, "Grid-search the One Euro parameters on clips FIRST..LAST (tuning: 1..1000)");
+  std::string oracle_range, bank_range;
+  std::size_t bank_bins = 5;
+  app.add_option("--fit-wiener-bank", bank_range,
+                 "Fit the wiener-bank smoother's bank on clips FIRST..LAST (tuning: 1..1000) and print it as "
+                 "filter/src/wiener_bank_table.cpp");
+  app.add_option("--bins", bank_bins, "With --fit-wiener-bank: centres per feature")->capture_default_str()->check(CLI::Range(2, 12));
+  app.add_option("--oracle-fir", oracle_range,
+                 "Clips FIRST..LAST: each clip's own least-squares causal FIR (an oracle that knows the clip's truth), "
+                 "12 and 24 taps at delays 0.5-1 frame: how close a causal linear filter can come to the ceiling");
   app.add_option("--min-cutoff", min_cutoff, "One Euro min_cutoff_hz to try instead of the default");
   app.add_option("--beta", beta, "One Euro beta to try instead of the default");
   app.add_option("--d-cutoff", d_cutoff, "One Euro d_cutoff_hz to try instead of the default");
@@ -321,6 +486,8 @@ int main(int argc, char** argv) try {
   if (lag_compensation >= 0) chosen.lag_compensation = lag_compensation;
   if (!fit_range.empty()) return fit_wiener(parse_range(fit_range), taps, delay);
   if (!tune_range.empty()) return tune(parse_range(tune_range));
+  if (!oracle_range.empty()) return oracle_fir(parse_range(oracle_range));
+  if (!bank_range.empty()) return fit_wiener_bank(parse_range(bank_range), bank_bins, delay);
   if (!tremor_range.empty()) return tremor_table(parse_range(tremor_range), chosen);
   if (truth_csv.empty()) throw std::invalid_argument("--truth is needed (or --tremor / --tune)");
 

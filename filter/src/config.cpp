@@ -83,7 +83,7 @@ FilterConfig parse_filter_config(const std::string& json_text) {
     std::string kind;
     read(s, "kind", "smoother.", kind);
     const auto k = smoother_kind_from_string(kind);
-    if (!k) fail("smoother.kind must be one of none, moving-average, one-euro, wiener (got \"" + kind + "\")");
+    if (!k) fail("smoother.kind must be one of none, moving-average, one-euro, wiener, wiener-bank (got \"" + kind + "\")");
     c.smoother.kind = *k;
   }
   read(s, "moving_average_window", "smoother.", c.smoother.moving_average_window);

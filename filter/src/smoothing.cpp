@@ -80,6 +80,7 @@ std::optional<SmootherKind> smoother_kind_from_string(const std::string& name) {
   if (name == "moving-average") return SmootherKind::MovingAverage;
   if (name == "one-euro") return SmootherKind::OneEuro;
   if (name == "wiener") return SmootherKind::Wiener;
+  if (name == "wiener-bank") return SmootherKind::WienerBank;
   return std::nullopt;
 }
 
@@ -89,6 +90,7 @@ std::string to_string(SmootherKind kind) {
     case SmootherKind::MovingAverage: return "moving-average";
     case SmootherKind::OneEuro: return "one-euro";
     case SmootherKind::Wiener: return "wiener";
+    case SmootherKind::WienerBank: return "wiener-bank";
   }
   return "?";
 }
@@ -109,12 +111,14 @@ std::optional<std::string> validate(const SmootherParams& p) {
 }
 
 Smoother::Smoother(const SmootherParams& params)
-    : params_(params), average_(params.moving_average_window), one_euro_(params.one_euro), wiener_(params.wiener_taps) {}
+    : params_(params), average_(params.moving_average_window), one_euro_(params.one_euro), wiener_(params.wiener_taps),
+      wiener_bank_(tremor_wiener_bank()) {}
 
 void Smoother::reset() {
   average_.reset();
   one_euro_.reset();
   wiener_.reset();
+  wiener_bank_.reset();
   last_stamp_ns_.reset();
 }
 
@@ -129,7 +133,10 @@ Eigen::Vector3f Smoother::filter(const Eigen::Vector3f& x, std::int64_t stamp_ns
     }
   }
   // The Wiener taps hold for samples at the nominal rate: a dropped frame (or a burst) restarts them.
-  if (last_stamp_ns_ && std::abs(dt_s * params_.nominal_rate_hz - 1.0) > 0.5) wiener_.reset();
+  if (last_stamp_ns_ && std::abs(dt_s * params_.nominal_rate_hz - 1.0) > 0.5) {
+    wiener_.reset();
+    wiener_bank_.reset();
+  }
   last_stamp_ns_ = stamp_ns;
   switch (params_.kind) {
     case SmootherKind::None: return x;
@@ -139,6 +146,10 @@ Eigen::Vector3f Smoother::filter(const Eigen::Vector3f& x, std::int64_t stamp_ns
       // The One Euro filter runs alongside and bridges the Wiener filter's warm-up.
       const Eigen::Vector3f bridge = one_euro_.filter(x, dt_s);
       return wiener_.filter(x).value_or(bridge);
+    }
+    case SmootherKind::WienerBank: {
+      const Eigen::Vector3f bridge = one_euro_.filter(x, dt_s);
+      return wiener_bank_.filter(x).value_or(bridge);
     }
   }
   return x;

@@ -161,21 +161,94 @@ TEST(SmootherParams, ValidationNamesTheBadKey) {
 // is 1.46x (mean per clip over 300 clips); this test holds it there (1.55x on the smaller range; One Euro as
 // configured by default measures 1.75x over the 300 and fails here), and the
 // lag within one frame: it fails if the smoother regresses toward One Euro's 1.75x or starts to lag.
-TEST(TremorClips, TheWienerSmootherStaysNearTheOfflineCeilingOnHeldOutClips) {
-  tachi::filter::SmootherParams defaults;
-  defaults.kind = tachi::filter::SmootherKind::Wiener;
+namespace {
+struct HeldOutScore {
+  double mean_vs_ceiling = 0.0;  ///< mean over the clips of the smoother's error over the ceiling's
+  double median_lag_frames = 0.0;
+};
+/// A smoother of `kind` over the held-out tremor clips 100001-100040, as tachi-filter-bench --tremor scores it.
+HeldOutScore held_out_score(tachi::filter::SmootherKind kind) {
+  tachi::filter::SmootherParams params;
+  params.kind = kind;
   std::vector<double> ratio, lag;
   for (std::uint64_t seed = 100001; seed <= 100040; ++seed) {
     const auto clip = tachi::filter::make_tremor_clip(seed);
     const auto ceiling = tachi::filter::offline_ceiling(clip);
-    const auto score = tachi::filter::score_causal(clip, tachi::filter::run_smoother(clip, defaults));
+    const auto score = tachi::filter::score_causal(clip, tachi::filter::run_smoother(clip, params));
     ratio.push_back(score.rms_m / ceiling.rms_m);
     lag.push_back(score.lag_frames);
   }
   std::sort(lag.begin(), lag.end());
-  const double mean_ratio = std::accumulate(ratio.begin(), ratio.end(), 0.0) / static_cast<double>(ratio.size());
-  EXPECT_LE(mean_ratio, 1.55);
-  EXPECT_LE(lag[lag.size() / 2], 1.0) << "median lag";
+  return {std::accumulate(ratio.begin(), ratio.end(), 0.0) / static_cast<double>(ratio.size()), lag[lag.size() / 2]};
+}
+}  // namespace
+
+TEST(TremorClips, TheWienerSmootherStaysNearTheOfflineCeilingOnHeldOutClips) {
+  const HeldOutScore score = held_out_score(tachi::filter::SmootherKind::Wiener);
+  EXPECT_LE(score.mean_vs_ceiling, 1.55);
+  EXPECT_LE(score.median_lag_frames, 1.0) << "median lag";
+}
+
+// The Wiener bank (wiener-bank) on the same held-out clips: the bank of FIRs chosen by what the last 12 samples
+// show, fitted on seeds 1-1000. Over the 300 held-out clips it is 1.16x the ceiling (mean per clip; the target
+// is 1.15x, docs/filter.md); on these 40 it measured 1.14x (1.51x for the single FIR). It fails if the
+// scheduling stops paying (back toward the single FIR) or the smoother starts to lag.
+TEST(TremorClips, TheWienerBankComesNearerTheOfflineCeilingOnHeldOutClips) {
+  const HeldOutScore score = held_out_score(tachi::filter::SmootherKind::WienerBank);
+  EXPECT_LE(score.mean_vs_ceiling, 1.20) << "mean per clip / ceiling";
+  EXPECT_LE(score.median_lag_frames, 1.0) << "median lag";
+}
+
+// The bank in wiener_bank_table.cpp is what its command fits (tachi-filter-bench --fit-wiener-bank 1..1000):
+// regenerate the table when the clips, the features or the fit change.
+TEST(WienerBank, TheBankInTheSourceIsTheFitOfTheTuningClips) {
+  std::vector<tachi::filter::TremorClip> clips;
+  for (std::uint64_t seed = 1; seed <= 1000; ++seed) clips.push_back(tachi::filter::make_tremor_clip(seed));
+  const auto fitted = tachi::filter::fit_wiener_bank(clips, 5, 0.9);
+  const auto& shipped = tachi::filter::tremor_wiener_bank();
+  ASSERT_EQ(shipped.bins(), fitted.bins());
+  const auto near = [](double a, double b) { return std::abs(a - b) <= 1e-6 * std::max(1.0, std::abs(b)); };
+  for (std::size_t d = 0; d < shipped.centres.size(); ++d) {
+    for (std::size_t b = 0; b < shipped.centres[d].size(); ++b) {
+      EXPECT_TRUE(near(shipped.centres[d][b], fitted.centres[d][b])) << "feature " << d << " centre " << b;
+    }
+  }
+  for (std::size_t b = 0; b < shipped.bins(); ++b) {
+    for (std::size_t k = 0; k < shipped.gains[b].size(); ++k) {
+      EXPECT_TRUE(near(shipped.gains[b][k], fitted.gains[b][k])) << "bin " << b << " gain " << k;
+    }
+  }
+}
+
+// The taps are interpolated between the bins' centres: swept finely across every centre of each feature,
+// they never jump (a choice of one bin by thresholds would jump by the difference between neighbouring bins'
+// gains at each boundary), and a still hand, whatever bin its features fall in, stays where it is.
+TEST(WienerBank, TheTapsMoveContinuouslyWithTheFeaturesAndAStillHandStaysPut) {
+  const auto& bank = tachi::filter::tremor_wiener_bank();
+  for (std::size_t d = 0; d < 3; ++d) {
+    std::array<double, 3> f{bank.centres[0][2], bank.centres[1][2], bank.centres[2][2]};
+    const double lo = bank.centres[d].front() - 0.2, hi = bank.centres[d].back() + 0.2;
+    std::array<double, 11> previous{};
+    double largest_step = 0.0;
+    constexpr int kSteps = 20000;
+    for (int i = 0; i <= kSteps; ++i) {
+      f[d] = lo + (hi - lo) * i / kSteps;
+      const auto w = tachi::filter::bin_weights(bank, f);
+      EXPECT_NEAR(std::accumulate(w.weight.begin(), w.weight.end(), 0.0), 1.0, 1e-12);
+      std::array<double, 11> gains{};
+      for (std::size_t c = 0; c < 8; ++c)
+        for (std::size_t k = 0; k < 11; ++k) gains[k] += w.weight[c] * bank.gains[w.bin[c]][k];
+      if (i > 0)
+        for (std::size_t k = 0; k < 11; ++k) largest_step = std::max(largest_step, std::abs(gains[k] - previous[k]));
+      previous = gains;
+    }
+    EXPECT_LT(largest_step, 1e-3) << "feature " << d;  // measured <= 5.3e-5
+  }
+  tachi::filter::BankedWiener filter{bank};
+  std::optional<Eigen::Vector3f> out;
+  for (int i = 0; i < 12; ++i) out = filter.filter({0.1F, -0.2F, 1.0F});
+  ASSERT_TRUE(out.has_value());
+  EXPECT_TRUE(out->isApprox(Eigen::Vector3f{0.1F, -0.2F, 1.0F}, 1e-5F));
 }
 
 TEST(TremorClips, AClipIsTheSameForTheSameSeedAndItsTremorIsInTheDrawnBand) {

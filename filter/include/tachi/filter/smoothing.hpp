@@ -8,6 +8,8 @@
 // min_cutoff_hz is in Hz, beta in 1/m (cutoff grows by beta Hz per m/s of hand speed).
 #pragma once
 
+#include "tachi/filter/wiener_bank.hpp"
+
 #include <Eigen/Core>
 
 #include <cstddef>
@@ -115,7 +117,8 @@ class WienerFir {
 /// The taps of `wiener` (12, newest first; they sum to 1).
 const std::vector<double>& tremor_wiener_taps();
 
-enum class SmootherKind { None, MovingAverage, OneEuro, Wiener };
+/// `wiener-bank`: a bank of Wiener FIRs chosen by what the last 12 samples show (wiener_bank.hpp).
+enum class SmootherKind { None, MovingAverage, OneEuro, Wiener, WienerBank };
 
 /// "none", "moving-average", "one-euro" (the CLI's spelling) -> kind.
 std::optional<SmootherKind> smoother_kind_from_string(const std::string& name);
@@ -148,6 +151,7 @@ class Smoother {
   MovingAverage average_;
   OneEuroFilter one_euro_;
   WienerFir wiener_;
+  BankedWiener wiener_bank_;
   std::optional<std::int64_t> last_stamp_ns_;
 };
 

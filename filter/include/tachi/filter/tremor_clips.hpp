@@ -18,6 +18,7 @@
 #pragma once
 
 #include "tachi/filter/smoothing.hpp"
+#include "tachi/filter/wiener_bank.hpp"
 
 #include <Eigen/Core>
 
@@ -68,6 +69,13 @@ struct Ceiling {
 };
 /// The best zero-lag offline smoother of this clip, its width chosen against the ground truth.
 Ceiling offline_ceiling(const TremorClip& clip);
+
+/// Fits a WienerBank (wiener_bank.hpp) over `clips`: `bins` centres per feature at the quantiles
+/// (b + 1/2) / bins of the features over every full history, then every bin's gains at once by least
+/// squares against the intended path `delay` frames earlier, through the trilinear interpolation the filter
+/// uses, on the scored frames (kScoreMargin from each end); a light ridge pulls bins the clips hardly visit
+/// toward the one FIR fitted over all of them.
+WienerBank fit_wiener_bank(const std::vector<TremorClip>& clips, std::size_t bins, double delay);
 
 /// Runs a tachi smoother over the clip's measured samples, as the filter stage would.
 std::vector<Eigen::Vector3d> run_smoother(const TremorClip& clip, const SmootherParams& params);

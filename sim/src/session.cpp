@@ -72,6 +72,7 @@ void Session::close_stroke() {
   if (!stroke_active_) return;
   stroke_active_ = false;
   approach_.reset();
+  contact_.reset();
   absorb(cutter_.end_stroke());
   if (cut_something(cutter_.report())) ++closed_cuts_;
   const Pieces pieces = find_pieces(cloth_);
@@ -148,21 +149,29 @@ void Session::on_hand(const HandInput& hand) {
   }
   const StrokeSample sample{hand.time_s, hand.position_m};
   const bool had_cut = blade_.has_cut();
+  const bool held = blade_.held().has_value();
   const BladeContact::Verdict verdict = blade_.press(cloth_, hand.position_m);
   if (verdict == BladeContact::Verdict::Away) {
     // Not touching the cloth (beyond the blade's reach): the stroke goes on as the gate says, so the cutter
     // sees where it came from (a stroke entering across an edge is clipped there); it cuts nothing here.
     absorb(cutter_.add_sample(sample, false));
     approach_.reset();
+    contact_.reset();
     return;
   }
   if (verdict == BladeContact::Verdict::Pushing) {
     approach_ = sample;  // the blade drags the cloth, it does not cut
+    // The blade has just met the cloth: the point it met is located now, before it drags the cloth along (the
+    // press that meets a particle holds it where it is). Located later, on the dragged cloth, the approach
+    // sample lies behind that point by as far as the cloth was dragged, and the cut began there: 0.36 cell
+    // before the stroke's first point at the median, up to 10 (docs/cutting.md, section 8, "Tips").
+    if (!held || !contact_) contact_ = cutter_.locate(hand.position_m);
     return;
   }
-  // The stroke's first cut starts where the blade met the cloth (the previous sample); later ones go on
-  // from the cut so far (the cutter joins them).
-  if (!had_cut && approach_) absorb(cutter_.add_sample(*approach_));
+  // The stroke's first cut starts where the blade met the cloth (the point the blade held while it dragged
+  // the cloth); later ones go on from the cut so far (the cutter joins them).
+  if (!had_cut && approach_) absorb(contact_ ? cutter_.add_sample(*approach_, *contact_) : cutter_.add_sample(*approach_));
+  contact_.reset();
   absorb(cutter_.add_sample(sample));
 }
 

@@ -748,8 +748,16 @@ void StrokeCutter::add_line_to_report(const std::vector<GridCoord>& line) {
 TopologyChange StrokeCutter::add_sample(const StrokeSample& sample, bool touching) {
   TopologyChange change;
   if (!sample.position.allFinite()) return change;
+  // The open stroke ends (and cuts) before the sample is located on the cloth it leaves.
   if (!open_) change.merge(begin_stroke());
-  const ClothPoint at = locator_.locate(*cloth_, sample.position);
+  change.merge(add_sample(sample, locator_.locate(*cloth_, sample.position), touching));
+  return change;
+}
+
+TopologyChange StrokeCutter::add_sample(const StrokeSample& sample, const ClothPoint& at, bool touching) {
+  TopologyChange change;
+  if (!sample.position.allFinite()) return change;
+  if (!open_) change.merge(begin_stroke());
   // Grid mode rounds (u, v) with hysteresis (grid_point); the nearest particle's own grid point flipped
   // between two rows on a stroke between them.
   const Point point{at.uv, follows_path() ? at.grid : grid_point(at.uv), sample.position, at.inside && touching,

@@ -141,6 +141,9 @@ class Session {
   std::optional<std::string> grab_refusal_;
   bool stroke_active_ = false;  ///< a cutting stroke is open (the blade may not be through yet)
   std::optional<StrokeSample> approach_;  ///< the stroke's previous sample, for the cut to start where the blade met the cloth
+  /// Where the blade met the cloth, located when it met it: the blade then drags the cloth along, and the
+  /// approach sample located on the dragged cloth lies behind that point by the drag (0.36 cell at the median).
+  std::optional<ClothPoint> contact_;
   float hand_radius_m_;
   std::optional<Eigen::Vector3f> hand_;  ///< last tracked hand position while not cutting
   std::uint32_t stroke_id_ = 0;

@@ -180,6 +180,11 @@ class StrokeCutter {
   /// (u, v) falls: extrapolated from the nearest particle's frame, a hand 30 cm from a swinging flap can map into
   /// the grid rectangle. It ends the cut at the sample before (or at the edge, when it is beyond it).
   TopologyChange add_sample(const StrokeSample& sample, bool touching = true);
+  /// The same for a sample whose point on the cloth was found earlier (`locate`): where the blade met the cloth,
+  /// located before it dragged the cloth along (the session's BladeContact), is where the cut begins.
+  TopologyChange add_sample(const StrokeSample& sample, const ClothPoint& at, bool touching = true);
+  /// Where a world point falls on the cloth as it is now (the locator add_sample uses, warm-started).
+  [[nodiscard]] ClothPoint locate(const Eigen::Vector3f& point) { return locator_.locate(*cloth_, point); }
   /// Gate closed: the cut reaches the last sample, the line's end is tidied. Nothing if no stroke is open.
   TopologyChange end_stroke();
 

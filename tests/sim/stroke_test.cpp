@@ -146,7 +146,9 @@ TEST(StrokeCutter, SamplesAwayFromTheClothCutNothing) {
     }
     cutter.end_stroke();
     EXPECT_EQ(cutter.total().lines, 2U);
-    if (mode != CutMode::Delete) EXPECT_EQ(find_pieces(cloth).count(), 1U);  // delete mode: its crumbs are pieces too
+    if (mode != CutMode::Delete) {
+      EXPECT_EQ(find_pieces(cloth).count(), 1U);  // delete mode: its crumbs are pieces too
+    }
     for (const GridCoord g : cutter.total().cut_line) EXPECT_TRUE(g.u <= 6 || g.u >= 9) << g.u;
   }
 }

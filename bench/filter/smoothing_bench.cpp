@@ -536,6 +536,9 @@ int main(int argc, char** argv) try {
     auto wiener = base;
     wiener.kind = tachi::filter::SmootherKind::Wiener;
     variants.emplace_back("wiener (12 taps, seeds 1..1000)", wiener);
+    auto bank = base;
+    bank.kind = tachi::filter::SmootherKind::WienerBank;
+    variants.emplace_back("wiener-bank (5^3 bins, seeds 1..1000)", bank);
   }
   // The paper's filter at the settings its tuning procedure starts from (1 Hz, beta 0 -> 3), and the
   // optional lag compensation (not in the paper) at the former default.

@@ -19,7 +19,7 @@ std::string error_of(const std::string& json) {
 
 TEST(FilterConfig, EmptyDocumentGivesTheDefaults) {
   const FilterConfig c = parse_filter_config("{}");
-  EXPECT_EQ(c.smoother.kind, SmootherKind::OneEuro);
+  EXPECT_EQ(c.smoother.kind, SmootherKind::WienerBank);
   EXPECT_EQ(c.gate.mode, GateMode::Threshold);
   EXPECT_TRUE(c.workspace.rotation.isApprox(default_mapping().rotation));
 }

@@ -125,10 +125,9 @@ std::optional<SmootherKind> smoother_kind_from_string(const std::string& name);
 std::string to_string(SmootherKind kind);
 
 struct SmootherParams {
-  /// One Euro stays the default: `wiener` (0.40x raw on recordings/jitter, 1.46x the ceiling on
-  /// held-out tremor, against 0.49x and 1.75x) turns recordings/straight_cut's exact cut at 128 x 128 into
-  /// 2 pieces (sim_recording_cut_test) until the exact cut stops flipping on small input changes.
-  SmootherKind kind = SmootherKind::OneEuro;
+  /// The Wiener bank: 1.16x the offline ceiling on held-out randomized tremor and 0.46x raw on
+  /// recordings/jitter, against One Euro's 1.75x and 0.49x (docs/filter.md).
+  SmootherKind kind = SmootherKind::WienerBank;
   std::size_t moving_average_window = 5;
   OneEuroParams one_euro;
   std::vector<double> wiener_taps = tremor_wiener_taps();

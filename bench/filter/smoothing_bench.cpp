@@ -18,7 +18,6 @@
 #include <sstream>
 #include <algorithm>
 #include <numeric>
-#include <array>
 #include <tuple>
 
 namespace {

@@ -2,7 +2,7 @@
 // quad (SSE lanes), in a fixed sweep order (row by row, colours within a row), the basis of the Gauss-Seidel
 // sweeps of sub-step steps 3 and 4 (XPBD, Macklin et al. 2016, eq. 18; Mueller et al. 2007, sec. 3.3). A
 // cut's springs are appended (pack_quads). On several threads the quads are split into bands of rows, the
-// even bands swept at once and then the odd ones (build_bands, sweep_springs; docs/sim.md "Threads").
+// even bands swept at once and then the odd ones (build_bands, front_in_bands; docs/sim.md "Threads").
 #include "tachi/sim/solver.hpp"
 
 #include "constraint_kernels.hpp"
@@ -240,7 +240,8 @@ void Solver::build_bands(const Cloth& cloth) {
   // apart; structural and shear v .. v + 1). So bands of at least three rows, every other one swept at once,
   // share no particle: a two-colouring of a partition, where each band itself is still swept in the
   // single-threaded order. What a cut changes in place only blanks lanes (particle 0, which never moves);
-  // its new springs go after the bands. The check below reads the particles' rows rather than trusting the
+  // its new springs are appended and placed in the band of their rows (place_cut_quads), or after the bands
+  // where they fit none. The check below reads the particles' rows rather than trusting the
   // rule: after a full build of a cut cloth an exact cut's particles have the row of their nearest grid point.
   // The three families share the bands' rows, so that a band can sweep all of its springs at once.
   banded_ = false;
@@ -319,20 +320,10 @@ void Solver::sweep_unbanded(Vec4* padded, std::size_t family, float alpha) const
 }
 
 void Solver::sweep_springs(Vec4* padded, std::size_t family, float alpha) const {
-  const std::vector<SpringQuad>& quads = quads_[family];
-  const std::vector<std::size_t>& bounds = bands_[family];
-  const SpringQuad* g = quads.data();
-  if (params_.threads <= 1 || bounds.empty()) {
-    sweep_near_rest(padded, g, g + quads.size(), alpha);
-    return;
-  }
-  const int count = static_cast<int>(bounds.size()) - 1;
-#pragma omp parallel num_threads(params_.threads)
-  for (int parity = 0; parity < 2; ++parity) {
-#pragma omp for schedule(static)
-    for (int j = parity; j < count; j += 2) sweep_band(padded, family, static_cast<std::size_t>(j), alpha);
-  }
-  sweep_unbanded(padded, family, alpha);
+  // Banded sweeps run in front_in_bands, inside the sub-step's one parallel region; this is the order of one
+  // thread, or of several when the cloth has too few rows for bands (build_bands).
+  const SpringQuad* g = quads_[family].data();
+  sweep_near_rest(padded, g, g + quads_[family].size(), alpha);
 }
 
 }  // namespace tachi::sim

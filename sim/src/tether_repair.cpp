@@ -344,8 +344,8 @@ void Solver::update_attachments(const Cloth& cloth, const std::vector<std::uint3
   if (pin_groups_.empty()) return;
   // Decremental shortest paths (Ramalingam and Reps 1996): a particle is affected when the spring to its
   // parent on the shortest-path tree is gone, or it is new; so is everything below it on the tree. They are
-  // opened by the cut's work (open_group_subtrees: distance off, old tether kept); the repair that searches them again from the distances of their
-  // settled neighbours runs within each step's budget (continue_repairs).
+  // opened by the cut's work (open_group_subtrees: distance off, old tether kept); the repair that searches
+  // them again from the distances of their settled neighbours runs within each step's budget (continue_repairs).
   // A cut may also make a path shorter (an exact cut's new triangles' edges cut across a cell): that is not
   // searched for, so a repaired distance may exceed a full build's by a few per cent (up to 10 % after a
   // dozen random strokes on a 24 x 24 cloth, solver_test), never fall short of it. Searching for it too

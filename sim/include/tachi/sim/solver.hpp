@@ -294,7 +294,8 @@ class Solver {
   template <typename Predict>
   bool front_in_bands(Eigen::Vector4f* x, std::size_t n, const Predict& predict, bool soft, float shear_alpha,
                       float bend_alpha, float structural_alpha, float limit);
-  /// One XPBD pass over a family of springs (substep steps 3 and 4): in bands when threads > 1.
+  /// One XPBD pass over a family of springs (substep steps 3 and 4) in the single-threaded order; when the
+  /// springs are banded, front_in_bands sweeps them instead.
   void sweep_springs(Eigen::Vector4f* padded, std::size_t family, float alpha) const;
   /// Step 2 over every tether, in the order they apply: in parallel over each pin group's block.
   void sweep_all_tethers(Eigen::Vector4f* x) const;
@@ -331,7 +332,8 @@ class Solver {
   std::size_t incremental_updates_ = 0;
   std::array<std::vector<SpringQuad>, 3> quads_;  ///< structural, shear, bend, four at a time
   /// Per family: where each band of rows starts in quads_ (2 x threads + 1 bounds; empty: sweep in order),
-  /// over the batches of the last full build (a cut's springs, appended after them, go in order after).
+  /// over the batches of the last full build (a cut's springs, appended after them, are swept with the band
+  /// of their rows or after the bands: band_cut_runs_, unbanded_runs_).
   std::array<std::vector<std::size_t>, 3> bands_;
   bool banded_ = false;
   /// A run of quads_ entries [begin, end).

@@ -4,6 +4,8 @@
 
 #include "tachi/filter/tremor_clips.hpp"
 
+#include "fir_history.hpp"
+
 #include <Eigen/Dense>
 
 #include <algorithm>
@@ -68,18 +70,13 @@ BinWeights bin_weights(const WienerBank& bank, const std::array<double, WienerBa
 }
 
 std::optional<Eigen::Vector3f> BankedWiener::filter(const Eigen::Vector3f& x) {
-  history_.push_front(x.cast<double>());
-  if (history_.size() > WienerBank::kTaps) history_.pop_back();
-  if (history_.size() < WienerBank::kTaps) return std::nullopt;
+  if (!push_history(history_, x, WienerBank::kTaps)) return std::nullopt;
   const BinWeights w = bin_weights(*bank_, history_features(history_));
   std::array<double, kGains> gains{};
   for (std::size_t c = 0; c < 8; ++c) {
     for (std::size_t k = 0; k < kGains; ++k) gains[k] += w.weight[c] * bank_->gains[w.bin[c]][k];
   }
-  // Relative to the newest sample, so that the float sum of a position ~1 m loses nothing.
-  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-  for (std::size_t k = 1; k < WienerBank::kTaps; ++k) sum += gains[k - 1] * (history_[k] - history_[0]);
-  return (history_[0] + sum).cast<float>();
+  return relative_fir(history_, gains);
 }
 
 WienerBank fit_wiener_bank(const std::vector<TremorClip>& clips, std::size_t bins, double delay) {

@@ -204,7 +204,7 @@ TEST(TremorClips, TheWienerBankComesNearerTheOfflineCeilingOnHeldOutClips) {
 TEST(WienerBank, TheBankInTheSourceIsTheFitOfTheTuningClips) {
   std::vector<tachi::filter::TremorClip> clips;
   for (std::uint64_t seed = 1; seed <= 1000; ++seed) clips.push_back(tachi::filter::make_tremor_clip(seed));
-  const auto fitted = tachi::filter::fit_wiener_bank(clips, 5, 0.9);
+  const auto fitted = tachi::filter::fit_wiener_bank(clips, tachi::filter::WienerBankFit{});
   const auto& shipped = tachi::filter::tremor_wiener_bank();
   ASSERT_EQ(shipped.bins(), fitted.bins());
   const auto near = [](double a, double b) { return std::abs(a - b) <= 1e-6 * std::max(1.0, std::abs(b)); };

@@ -1,5 +1,7 @@
 #include "tachi/filter/smoothing.hpp"
 
+#include "fir_history.hpp"
+
 #include <cmath>
 #include <numbers>
 
@@ -59,13 +61,8 @@ void OneEuroFilter::reset() {
 WienerFir::WienerFir(std::vector<double> taps) : taps_(std::move(taps)) {}
 
 std::optional<Eigen::Vector3f> WienerFir::filter(const Eigen::Vector3f& x) {
-  history_.push_front(x.cast<double>());
-  if (history_.size() > taps_.size()) history_.pop_back();
-  if (history_.size() < taps_.size() || taps_.empty()) return std::nullopt;
-  // Relative to the newest sample, so that the float sum of a position ~1 m loses nothing.
-  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-  for (std::size_t k = 1; k < taps_.size(); ++k) sum += taps_[k] * (history_[k] - history_[0]);
-  return (history_[0] + sum).cast<float>();
+  if (!push_history(history_, x, taps_.size())) return std::nullopt;
+  return relative_fir(history_, std::span<const double>(taps_).subspan(1));
 }
 
 const std::vector<double>& tremor_wiener_taps() {

@@ -125,8 +125,8 @@ std::optional<SmootherKind> smoother_kind_from_string(const std::string& name);
 std::string to_string(SmootherKind kind);
 
 struct SmootherParams {
-  /// The Wiener bank: 1.16x the offline ceiling on held-out randomized tremor and 0.46x raw on
-  /// recordings/jitter, against One Euro's 1.75x and 0.49x (docs/filter.md).
+  /// The Wiener bank: 1.14x the offline ceiling on held-out randomized tremor and 4.93 mm (0.49x raw) on
+  /// recordings/jitter, against One Euro's 1.75x and 4.98 mm (docs/filter.md).
   SmootherKind kind = SmootherKind::WienerBank;
   std::size_t moving_average_window = 5;
   OneEuroParams one_euro;

@@ -70,12 +70,30 @@ struct Ceiling {
 /// The best zero-lag offline smoother of this clip, its width chosen against the ground truth.
 Ceiling offline_ceiling(const TremorClip& clip);
 
+/// How fit_wiener_bank fits. The defaults are the shipped bank's (wiener_bank_table.cpp), chosen on the
+/// validation seeds 1001-1300 (docs/filter.md).
+struct WienerBankFit {
+  std::size_t bins = 5;  ///< centres per feature
+  double delay = 0.95;   ///< frames: the intended path's delay the taps aim at
+  /// How the clips' frames count. What is reported is the mean over clips of (clip RMS / clip's ceiling RMS);
+  /// the squared error pooled over every frame (Pooled) lets the clips of large tremor dominate. Ceiling
+  /// weighs each clip's frames by 1 / (frames * ceiling^2): the mean over clips of (RMS / ceiling)^2. MeanRatio
+  /// starts there, then takes `reweighting_rounds` rounds with 1 / (frames * RMS * ceiling), the RMS the
+  /// previous round's bank makes of the clip at `delay`: iteratively reweighted least squares (the gradient of
+  /// sum RMS / ceiling is that of sum RMS^2 / (2 RMS ceiling)) toward the mean of RMS / ceiling itself.
+  enum class Weighting { Pooled, Ceiling, MeanRatio };
+  Weighting weighting = Weighting::MeanRatio;
+  int reweighting_rounds = 2;
+  /// Of the mean diagonal: pulls each bin toward the one FIR fitted with the same weights over all the frames.
+  double ridge = 1e-4;
+};
+
 /// Fits a WienerBank (wiener_bank.hpp) over `clips`: `bins` centres per feature at the quantiles
-/// (b + 1/2) / bins of the features over every full history, then every bin's gains at once by least
-/// squares against the intended path `delay` frames earlier, through the trilinear interpolation the filter
-/// uses, on the scored frames (kScoreMargin from each end); a light ridge pulls bins the clips hardly visit
-/// toward the one FIR fitted over all of them.
-WienerBank fit_wiener_bank(const std::vector<TremorClip>& clips, std::size_t bins, double delay);
+/// (b + 1/2) / bins of the features over every full history, then every bin's gains at once by weighted least
+/// squares (each clip's frames weighted as fit.weighting says) against the intended path `delay` frames
+/// earlier, through the trilinear interpolation the filter uses, on the scored frames (kScoreMargin from each
+/// end); a light ridge pulls bins the clips hardly visit toward the one FIR fitted over all of them.
+WienerBank fit_wiener_bank(const std::vector<TremorClip>& clips, const WienerBankFit& fit);
 
 /// Runs a tachi smoother over the clip's measured samples, as the filter stage would.
 std::vector<Eigen::Vector3d> run_smoother(const TremorClip& clip, const SmootherParams& params);

@@ -9,8 +9,11 @@
 // RMS first difference, 2 sin(w/2) for a sinusoid of w rad/frame), how large that roughness is, and the
 // mean speed. The taps are interpolated (trilinearly) between the bins' centres, so the output is
 // continuous in the input; the bins' taps are fitted jointly through that interpolation, by least squares
-// against the intended path 0.9 frame earlier (Wiener 1949; Haykin, Adaptive Filter Theory, ch. 2; gain
-// scheduling as in Rugh & Shamma 2000, "Research on gain scheduling").
+// against the intended path 0.95 frame earlier (Wiener 1949; Haykin, Adaptive Filter Theory, ch. 2; gain
+// scheduling as in Rugh & Shamma 2000, "Research on gain scheduling"). The squares are weighted per clip
+// toward the figure the smoother is judged by, the mean over clips of (RMS / the clip's offline ceiling):
+// a pooled fit let the clips of large tremor, whose errors are largest, set the taps for every hand
+// (fit_wiener_bank, tremor_clips.hpp).
 #pragma once
 
 #include <Eigen/Core>
@@ -45,8 +48,8 @@ struct BinWeights {
 };
 BinWeights bin_weights(const WienerBank& bank, const std::array<double, WienerBank::kFeatures>& features);
 
-/// The bank fitted over the randomized tremor clips of seeds 1-1000 (`tachi-filter-bench --fit-wiener-bank
-/// 1..1000` prints it; a test checks that it still does).
+/// The bank fitted over the randomized tremor clips of seeds 1-1000 with WienerBankFit's defaults
+/// (`tachi-filter-bench --fit-wiener-bank 1..1000` prints it; a test checks that it still does).
 const WienerBank& tremor_wiener_bank();
 
 /// The scheduled FIR over a stream of samples at the nominal rate (as WienerFir: a dropped frame restarts

@@ -24,6 +24,7 @@ int main(int argc, char** argv) {
   int grid = 32;
   bool recut = false;
   bool verbose = false;
+  std::filesystem::path keep;  // where the strokes of each differing pair are written (--keep-strokes)
   std::optional<Blade> only_blade;
   std::optional<CutMode> only_mode;
   const auto scratch = std::filesystem::temp_directory_path() / ("cut_stability_" + std::to_string(::getpid()) + ".csv");
@@ -44,13 +45,21 @@ int main(int argc, char** argv) {
       recut = true;
     } else if (a == "--verbose") {
       verbose = true;
+    } else if (a == "--keep-strokes" && i + 1 < argc) {
+      keep = argv[++i];
+      std::error_code error;
+      std::filesystem::create_directories(keep, error);
+      if (error) {
+        std::fprintf(stderr, "cut_stability: --keep-strokes %s: %s\n", keep.c_str(), error.message().c_str());
+        return 2;
+      }
     } else if (a == "--blade" && i + 1 < argc && parse_blade(argv[i + 1])) {
       only_blade = parse_blade(argv[++i]);
     } else if (a == "--mode" && i + 1 < argc && parse_cut_mode(argv[i + 1])) {
       only_mode = parse_cut_mode(argv[++i]);
     } else {
       std::fprintf(stderr, "usage: cut_stability [--strokes N] [--first-seed S] [--grid G] [--recut] [--blade NAME] "
-                           "[--mode exact|grid|delete] [--verbose]\n       cut_stability --blade-table\n");
+                           "[--mode exact|grid|delete] [--verbose] [--keep-strokes DIR]\n       cut_stability --blade-table\n");
       return 2;
     }
   }
@@ -71,14 +80,22 @@ int main(int argc, char** argv) {
       for (int k = 0; k < strokes; ++k) {
         const std::uint64_t seed = first_seed + static_cast<std::uint64_t>(k);
         const auto stroke = random_stroke(seed);
+        const auto other = recut ? there_back_and_there(stroke) : perturbed(stroke, 1e-6, seed ^ 0x9E3779B97F4A7C15ULL);
         const CutOutcome a = cut_outcome(stroke, blade, mode, grid, scratch);
-        const CutOutcome b = recut ? cut_outcome(there_back_and_there(stroke), blade, mode, grid, scratch)
-                                   : cut_outcome(perturbed(stroke, 1e-6, seed ^ 0x9E3779B97F4A7C15ULL), blade, mode, grid, scratch);
+        const CutOutcome b = cut_outcome(other, blade, mode, grid, scratch);
         const double diff = std::abs(a.cut_length_m - b.cut_length_m) / std::max(a.cut_length_m, 1e-3);
         if (a.pieces != b.pieces) ++pieces_differ;
         if (!recut && diff > 0.01) ++length_differs;
         worst = std::max(worst, diff);
-        if (verbose && (a.pieces != b.pieces || (!recut && diff > 0.01))) {
+        const bool differs = a.pieces != b.pieces || (!recut && diff > 0.01);
+        if (differs && !keep.empty()) {
+          // Both strokes, to run again through `tachi-sim --offline --stroke FILE --blade B --cut-mode M`.
+          const std::string stem = "seed" + std::to_string(seed) + "_" + std::string{to_string(blade)} + "_" +
+                                   std::string{to_string(mode)};
+          write_stroke_csv(stroke, keep / (stem + "_once.csv"));
+          write_stroke_csv(other, keep / (stem + (recut ? "_recut.csv" : "_perturbed.csv")));
+        }
+        if (verbose && differs) {
           std::printf("seed %llu: %zu pieces %.4f m / %zu pieces %.4f m\n", static_cast<unsigned long long>(seed),
                       a.pieces, a.cut_length_m, b.pieces, b.cut_length_m);
         }

@@ -89,7 +89,7 @@ StrokeRun time_stroke(const Cloth& prototype, const std::vector<tachi::sim::Stro
     cutter.end_stroke();
     ms.push_back(ms_since(t0));
     const auto t1 = cpu_ms();
-    const std::size_t pieces = tachi::sim::find_pieces(cloth).count();
+    const std::size_t pieces = tachi::sim::find_pieces(cloth).cloth_count();
     pieces_ms.push_back(ms_since(t1));
     if (r > 0 && (pieces != run.pieces || cutter.report().cut_line.size() != run.line.size())) std::abort();
     run.line = cutter.report().cut_line;
@@ -164,7 +164,7 @@ ExactRun time_exact(const Cloth& prototype, const std::vector<tachi::sim::Stroke
     worst_following_ms.push_back(worst);
     following_steps.push_back(following);
     run.particles = cloth.particle_count();
-    run.pieces = tachi::sim::find_pieces(cloth).count();
+    run.pieces = tachi::sim::find_pieces(cloth).cloth_count();
     run.deviation = cutter.exact() != nullptr ? cutter.exact()->max_deviation_cells() : 0.0;
     run.full_builds = solver.full_builds();
   }
@@ -257,7 +257,7 @@ LiveRun time_long_stroke(int n, tachi::sim::CutMode mode, const tachi::sim::Solv
   }
   run.worst_ms = *std::max_element(frame_ms.begin(), frame_ms.end());
   run.median_ms = median(frame_ms);
-  run.pieces = tachi::sim::find_pieces(cloth).count();
+  run.pieces = tachi::sim::find_pieces(cloth).cloth_count();
   run.full_builds = solver.full_builds();
   // How the cloth came out of it, not only how fast: a repair of the attachments that cannot keep up with
   // the stroke leaves the cloth below the cut without tethers, and it stretches (docs/sim.md, "Limits").

@@ -77,7 +77,7 @@ void Session::close_stroke() {
   if (cut_something(cutter_.report())) ++closed_cuts_;
   const Pieces pieces = find_pieces(cloth_);
   reports_.push_back(
-      {stroke_id_, cutter_.report(), pieces.count(), pieces.fallen(), stroke_sensor_, blade_.max_force_n(), blade_.drag_m()});
+      {stroke_id_, cutter_.report(), pieces.cloth_count(), pieces.cloth_fallen(), stroke_sensor_, blade_.max_force_n(), blade_.drag_m()});
   max_drag_m_ = std::max(max_drag_m_, blade_.drag_m());
   max_contact_force_n_ = std::max(max_contact_force_n_, blade_.max_force_n());
   blade_.end_stroke(cloth_);

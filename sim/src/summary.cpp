@@ -60,7 +60,8 @@ Summary summarize(const Cloth& cloth) {
   s.springs = cloth.alive_spring_count();
   s.triangles = cloth.alive_triangle_count();
   const Pieces pieces = find_pieces(cloth);
-  s.pieces = pieces.count();
+  s.pieces = pieces.cloth_count();  // pieces of cloth; particles in no triangle are counted apart (pieces.hpp)
+  s.extra["loose_particles"] = pieces.loose_particles();
   s.max_strain = cloth.max_structural_strain();
   // Whether max_strain is a cloth at rest or a snapshot of one still moving: the kinetic energy of the pieces a
   // pin holds (pieces that fell off are meant to move).
@@ -95,7 +96,7 @@ void add_cut_summary(Summary& summary, const Cloth& cloth, const StrokeCutter& c
   const StrokeReport& cut = cutter.total();
   nlohmann::json cut_line = nlohmann::json::array();
   for (const GridCoord g : cut.cut_line) cut_line.push_back({g.u, g.v});
-  summary.extra["fallen_pieces"] = find_pieces(cloth).fallen();
+  summary.extra["fallen_pieces"] = find_pieces(cloth).cloth_fallen();
   summary.extra["cut_particles"] = cut.particles_duplicated;
   summary.extra["cut_length_m"] = cut.cut_length_m;
   summary.extra["cut_line"] = std::move(cut_line);

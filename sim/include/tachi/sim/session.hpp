@@ -38,8 +38,8 @@ struct HandInput {
 struct CutReport {
   std::uint32_t stroke_id = 0;
   StrokeReport stroke;
-  std::size_t pieces = 0;
-  std::size_t fallen_pieces = 0;
+  std::size_t pieces = 0;         ///< pieces of cloth after it (Pieces::cloth_count: loose particles apart)
+  std::size_t fallen_pieces = 0;  ///< of them, those nothing pins
   std::uint32_t sensor_id = 0;  ///< the hand source that made the stroke
   float max_contact_force_n = 0.0F;  ///< largest blade contact force of the stroke (blade_contact.hpp)
   float drag_m = 0.0F;               ///< farthest the blade dragged the cloth before it cut (or without cutting)

@@ -19,7 +19,7 @@ struct Summary {
   std::size_t particles = 0;
   std::size_t springs = 0;    ///< live springs
   std::size_t triangles = 0;  ///< live triangles
-  std::size_t pieces = 0;     ///< connected components over live springs
+  std::size_t pieces = 0;     ///< pieces of cloth: components over live springs with a live triangle (pieces.hpp)
   float max_strain = 0.0F;    ///< max over live structural springs of length / rest - 1
   int steps = 0;
   double step_ms_median = 0.0;

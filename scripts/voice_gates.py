@@ -42,6 +42,8 @@ def load(path):
                      phrase_margin=v[4], level=v[5])
             d["garbage_score"] = v[6] if len(v) > 6 else math.nan
             d["garbage_margin"] = v[7] if len(v) > 7 else math.nan
+            d["phrase_duration"] = v[8] if len(v) > 8 else math.nan
+            d["garbage_duration"] = v[9] if len(v) > 9 else math.nan
             dets.append(d)
     return runs, dets
 

@@ -38,6 +38,10 @@ struct VoiceDetection {
   /// second pass.
   double garbage_score = std::numeric_limits<double>::quiet_NaN();
   double garbage_margin = std::numeric_limits<double>::quiet_NaN();
+  /// How long the phrase lasts (s) as the phrase grammar (silence fillers around it) and the garbage
+  /// grammar align it; NaN without a second pass.
+  double phrase_duration_s = std::numeric_limits<double>::quiet_NaN();
+  double garbage_duration_s = std::numeric_limits<double>::quiet_NaN();
 };
 
 /// The second pass's decision on one scored hit (VoiceConfig's verify_* thresholds): a command when

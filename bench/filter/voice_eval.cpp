@@ -347,6 +347,8 @@ int speakers_main(VoiceConfig config, const std::string& set, unsigned seed_offs
   config.verify_min_phrase_margin = 0.0;
   config.verify_min_level_db.reset();
   config.verify_min_garbage_margin.reset();
+  config.verify_min_garbage_log_ratio.reset();
+  config.verify_min_phrase_seconds.reset();
   std::vector<std::vector<std::int16_t>> librivox;
   for (const auto& clip : fixture::librivox_clips()) librivox.push_back(read_wav_file(clip).samples);
   // Jobs: every speaker (base voice, pitch-shifted, tempo-changed) of the set, then the corpora

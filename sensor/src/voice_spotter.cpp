@@ -491,7 +491,14 @@ bool verification_accepts(const VoiceConfig& config, const VoiceDetection& d) {
   // The same margin with the words around the phrase explained by the garbage model: a phrase that wins
   // only because it stretched over a neighbouring word loses here.
   if (config.verify_min_garbage_margin && !(d.garbage_margin >= *config.verify_min_garbage_margin)) return false;
+  // Where the phrase is not said, the garbage grammar explains the audio with its phone loop and
+  // squeezes the phrase into the fewest frames it can: too short a phrase is none.
+  if (config.verify_min_phrase_seconds && !(d.garbage_duration_s >= *config.verify_min_phrase_seconds)) return false;
+  // Said on its own, the whole window passes; said inside other words, which the whole window's
+  // grammar can explain only with silence, the garbage model's ratio (the words explained by its phone
+  // loop) or the phrase's own frames.
   return d.verification_score >= *config.verify_min_log_ratio ||
+         (config.verify_min_garbage_log_ratio && d.garbage_score >= *config.verify_min_garbage_log_ratio) ||
          (config.verify_min_phrase_log_ratio && d.phrase_score >= *config.verify_min_phrase_log_ratio);
 }
 

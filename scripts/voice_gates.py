@@ -4,9 +4,11 @@
 none and applies them when scoring), so a dump taken once scores any gate. The decision replicates
 verification_accepts() (sensor/src/voice_spotter.cpp) and the counting replicates tachi-voice-eval's
 score(): per utterance, found when a kept detection names its command, WRONG when one names another;
-kept detections near no utterance are false alarms.
+kept detections near no utterance are false alarms. A D line's columns: run, utterance (-1: none), right, phrase,
+time, score, margin, phrase_score, phrase_margin, level, garbage_score, garbage_margin, and (dumps since the garbage
+ratio became an acceptance test) the phrase's seconds as the phrase grammar and as the garbage grammar align it.
 
-  scripts/voice_gates.py DUMP [--gate margin=8 phrase_margin=2 level=14 garbage_margin=0 ...] [--search]
+  scripts/voice_gates.py DUMP [--gate margin=8 level=14 garbage_margin=0 garbage_ratio=-60 min_seconds=0.5 ...] [--search]
 """
 import argparse
 import itertools
@@ -18,13 +20,15 @@ import sys
 
 def shipped_gates():
     """The gates config/voice.json ships (what tachi-voice and tachi-voice-eval use by default), read rather
-    than copied here so that the two cannot drift. garbage_ratio is a search-only gate with no config key."""
+    than copied here so that the two cannot drift. Keys: ratio (verify_min_log_ratio), margin, phrase_margin, level,
+    garbage_margin, phrase_ratio, garbage_ratio (verify_min_garbage_log_ratio), min_seconds (verify_min_phrase_seconds)."""
     path = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "config", "voice.json")
     with open(path) as f:
         c = json.load(f)
     return dict(ratio=c["verify_min_log_ratio"], margin=c["verify_min_margin"], phrase_margin=c.get("verify_min_phrase_margin", 0.0),
                 level=c.get("verify_min_level_db"), garbage_margin=c.get("verify_min_garbage_margin"),
-                phrase_ratio=c.get("verify_min_phrase_log_ratio"), garbage_ratio=None)
+                phrase_ratio=c.get("verify_min_phrase_log_ratio"), garbage_ratio=c.get("verify_min_garbage_log_ratio"),
+                min_seconds=c.get("verify_min_phrase_seconds"))
 
 
 DEFAULT = shipped_gates()
@@ -42,6 +46,8 @@ def load(path):
                      phrase_margin=v[4], level=v[5])
             d["garbage_score"] = v[6] if len(v) > 6 else math.nan
             d["garbage_margin"] = v[7] if len(v) > 7 else math.nan
+            d["phrase_duration"] = v[8] if len(v) > 8 else math.nan
+            d["garbage_duration"] = v[9] if len(v) > 9 else math.nan
             dets.append(d)
     return runs, dets
 
@@ -61,8 +67,10 @@ def accepts(g, d):
         return False
     if g["garbage_margin"] is not None and not ge(d["garbage_margin"], g["garbage_margin"]):
         return False
-    return (d["score"] >= g["ratio"] or (g["phrase_ratio"] is not None and d["phrase_score"] >= g["phrase_ratio"]) or
-            (g["garbage_ratio"] is not None and d["garbage_score"] >= g["garbage_ratio"]))
+    if g["min_seconds"] is not None and not ge(d["garbage_duration"], g["min_seconds"]):
+        return False
+    return (d["score"] >= g["ratio"] or (g["garbage_ratio"] is not None and d["garbage_score"] >= g["garbage_ratio"]) or
+            (g["phrase_ratio"] is not None and d["phrase_score"] >= g["phrase_ratio"]))
 
 
 def tally(runs, dets, g):
@@ -116,7 +124,8 @@ def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("dump")
     ap.add_argument("--gate", nargs="*", help="key=value overrides of the shipped gates (none: off)")
-    ap.add_argument("--search", action="store_true", help="grid over margin, phrase margin, level, garbage margin, garbage ratio")
+    ap.add_argument("--search", action="store_true", help="grid over margin, level, garbage margin, garbage ratio, phrase seconds")
+    ap.add_argument("--max-wrong", type=int, default=0, help="--search: list gates with at most this many WRONG commands")
     a = ap.parse_args()
     runs, dets = load(a.dump)
     if not a.search:
@@ -124,12 +133,12 @@ def main():
         show(g, tally(runs, dets, g))
         return
     rows = []
-    for m, pm, lv, gm, gr in itertools.product([0, 2, 4, 6, 8], [0, 1, 2], [None, 10, 12, 14], [None, -10, -5, 0, 5, 10, 15, 20, 30],
-                                               [None, -70, -60, -50, -40, -30]):
-        g = dict(DEFAULT, margin=m, phrase_margin=pm, level=lv, garbage_margin=gm, garbage_ratio=gr)
+    for m, lv, gm, gr, sec in itertools.product([2, 4, 8], [10, 14], [None, 0, 10, 20], [None, -50, -55, -60, -65, -70, -75, -80],
+                                                [None, 0.4, 0.45, 0.5, 0.55, 0.6]):
+        g = dict(DEFAULT, margin=m, level=lv, garbage_margin=gm, garbage_ratio=gr, min_seconds=sec)
         t = tally(runs, dets, g)
         rows.append((g, t))
-    ok = [(g, t) for g, t in rows if t["wrong"] == 0 and t["fa_librivox"] == 0 and t["fa_babble"] == 0]
+    ok = [(g, t) for g, t in rows if t["wrong"] <= a.max_wrong and t["fa_librivox"] == 0 and t["fa_babble"] == 0]
     ok.sort(key=lambda gt: (-gt[1]["f20"], gt[1]["fa_seq"]))
     for g, t in ok[:40]:
         show(g, t)

@@ -347,6 +347,8 @@ int speakers_main(VoiceConfig config, const std::string& set, unsigned seed_offs
   config.verify_min_phrase_margin = 0.0;
   config.verify_min_level_db.reset();
   config.verify_min_garbage_margin.reset();
+  config.verify_min_garbage_log_ratio.reset();
+  config.verify_min_phrase_seconds.reset();
   std::vector<std::vector<std::int16_t>> librivox;
   for (const auto& clip : fixture::librivox_clips()) librivox.push_back(read_wav_file(clip).samples);
   // Jobs: every speaker (base voice, pitch-shifted, tempo-changed) of the set, then the corpora
@@ -427,9 +429,9 @@ int speakers_main(VoiceConfig config, const std::string& set, unsigned seed_offs
                       return p.phrase == run.placed[u].phrase;
                     })->command == d.command;
           }
-        std::fprintf(f, "D\t%zu\t%d\t%d\t%s\t%.3f\t%.3f\t%.3f\t%.3f\t%.3f\t%.3f\t%.3f\t%.3f\n", r, utterance, right ? 1 : 0,
+        std::fprintf(f, "D\t%zu\t%d\t%d\t%s\t%.3f\t%.3f\t%.3f\t%.3f\t%.3f\t%.3f\t%.3f\t%.3f\t%.2f\t%.2f\n", r, utterance, right ? 1 : 0,
                      d.phrase.c_str(), d.time_s, d.verification_score, d.command_margin, d.phrase_score, d.phrase_margin, d.level_db,
-                     d.garbage_score, d.garbage_margin);
+                     d.garbage_score, d.garbage_margin, d.phrase_duration_s, d.garbage_duration_s);
       }
     }
     std::fclose(f);

@@ -72,6 +72,10 @@ std::optional<std::string> validate(const VoiceConfig& config) {
   if (config.verify_min_level_db && std::isnan(*config.verify_min_level_db)) return "verify_min_level_db must be a number (or null)";
   if (config.verify_min_garbage_margin && std::isnan(*config.verify_min_garbage_margin))
     return "verify_min_garbage_margin must be a number (or null)";
+  if (config.verify_min_garbage_log_ratio && std::isnan(*config.verify_min_garbage_log_ratio))
+    return "verify_min_garbage_log_ratio must be a number (or null)";
+  if (config.verify_min_phrase_seconds && !(*config.verify_min_phrase_seconds >= 0.0))
+    return "verify_min_phrase_seconds must be a number >= 0 (or null)";
   return std::nullopt;
 }
 
@@ -93,7 +97,8 @@ VoiceConfig parse_voice_config(const std::string& json_text) {
     if (item.key() != "model_dir" && item.key() != "dictionary" && item.key() != "phrases" && item.key() != "phone_loop_probability" &&
         item.key() != "verify_min_log_ratio" && item.key() != "verify_min_margin" && item.key() != "verify_min_phrase_log_ratio" &&
         item.key() != "verify_min_phrase_margin" && item.key() != "verify_min_level_db" &&
-        item.key() != "verify_min_garbage_margin")
+        item.key() != "verify_min_garbage_margin" && item.key() != "verify_min_garbage_log_ratio" &&
+        item.key() != "verify_min_phrase_seconds")
       fail("unknown key " + item.key());
   try {
     if (root.contains("model_dir")) c.model_dir = root.at("model_dir").get<std::string>();
@@ -111,7 +116,9 @@ VoiceConfig parse_voice_config(const std::string& json_text) {
     if (root.contains("verify_min_margin")) c.verify_min_margin = root.at("verify_min_margin").get<double>();
     for (const auto& [key, target] : {std::pair{"verify_min_phrase_log_ratio", &c.verify_min_phrase_log_ratio},
                                       std::pair{"verify_min_level_db", &c.verify_min_level_db},
-                                      std::pair{"verify_min_garbage_margin", &c.verify_min_garbage_margin}}) {
+                                      std::pair{"verify_min_garbage_margin", &c.verify_min_garbage_margin},
+                                      std::pair{"verify_min_garbage_log_ratio", &c.verify_min_garbage_log_ratio},
+                                      std::pair{"verify_min_phrase_seconds", &c.verify_min_phrase_seconds}}) {
       if (!root.contains(key)) continue;
       const auto& v = root.at(key);
       if (v.is_null())

@@ -74,6 +74,9 @@ struct KeywordSpotter::Impl {
     /// grammar prefers the other command).
     double garbage_log_ratio = -std::numeric_limits<double>::infinity();
     double garbage_margin = std::numeric_limits<double>::infinity();
+    /// The phrase's frames as the phrase grammar and the garbage grammar align it (10 ms each; 0: none).
+    int phrase_frames = 0;
+    int garbage_frames = 0;
   };
   Verdict verify(long begin, long end, long before);
 
@@ -220,6 +223,7 @@ KeywordSpotter::Impl::Verdict KeywordSpotter::Impl::verify(long begin, long end,
   std::vector<double> log_ratio(config.phrases.size(), -std::numeric_limits<double>::infinity());
   std::vector<double> phrase_only(config.phrases.size(), -std::numeric_limits<double>::infinity());
   std::vector<std::pair<int, int>> phrase_span(config.phrases.size(), {-1, -1});
+  std::vector<int> phrase_frame_count(config.phrases.size(), 0);
   for (std::size_t i = 0; i < config.phrases.size(); ++i) {
     double phrase_score = 0.0, words_score = 0.0;
     int phrase_frames = 0;
@@ -234,6 +238,7 @@ KeywordSpotter::Impl::Verdict KeywordSpotter::Impl::verify(long begin, long end,
       phrase_span[i].second = seg.last_frame - base;
     }
     if (phrase_frames == 0) continue;  // the phrase cannot be aligned to this audio
+    phrase_frame_count[i] = phrase_frames;
     log_ratio[i] = (phrase_score - loop_score) / phrase_frames;
     phrase_only[i] = (words_score - loop_over(phrase_span[i].first, phrase_span[i].second)) / phrase_frames;
   }
@@ -253,6 +258,7 @@ KeywordSpotter::Impl::Verdict KeywordSpotter::Impl::verify(long begin, long end,
   // around both, each phrase is aligned where it fits best and the commands compete on the phrase.
   // Score: the ratio of the whole window against the free phone loop, per frame of the phrase, as above.
   std::vector<double> garbage_ratio(config.phrases.size(), -std::numeric_limits<double>::infinity());
+  std::vector<int> garbage_frame_count(config.phrases.size(), 0);
   for (std::size_t i = 0; i < config.phrases.size(); ++i) {
     double score = 0.0;
     int frames = 0;
@@ -262,9 +268,12 @@ KeywordSpotter::Impl::Verdict KeywordSpotter::Impl::verify(long begin, long end,
       if (!is_filler(seg.word) && seg.word.rfind(kGarbagePrefix, 0) != 0) frames += seg.last_frame - seg.first_frame + 1;
     }
     if (frames > 0) garbage_ratio[i] = (score - loop_score) / frames;
+    garbage_frame_count[i] = frames;
   }
   verdict.phrase = config.phrases[best];
   verdict.log_ratio = log_ratio[best];
+  verdict.phrase_frames = phrase_frame_count[best];
+  verdict.garbage_frames = garbage_frame_count[best];
   for (std::size_t i = 0; i < config.phrases.size(); ++i)
     if (config.phrases[i].command != config.phrases[best].command && std::isfinite(log_ratio[i]))
       verdict.margin = std::min(verdict.margin, log_ratio[best] - log_ratio[i]);
@@ -467,6 +476,8 @@ void KeywordSpotter::Impl::verify_pending(long ended_by, std::vector<VoiceDetect
     d.level_db = verdict.level_db;
     d.garbage_score = verdict.garbage_log_ratio;
     d.garbage_margin = verdict.garbage_margin;
+    d.phrase_duration_s = verdict.phrase_frames / 100.0;
+    d.garbage_duration_s = verdict.garbage_frames / 100.0;
     if (verification_accepts(config, d)) accepted.push_back(d);
   }
 }
@@ -480,7 +491,14 @@ bool verification_accepts(const VoiceConfig& config, const VoiceDetection& d) {
   // The same margin with the words around the phrase explained by the garbage model: a phrase that wins
   // only because it stretched over a neighbouring word loses here.
   if (config.verify_min_garbage_margin && !(d.garbage_margin >= *config.verify_min_garbage_margin)) return false;
+  // Where the phrase is not said, the garbage grammar explains the audio with its phone loop and
+  // squeezes the phrase into the fewest frames it can: too short a phrase is none.
+  if (config.verify_min_phrase_seconds && !(d.garbage_duration_s >= *config.verify_min_phrase_seconds)) return false;
+  // Said on its own, the whole window passes; said inside other words, which the whole window's
+  // grammar can explain only with silence, the garbage model's ratio (the words explained by its phone
+  // loop) or the phrase's own frames.
   return d.verification_score >= *config.verify_min_log_ratio ||
+         (config.verify_min_garbage_log_ratio && d.garbage_score >= *config.verify_min_garbage_log_ratio) ||
          (config.verify_min_phrase_log_ratio && d.phrase_score >= *config.verify_min_phrase_log_ratio);
 }
 

@@ -101,6 +101,8 @@ TEST(VoiceCommands, TheShippedConfigFileMatchesTheDefaults) {
   EXPECT_EQ(file.verify_min_phrase_margin, defaults.verify_min_phrase_margin);
   EXPECT_EQ(file.verify_min_level_db, defaults.verify_min_level_db);
   EXPECT_EQ(file.verify_min_garbage_margin, defaults.verify_min_garbage_margin);
+  EXPECT_EQ(file.verify_min_garbage_log_ratio, defaults.verify_min_garbage_log_ratio);
+  EXPECT_EQ(file.verify_min_phrase_seconds, defaults.verify_min_phrase_seconds);
 }
 
 TEST(VoiceCommands, ThePhraseRatioMarginAndLevelKeysParseAndAreValidated) {
@@ -125,6 +127,12 @@ TEST(VoiceCommands, ThePhraseRatioMarginAndLevelKeysParseAndAreValidated) {
   EXPECT_EQ(parse_voice_config(R"({"verify_min_garbage_margin": 1.5})").verify_min_garbage_margin, 1.5);
   EXPECT_FALSE(parse_voice_config(R"({"verify_min_garbage_margin": null})").verify_min_garbage_margin.has_value());
   EXPECT_NE(error_of(R"({"verify_min_garbage_margin": "x"})").find("verify_min_garbage_margin"), std::string::npos);
+  EXPECT_EQ(parse_voice_config(R"({"verify_min_garbage_log_ratio": -50})").verify_min_garbage_log_ratio, -50.0);
+  EXPECT_FALSE(parse_voice_config(R"({"verify_min_garbage_log_ratio": null})").verify_min_garbage_log_ratio.has_value());
+  EXPECT_NE(error_of(R"({"verify_min_garbage_log_ratio": "x"})").find("verify_min_garbage_log_ratio"), std::string::npos);
+  EXPECT_EQ(parse_voice_config(R"({"verify_min_phrase_seconds": 0.4})").verify_min_phrase_seconds, 0.4);
+  EXPECT_FALSE(parse_voice_config(R"({"verify_min_phrase_seconds": null})").verify_min_phrase_seconds.has_value());
+  EXPECT_NE(error_of(R"({"verify_min_phrase_seconds": -1})").find("verify_min_phrase_seconds"), std::string::npos);
 }
 
 TEST(VoiceCommands, TheSecondPassMarginIsValidated) {

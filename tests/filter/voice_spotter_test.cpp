@@ -194,6 +194,8 @@ TEST(VoiceSpotter, TheSecondPassDecisionNeedsTheLevelTheMarginsAndOneOfTheTwoRat
   c.verify_min_phrase_margin = 2.0;
   c.verify_min_level_db = 8.0;
   c.verify_min_garbage_margin.reset();
+  c.verify_min_garbage_log_ratio.reset();
+  c.verify_min_phrase_seconds.reset();
   VoiceDetection d;
   d.verification_score = -10.0;  // said alone: the whole window passes
   d.command_margin = 6.0;
@@ -225,6 +227,8 @@ TEST(VoiceSpotter, TheSecondPassDecisionNeedsTheLevelTheMarginsAndOneOfTheTwoRat
   before.verify_min_phrase_margin = 0.0;
   before.verify_min_level_db.reset();
   before.verify_min_garbage_margin.reset();
+  before.verify_min_garbage_log_ratio.reset();
+  before.verify_min_phrase_seconds.reset();
   EXPECT_TRUE(verification_accepts(before, quiet));
   EXPECT_FALSE(verification_accepts(before, in_sentence));
   before.verify_min_log_ratio.reset();  // one pass: every hit
@@ -239,6 +243,7 @@ TEST(VoiceSpotter, TheGarbageMarginDropsAPhraseThatWinsOnlyByStretchingOverTheWo
   d.command_margin = 9.0;  // "begin cutting" beats "stop cutting" with silence fillers around them...
   d.phrase_margin = 3.0;
   d.level_db = 20.0;
+  d.garbage_duration_s = 0.7;
   d.garbage_margin = -4.0;  // ...but not once a phone loop explains "that is enough" before it
   EXPECT_FALSE(verification_accepts(c, d));
   d.garbage_margin = std::nan("");  // not scored: refused, never a wrong command
@@ -248,6 +253,48 @@ TEST(VoiceSpotter, TheGarbageMarginDropsAPhraseThatWinsOnlyByStretchingOverTheWo
   c.verify_min_garbage_margin.reset();  // not checked
   d.garbage_margin = -4.0;
   EXPECT_TRUE(verification_accepts(c, d));
+}
+
+TEST(VoiceSpotter, APhraseInsideWordsIsAcceptedOnItsGarbageModelRatioWhenItLastsLongEnough) {
+  const VoiceConfig c;  // the shipped gates: garbage ratio -55, phrase 0.5 s
+  VoiceDetection d;     // "please stop cutting now": the words around it sink the whole window
+  d.verification_score = -35.0;
+  d.command_margin = 9.0;
+  d.phrase_score = -20.0;
+  d.phrase_margin = 1.0;
+  d.level_db = 25.0;
+  d.garbage_score = -48.0;  // with a phone loop explaining the words, the phrase fits
+  d.garbage_margin = 30.0;
+  d.garbage_duration_s = 0.68;
+  EXPECT_TRUE(verification_accepts(c, d));
+  VoiceDetection squeezed = d;  // the phrase not said: the grammar crams it into its fewest frames
+  squeezed.garbage_duration_s = 0.38;
+  EXPECT_FALSE(verification_accepts(c, squeezed));
+  squeezed.garbage_duration_s = std::nan("");
+  EXPECT_FALSE(verification_accepts(c, squeezed));
+  squeezed = d;  // the duration check holds for a phrase said alone too
+  squeezed.verification_score = -5.0;
+  squeezed.command_margin = 20.0;
+  squeezed.garbage_duration_s = 0.4;
+  EXPECT_FALSE(verification_accepts(c, squeezed));
+  VoiceDetection poor = d;  // the garbage model does not find the phrase either
+  poor.garbage_score = -75.0;
+  EXPECT_FALSE(verification_accepts(c, poor));
+  VoiceDetection other = d;  // the garbage grammar prefers the other command: never a wrong command
+  other.garbage_margin = -3.0;
+  EXPECT_FALSE(verification_accepts(c, other));
+  other = d;  // nor when the commands score close with silence around them ("start" said without its R)
+  other.command_margin = 2.0;
+  EXPECT_FALSE(verification_accepts(c, other));
+  VoiceDetection quiet = d;  // babble: no louder than the talkers around it
+  quiet.level_db = 5.0;
+  EXPECT_FALSE(verification_accepts(c, quiet));
+  VoiceConfig whole_window_only = c;  // the garbage ratio off: as before, the whole window decides
+  whole_window_only.verify_min_garbage_log_ratio.reset();
+  EXPECT_FALSE(verification_accepts(whole_window_only, d));
+  whole_window_only.verify_min_phrase_seconds.reset();
+  squeezed.garbage_duration_s = 0.4;
+  EXPECT_TRUE(verification_accepts(whole_window_only, squeezed));
 }
 
 TEST(VoiceSpotter, UnknownWordsAndMissingModelsAreClearErrors) {

@@ -38,11 +38,16 @@ struct VoiceDetection {
   /// second pass.
   double garbage_score = std::numeric_limits<double>::quiet_NaN();
   double garbage_margin = std::numeric_limits<double>::quiet_NaN();
+  /// How long the phrase lasts (s) as the phrase grammar (silence fillers around it) and the garbage
+  /// grammar align it; NaN without a second pass.
+  double phrase_duration_s = std::numeric_limits<double>::quiet_NaN();
+  double garbage_duration_s = std::numeric_limits<double>::quiet_NaN();
 };
 
 /// The second pass's decision on one scored hit (VoiceConfig's verify_* thresholds): a command when
-/// its level is high enough, it beats every other command by the margins, and either its whole-window
-/// ratio or its phrase-frames ratio reaches its threshold. The spotter and tachi-voice-eval use this.
+/// its level is high enough, it beats every other command by the margins, the phrase lasts long enough
+/// as the garbage grammar aligns it, and its whole-window ratio, its garbage-model ratio or its
+/// phrase-frames ratio reaches its threshold. The spotter and tachi-voice-eval use this.
 bool verification_accepts(const VoiceConfig& config, const VoiceDetection& scored);
 
 class KeywordSpotter {

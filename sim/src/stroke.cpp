@@ -746,12 +746,8 @@ void StrokeCutter::add_line_to_report(const std::vector<GridCoord>& line) {
 }
 
 TopologyChange StrokeCutter::add_sample(const StrokeSample& sample, bool touching) {
-  TopologyChange change;
-  if (!sample.position.allFinite()) return change;
-  // The open stroke ends (and cuts) before the sample is located on the cloth it leaves.
-  if (!open_) change.merge(begin_stroke());
-  change.merge(add_sample(sample, locator_.locate(*cloth_, sample.position), touching));
-  return change;
+  if (!sample.position.allFinite()) return {};
+  return add_sample(sample, locator_.locate(*cloth_, sample.position), touching);
 }
 
 TopologyChange StrokeCutter::add_sample(const StrokeSample& sample, const ClothPoint& at, bool touching) {

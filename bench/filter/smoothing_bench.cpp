@@ -507,7 +507,8 @@ int main(int argc, char** argv) try {
                  "of printing it");
   app.add_option("--oracle-fir", oracle_range,
                  "Clips FIRST..LAST: each clip's own least-squares causal FIR (an oracle that knows the clip's truth), "
-                 "12 and 24 taps at delays 0.5-1 frame: how close a causal linear filter can come to the ceiling");
+                 "12 taps at delays 0.5, 0.9 and 1 frame, and banks chosen by the drawn tremor or fitted (wiener-bank): "
+                 "how close a causal linear filter can come to the ceiling");
   app.add_option("--min-cutoff", min_cutoff, "One Euro min_cutoff_hz to try instead of the default");
   app.add_option("--beta", beta, "One Euro beta to try instead of the default");
   app.add_option("--d-cutoff", d_cutoff, "One Euro d_cutoff_hz to try instead of the default");

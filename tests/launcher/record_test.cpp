@@ -3,6 +3,7 @@
 // and Foxglove's own MCAP reader (@mcap/core from npm, run by node) reads the file the project wrote.
 // Domain ids 140-145 (tests/launcher owns 120-149; docs/testing.md).
 #include "paths.hpp"
+#include "cut_lines.hpp"
 #include "process.hpp"
 #include "scratch_dir.hpp"
 
@@ -94,25 +95,7 @@ TEST_F(RecordedRun, PlayingTheRawHandIntoAFreshFilterAndSimulatorReproducesTheCu
   EXPECT_EQ(replayed["cuts"], recorded["cuts"]);
   EXPECT_EQ(replayed["pieces"], recorded["pieces"]);
   EXPECT_EQ(replayed["fallen_pieces"], recorded["fallen_pieces"]);
-  // The cut line: every cut cell of one run lies within one cell of a cut cell of the other.
-  const auto cells = [](const json& s) {
-    std::vector<std::pair<int, int>> v;
-    for (const auto& g : s["cut_line"]) v.emplace_back(g[0].get<int>(), g[1].get<int>());
-    return v;
-  };
-  const auto a_cells = cells(recorded), b_cells = cells(replayed);
-  ASSERT_FALSE(a_cells.empty());
-  ASSERT_FALSE(b_cells.empty()) << replayed.dump();
-  const auto within_a_cell = [](const auto& from, const auto& to) {
-    for (const auto& [u, v] : from) {
-      bool near = false;
-      for (const auto& [p, q] : to) near = near || (std::abs(u - p) <= 1 && std::abs(v - q) <= 1);
-      if (!near) return false;
-    }
-    return true;
-  };
-  EXPECT_TRUE(within_a_cell(a_cells, b_cells)) << recorded["cut_line"] << "\nvs\n" << replayed["cut_line"];
-  EXPECT_TRUE(within_a_cell(b_cells, a_cells)) << recorded["cut_line"] << "\nvs\n" << replayed["cut_line"];
+  EXPECT_TRUE(tachi::test::cut_lines_agree_within_a_cell(recorded, replayed));
   EXPECT_NEAR(replayed["cut_length_m"].get<double>(), recorded["cut_length_m"].get<double>(), 1.5 / 32);
 }
 

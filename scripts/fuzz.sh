@@ -14,35 +14,14 @@ tachi_configure build-fuzz -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_C_COMPILER=
   -DCMAKE_CXX_COMPILER=clang++ -DTACHI_FUZZ=ON -DBUILD_TESTING=OFF
 cmake --build build-fuzz -j"$(nproc)" --target "${targets[@]/%/_fuzz}"
 mkdir -p build-fuzz/crashes
-# Each target is one process on one core: two run at once (nproc at most), each for the whole SECONDS,
-# its last lines (the final stats, or the crash) printed when it ends. Any target's failure fails the run.
-parallel=$(nproc); [ "$parallel" -le 2 ] || parallel=2
-logs=$(mktemp -d)
-trap 'rm -rf "$logs"' EXIT
-fuzz_one() {  # TARGET
-  local t=$1 status=0
-  mkdir -p "build-fuzz/corpus/$t"
+fuzz_one() {  # TARGET, for its SECONDS
+  mkdir -p "build-fuzz/corpus/$1"
   # -max_len: a depth frame's header and a few rows are what the parsers branch on.
-  "build-fuzz/bin/${t}_fuzz" -max_total_time="$seconds" -max_len=4096 -timeout=10 -rss_limit_mb=2048 \
-    -artifact_prefix="build-fuzz/crashes/${t}-" -print_final_stats=1 \
-    "build-fuzz/corpus/$t" "fuzz/corpus/$t" >"$logs/$t.log" 2>&1 || status=$?
-  echo "$status" >"$logs/$t.status"
+  "build-fuzz/bin/${1}_fuzz" -max_total_time="$seconds" -max_len=4096 -timeout=10 -rss_limit_mb=2048 \
+    -artifact_prefix="build-fuzz/crashes/${1}-" -print_final_stats=1 "build-fuzz/corpus/$1" "fuzz/corpus/$1"
 }
-running=0
-for t in "${targets[@]}"; do
-  if [ "$running" -ge "$parallel" ]; then wait -n || true; running=$((running - 1)); fi
-  echo "fuzz: $t for ${seconds} s" >&2
-  fuzz_one "$t" &
-  running=$((running + 1))
-done
-wait
-failed=()
-for t in "${targets[@]}"; do
-  echo "--- fuzz: $t" >&2
-  tail -n 12 "$logs/$t.log" >&2
-  [ "$(cat "$logs/$t.status" 2>/dev/null)" = 0 ] || failed+=("$t")
-done
-if [ ${#failed[@]} -gt 0 ]; then
-  echo "fuzz.sh: failed: ${failed[*]} (inputs in build-fuzz/crashes)" >&2
-  exit 1
-fi
+# Two targets at a time, each on a core of its own for the whole SECONDS; each one's last lines (the final
+# stats, or the crash) shown when all have ended. Any target's failure fails the run.
+source scripts/two_at_a_time.sh
+two_at_a_time "fuzz (${seconds} s each)" fuzz_one "tail -n 12" "${targets[@]}" ||
+  { echo "fuzz.sh: inputs that failed are in build-fuzz/crashes" >&2; exit 1; }

@@ -104,8 +104,8 @@ int main(int argc, char** argv) try {
   app.add_option("--pki", o.pki, "Directory made by scripts/make_test_pki.sh")->required()->check(CLI::ExistingDirectory);
   app.add_option("--role", o.role)->group("")->check(CLI::IsMember({"ping", "echo"}));
   app.add_flag("--secure", o.secure)->group("");
-  app.add_option("--domain", o.domain, "DDS domain (plain uses it, secure the next one)")->check(CLI::Range(0u, 231u));
-  app.add_option("--count", o.count, "Round trips per mode and size")->check(CLI::Range(10u, 1'000'000u));
+  app.add_option("--domain", o.domain, "DDS domain (plain uses it, secure the next one; default 195)")->check(CLI::Range(0u, 231u));
+  app.add_option("--count", o.count, "Round trips per mode and size (default 2000)")->check(CLI::Range(10u, 1'000'000u));
   app.add_option("--floats", o.floats)->group("");
   if (const int rc = tachi::common::parse(app, argc, argv); rc >= 0) return rc;
   tachi::common::install_stop_handlers();

@@ -105,9 +105,9 @@ int main(int argc, char** argv) try {
   CLI::App app{"tachi-write-bench: the time of a dds_write through Cyclone's type and through bus::Writer's, and of a take on a quiet topic"};
   app.name("tachi-write-bench");
   Options o;
-  app.add_option("--domain", o.domain, "DDS domain id")->check(CLI::Range(0u, 232u));
-  app.add_option("--rounds", o.rounds, "Rounds per type (medians over them)")->check(CLI::Range(1u, 1000u));
-  app.add_option("--writes", o.writes, "Writes per round")->check(CLI::Range(1u, 1'000'000u));
+  app.add_option("--domain", o.domain, "DDS domain id (default 230)")->check(CLI::Range(0u, 232u));
+  app.add_option("--rounds", o.rounds, "Rounds per type, medians over them (default 9)")->check(CLI::Range(1u, 1000u));
+  app.add_option("--writes", o.writes, "Writes per round (default 2000)")->check(CLI::Range(1u, 1'000'000u));
   if (const int rc = tachi::common::parse(app, argc, argv); rc >= 0) return rc;
   bus::Participant dds{o.domain};
   std::printf("median time per write over %u rounds of %u writes, no reader matched\n", o.rounds, o.writes);

@@ -471,7 +471,8 @@ int main(int argc, char** argv) try {
   app.add_option("--lag-compensation", lag_compensation, "One Euro lag_compensation (0 = the paper's filter) to try");
   app.add_option("--hands", hands_csv, "tachi-sensor's CSV for the recording (omit: use the ground-truth palm, tremor only)")
       ->check(CLI::ExistingFile);
-  app.add_option("--truth", truth_csv, "The recording's ground_truth.csv (with intended_x,y,z); needed unless --tremor/--tune")
+  app.add_option("--truth", truth_csv, "The recording's ground_truth.csv (with intended_x,y,z); needed unless --tremor, --tune, --fit-wiener, "
+                 "--fit-wiener-bank or --oracle-fir")
       ->check(CLI::ExistingFile);
   std::string tremor_range, tune_range;
   app.add_option("--tremor", tremor_range,
@@ -533,7 +534,7 @@ int main(int argc, char** argv) try {
     return fit_wiener_bank(parse_range(bank_range), bank_fit, bank_validate);
   }
   if (!tremor_range.empty()) return tremor_table(parse_range(tremor_range), chosen);
-  if (truth_csv.empty()) throw std::invalid_argument("--truth is needed (or --tremor / --tune)");
+  if (truth_csv.empty()) throw std::invalid_argument("--truth is needed (or --tremor, --tune, --fit-wiener, --fit-wiener-bank, --oracle-fir)");
 
   const Truth truth = read_truth(truth_csv);
   std::vector<HandSample> hands;

@@ -522,7 +522,7 @@ int main(int argc, char** argv) try {
   app.add_flag("--verify-sweep", sweep, "run the second pass without a threshold and score a grid of thresholds");
   app.add_flag("--show-detections", show, "list every detection of the sequences with its second-pass score");
   app.add_option("--seed-offset", seed_offset, "added to the sequences' random seeds (0: the set the defaults were chosen on)");
-  app.add_option("--noise", noise, "noise mixed into the sequences: white or babble (4 LibriVox talkers)")
+  app.add_option("--noise", noise, "noise mixed into the sequences: white (default) or babble (4 LibriVox talkers)")
       ->check(CLI::IsMember({"white", "babble"}));
   app.add_option("threshold", threshold, "kws threshold for both default phrases, e.g. 1e-30 (default: the config's)")
       ->check(CLI::Range(1e-100, 1.0));
@@ -547,10 +547,10 @@ int main(int argc, char** argv) try {
   app.add_option("--start-phrase", start_phrase, "--speakers: the start phrase instead of the config's");
   app.add_option("--stop-phrase", stop_phrase, "--speakers: the stop phrase instead of the config's");
   app.add_option("--margin", margin, "--speakers: the second pass's minimum margin over another command (default: the config's)");
-  app.add_option("--threads", threads, "--speakers: decoding threads")->check(CLI::Range(1, 8));
-  app.add_option("--no-command-seconds", no_command_s, "--speakers: seconds of LibriVox reading and of babble without commands, each")
+  app.add_option("--threads", threads, "--speakers: decoding threads (default 1)")->check(CLI::Range(1, 8));
+  app.add_option("--no-command-seconds", no_command_s, "--speakers: seconds of LibriVox reading and of babble without commands, each (default 600)")
       ->check(CLI::Range(0.0, 36000.0));
-  app.add_option("--cache", cache, "--speakers: folder for the synthesised audio");
+  app.add_option("--cache", cache, "--speakers: folder for the synthesised audio (default: voice-cache in the build tree)");
   app.add_option("--sweep", sweep_ratio, "--speakers: sweep min log ratio FROM TO (step 2) x margins instead of the table")->expected(2);
   std::string dump;
   app.add_option("--dump", dump, "--speakers: write every run and detection with its second-pass features (tab-separated) to this file");

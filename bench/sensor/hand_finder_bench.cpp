@@ -90,7 +90,7 @@ int main(int argc, char** argv) {
   std::string recordings = tachi::test::recordings_dir();
   int repeat = 5;
   std::string per_frame_word;
-  app.add_option("recordings", recordings, "Folder holding the push, jitter, straight_cut, curve and top_edge recordings")
+  app.add_option("recordings", recordings, "Folder of rendered recordings: every subfolder with a ground_truth.csv is run, in name order")
       ->check(CLI::ExistingDirectory)
       ->capture_default_str();
   app.add_option("passes", repeat, "Passes per scenario")->check(CLI::Range(1, 1000))->capture_default_str();

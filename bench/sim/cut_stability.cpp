@@ -4,7 +4,9 @@
 // same number of pieces and cut lengths within 1 %; and (--recut) the stroke gone over forward, back and
 // forward again must give the same pieces as once.
 // Usage: cut_stability [--strokes N] [--first-seed S] [--grid G] [--recut] [--blade B] [--mode M] [--verbose]
-// (--blade, --mode: only that blade or mode; --verbose: each stroke's pieces and cut length, both runs).
+//                      [--keep-strokes DIR]   (defaults: 500 strokes from seed 1000, grid 32)
+// (--blade, --mode: only that blade or mode; --verbose: the pieces and cut length of both runs of each stroke
+// that differs; --keep-strokes: both strokes of each differing pair as CSV in DIR).
 //        cut_stability --blade-table   prints docs/cutting.md's blade table (blade_table(), cut_stability.hpp).
 #include "tachi/sim/cut_stability.hpp"
 

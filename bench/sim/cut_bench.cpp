@@ -2,6 +2,7 @@
 // Baseline in the same process: Bullet 3.24's btSoftBody::cutLink on a 128 x 128 patch, which splits ONE
 // link per call (~0.5 ms each at that size, FIELD_NOTES). Figures are medians of thread CPU time over repetitions,
 // each on a fresh copy of the cloth (the copy is not timed).
+#include "../bench_args.hpp"
 #include "tachi/sim/cloth.hpp"
 #include "tachi/sim/cut_line.hpp"
 #include "tachi/sim/cutting.hpp"
@@ -279,15 +280,24 @@ int main(int argc, char** argv) {
   // sub-steps (the third also the exact section's threads); the fifth the exact section's
   // SolverParams::cut_work_per_step (default: the solver's, 1 since 2026-12-05; the figures measured before
   // it without these arguments are 0's); the sixth the long strokes' (default: the solver's).
-  const int reps = argc > 1 ? std::max(1, std::atoi(argv[1])) : 30;
+  const char* usage =
+      "usage: cut_bench [REPS=30] [REPAIR_PER_STEP=0: the solver's] [THREADS=1] [SUBSTEPS=2] [CUT_WORK_PER_STEP=1] "
+      "[LONG_CUT_WORK_PER_STEP=1]\n(docs/benchmarks.md; e.g. `cut_bench 5 0 2 2`: two threads)\n";
+  tachi::bench::exit_on_help(argc, argv, usage);
+  const auto arg = [&](int i, int min, int max) { return tachi::bench::int_argument(argv[i], "cut_bench", min, max, usage); };
+  if (argc > 7) {
+    std::fprintf(stderr, "cut_bench: at most six arguments\n%s", usage);
+    return 2;
+  }
+  const int reps = argc > 1 ? arg(1, 1, 100000) : 30;
   tachi::sim::SolverParams long_stroke_params;
   // 0: the solver's default (one budget for all pin groups since session 27; 2048 per group before).
-  if (argc > 2 && std::atoi(argv[2]) > 0) long_stroke_params.repair_per_step = std::atoi(argv[2]);
-  if (argc > 3) long_stroke_params.threads = std::clamp(std::atoi(argv[3]), 1, 64);
-  if (argc > 4) long_stroke_params.substeps = std::clamp(std::atoi(argv[4]), 1, 64);
+  if (argc > 2 && arg(2, 0, 1 << 30) > 0) long_stroke_params.repair_per_step = arg(2, 0, 1 << 30);
+  if (argc > 3) long_stroke_params.threads = arg(3, 1, 64);
+  if (argc > 4) long_stroke_params.substeps = arg(4, 1, 64);
   tachi::sim::SolverParams exact_params;
-  if (argc > 5) exact_params.cut_work_per_step = std::max(0, std::atoi(argv[5]));
-  if (argc > 6) long_stroke_params.cut_work_per_step = std::max(0, std::atoi(argv[6]));
+  if (argc > 5) exact_params.cut_work_per_step = arg(5, 0, 1 << 30);
+  if (argc > 6) long_stroke_params.cut_work_per_step = arg(6, 0, 1 << 30);
   exact_params.threads = long_stroke_params.threads;  // the target is for one thread and two
   constexpr int n = 128;
   tachi::sim::ClothConfig config;

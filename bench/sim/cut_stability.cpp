@@ -8,6 +8,7 @@
 // (--blade, --mode: only that blade or mode; --verbose: the pieces and cut length of both runs of each stroke
 // that differs; --keep-strokes: both strokes of each differing pair as CSV in DIR).
 //        cut_stability --blade-table   prints docs/cutting.md's blade table (blade_table(), cut_stability.hpp).
+#include "../bench_args.hpp"
 #include "tachi/sim/cut_stability.hpp"
 
 #include <cmath>
@@ -30,6 +31,9 @@ int main(int argc, char** argv) {
   std::optional<Blade> only_blade;
   std::optional<CutMode> only_mode;
   const auto scratch = std::filesystem::temp_directory_path() / ("cut_stability_" + std::to_string(::getpid()) + ".csv");
+  const char* usage = "usage: cut_stability [--strokes N] [--first-seed S] [--grid G] [--recut] [--blade NAME] "
+                      "[--mode exact|grid|delete] [--verbose] [--keep-strokes DIR]\n       cut_stability --blade-table\n";
+  tachi::bench::exit_on_help(argc, argv, usage);
   if (argc == 2 && std::string{argv[1]} == "--blade-table") {
     std::fputs(blade_table(scratch).c_str(), stdout);
     std::filesystem::remove(scratch);
@@ -38,11 +42,11 @@ int main(int argc, char** argv) {
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--strokes" && i + 1 < argc) {
-      strokes = std::atoi(argv[++i]);
+      strokes = tachi::bench::int_argument(argv[++i], "cut_stability --strokes", 1, 1000000, usage);
     } else if (a == "--first-seed" && i + 1 < argc) {
-      first_seed = std::strtoull(argv[++i], nullptr, 10);
+      first_seed = static_cast<std::uint64_t>(tachi::bench::int_argument(argv[++i], "cut_stability --first-seed", 0, 2147483647, usage));
     } else if (a == "--grid" && i + 1 < argc) {
-      grid = std::atoi(argv[++i]);
+      grid = tachi::bench::int_argument(argv[++i], "cut_stability --grid", 4, 512, usage);
     } else if (a == "--recut") {
       recut = true;
     } else if (a == "--verbose") {
@@ -60,8 +64,7 @@ int main(int argc, char** argv) {
     } else if (a == "--mode" && i + 1 < argc && parse_cut_mode(argv[i + 1])) {
       only_mode = parse_cut_mode(argv[++i]);
     } else {
-      std::fprintf(stderr, "usage: cut_stability [--strokes N] [--first-seed S] [--grid G] [--recut] [--blade NAME] "
-                           "[--mode exact|grid|delete] [--verbose] [--keep-strokes DIR]\n       cut_stability --blade-table\n");
+      std::fprintf(stderr, "cut_stability: unknown or incomplete argument '%s'\n%s", a.c_str(), usage);
       return 2;
     }
   }

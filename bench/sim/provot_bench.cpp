@@ -2,6 +2,7 @@
 // position-based solver on the same grid and material, in one process: cost per step (median, and the
 // ratio to PBD measured alongside), strain and sag after settling, stability over the sub-step count and
 // time step, and what one cut does. Figures and the command: docs/sim.md and docs/benchmarks.md.
+#include "../bench_args.hpp"
 #include "tachi/sim/cloth_solver.hpp"
 #include "tachi/sim/material.hpp"
 #include "tachi/sim/session.hpp"
@@ -69,7 +70,13 @@ const char* verdict(const Run& r) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  const int grid = argc > 1 ? std::atoi(argv[1]) : 64;
+  const char* usage = "usage: provot_bench [GRID=64]   (particles per side, 4..512; docs/sim.md, docs/benchmarks.md)\n";
+  tachi::bench::exit_on_help(argc, argv, usage);
+  if (argc > 2) {
+    std::fprintf(stderr, "provot_bench: one argument at most\n%s", usage);
+    return 2;
+  }
+  const int grid = argc > 1 ? tachi::bench::int_argument(argv[1], "provot_bench", 4, 512, usage) : 64;
   const Material cotton = *material_preset("cotton");
   std::printf("grid %d x %d, 1 m, corners pinned, cotton (docs/sim.md), 3 s of hanging\n\n", grid, grid);
 

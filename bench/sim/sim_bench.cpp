@@ -13,6 +13,7 @@
 //   --variants: also print the solver-design table of docs/sim.md (sub-steps x passes, attachments).
 //   --bullet-bending-helper: give Bullet generateBendingConstraints(2) instead of the same bend links as
 //     ours (more links, slower; needs nodes^2 ints while building: up to 128^2 only).
+#include "../bench_args.hpp"
 #include "tachi/sim/cloth.hpp"
 #include "tachi/sim/solver.hpp"
 
@@ -408,15 +409,18 @@ int main(int argc, char** argv) {
   std::vector<int> thread_counts;
   bool bullet = true;
   int xpbd = 0;
+  const char* usage = "usage: sim_bench [--grids 32,64,128,256] [--warmup 60] [--steps 120] [--variants]\n"
+                      "                 [--bullet-bending-helper] [--threads 1,2 [--no-bullet]] [--xpbd 128]\n";
+  tachi::bench::exit_on_help(argc, argv, usage);
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
     const bool has_value = i + 1 < argc;
     if (arg == "--grids" && has_value) {
       grids = parse_list(argv[++i]);
     } else if (arg == "--warmup" && has_value) {
-      warmup = std::max(0, std::atoi(argv[++i]));
+      warmup = tachi::bench::int_argument(argv[++i], "sim_bench --warmup", 0, 1000000, usage);
     } else if (arg == "--steps" && has_value) {
-      steps = std::max(1, std::atoi(argv[++i]));
+      steps = tachi::bench::int_argument(argv[++i], "sim_bench --steps", 1, 1000000, usage);
     } else if (arg == "--variants") {
       variants = true;
     } else if (arg == "--bullet-bending-helper") {
@@ -437,10 +441,7 @@ int main(int argc, char** argv) {
     } else if (arg == "--xpbd" && has_value) {
       xpbd = std::clamp(std::atoi(argv[++i]), 2, 1024);
     } else {
-      std::fprintf(stderr, "sim_bench: unknown or incomplete argument '%s'\n"
-                           "usage: sim_bench [--grids 32,64,128,256] [--warmup 60] [--steps 120] [--variants]\n"
-                           "                 [--bullet-bending-helper] [--threads 1,2 [--no-bullet]] [--xpbd 128]\n",
-                   arg.c_str());
+      std::fprintf(stderr, "sim_bench: unknown or incomplete argument '%s'\n%s", arg.c_str(), usage);
       return 2;
     }
   }

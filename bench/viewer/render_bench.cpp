@@ -3,6 +3,7 @@
 // window's default size, from the front and from an orbited camera; prints the median frame time and
 // the ratio to a 32 x 32 cloth drawn in the same process (the baseline), so a noisy machine still
 // gives comparable figures. Usage: render_bench [--frames N] [--size PX]
+#include "../bench_args.hpp"
 #include "tachi/viewer/render.hpp"
 
 #include <algorithm>
@@ -51,11 +52,19 @@ double median_ms(const Scene& scene, const View& view, int frames) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  const char* usage = "usage: render_bench [--frames N=40] [--size PIXELS=800]   (N 1..100000, PIXELS 64..4096)\n";
+  tachi::bench::exit_on_help(argc, argv, usage);
   int frames = 40;
   int size = 800;
-  for (int i = 1; i + 1 < argc; i += 2) {
-    if (std::strcmp(argv[i], "--frames") == 0) frames = std::max(1, std::atoi(argv[i + 1]));
-    if (std::strcmp(argv[i], "--size") == 0) size = std::clamp(std::atoi(argv[i + 1]), 64, 4096);
+  for (int i = 1; i < argc; i += 2) {
+    if (i + 1 < argc && std::strcmp(argv[i], "--frames") == 0) {
+      frames = tachi::bench::int_argument(argv[i + 1], "render_bench --frames", 1, 100000, usage);
+    } else if (i + 1 < argc && std::strcmp(argv[i], "--size") == 0) {
+      size = tachi::bench::int_argument(argv[i + 1], "render_bench --size", 64, 4096, usage);
+    } else {
+      std::fprintf(stderr, "render_bench: unknown argument '%s'\n%s", argv[i], usage);
+      return 2;
+    }
   }
   View front;
   front.width = front.height = size;

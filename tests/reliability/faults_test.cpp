@@ -78,6 +78,27 @@ TEST(BadFlags, TheBenchmarksAnswerHelp) {
     EXPECT_EQ(r.exit_code, 0) << exe << r.err;
     EXPECT_NE(r.out.find("Usage"), std::string::npos) << r.out;
   }
+  // The benchmarks with positional numbers (bench/bench_args.hpp): before, `provot_bench --help` read a grid
+  // of 0 and crashed, and `cut_bench --help` ran the benchmark.
+  for (const auto* exe : {"/cut_bench", "/provot_bench", "/render_bench", "/sim_bench", "/cut_stability"}) {
+    const auto r = tachi::test::run({kBin + exe, "--help"}, 20s);
+    EXPECT_EQ(r.exit_code, 0) << exe << r.err;
+    EXPECT_NE(r.out.find("usage: "), std::string::npos) << exe << r.out;
+  }
+  const std::pair<std::vector<std::string>, std::string> wrong[] = {
+      {{kBin + "/provot_bench", "abc"}, "provot_bench: 'abc' is not a whole number in 4..512"},
+      {{kBin + "/provot_bench", "0"}, "provot_bench: '0' is not a whole number"},
+      {{kBin + "/cut_bench", "5", "0", "99"}, "cut_bench: '99' is not a whole number in 1..64"},
+      {{kBin + "/cut_bench", "5x"}, "cut_bench: '5x' is not a whole number"},
+      {{kBin + "/render_bench", "--frames", "-3"}, "render_bench --frames: '-3' is not a whole number"},
+      {{kBin + "/render_bench", "--fps", "30"}, "render_bench: unknown argument '--fps'"},
+      {{kBin + "/sim_bench", "--steps", "many"}, "sim_bench --steps: 'many' is not a whole number"},
+      {{kBin + "/cut_stability", "--grid", "1"}, "cut_stability --grid: '1' is not a whole number in 4..512"}};
+  for (const auto& [argv, message] : wrong) {
+    const auto r = tachi::test::run(argv, 20s);
+    EXPECT_EQ(r.exit_code, 2) << argv[0] << " " << argv[1] << r.out << r.err;
+    EXPECT_NE(r.err.find(message), std::string::npos) << r.err;
+  }
 }
 
 // Sends `signo` to a running child and returns how long it took to exit; the exit code must be 0.

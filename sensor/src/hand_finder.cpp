@@ -192,6 +192,7 @@ struct HandFinder::Impl {
   std::array<std::uint16_t, 2048> foreground_below{};  // raw < this[bg] means foreground
   std::array<std::uint16_t, 2048> band_limit{};        // hand band: raw <= this[nearest raw]
   std::array<std::uint16_t, 2048> front_limit{};       // a candidate's front surface: raw <= this[nearest raw]
+  std::array<float, 2048> surface_step{};              // walk_surface: the largest step between neighbours at a raw reading
   // Per cell: the nearest depth that has stayed put for a while (what "static" means here: the
   // scene at start, furniture, a resting arm), the farthest depth seen (fallback where nothing was
   // stable yet), and the current run of steady readings.
@@ -236,6 +237,10 @@ struct HandFinder::Impl {
       foreground_below[raw] = raw_limit(z > 0 ? z - params.foreground_m : 0.0, false);
       band_limit[raw] = raw_limit(z > 0 ? z + params.hand_depth_band_m : 0.0, true);
       front_limit[raw] = raw_limit(z > 0 ? z + kFrontSurfaceM : 0.0, true);
+      // The Kinect's depth step at this reading (one raw unit, 0.0031 z^2 m: 3 mm at 1 m, 1.5 cm at
+      // 2.2 m); none past the last valid reading.
+      const double quantum = z > 0 && raw < kMaxValidRaw ? model.metres(static_cast<std::uint16_t>(raw + 1)) - z : 0.0;
+      surface_step[raw] = static_cast<float>(std::max(kSurfaceStepM, params.surface_step_quanta * quantum));
     }
   }
 
@@ -286,7 +291,7 @@ struct HandFinder::Impl {
            palm.bulge_min_per_m > params.dome_min_curvature_per_m && palm.bulge_view_cos > params.dome_min_view_cos;
   }
   template <class OnCell, class OnStep>
-  bool walk_surface(cv::Point seed, OnCell&& on_cell, OnStep&& on_step);
+  bool walk_surface(cv::Point seed, OnCell&& on_cell, OnStep&& on_step, bool depth_steps = false);
   static std::size_t grid_index(cv::Point p) { return static_cast<std::size_t>(p.y) * kGridW + static_cast<std::size_t>(p.x); }
   bool reaches_back(cv::Point seed, std::uint16_t near_raw, bool past_nearer = false);
   bool front_touches_border(cv::Point seed, std::uint16_t near_raw, bool two_sided = false);
@@ -1173,12 +1178,14 @@ bool HandFinder::Impl::make_plane_grid(const Roi& roi, const Plane& plane, Plane
 }
 
 /// Breadth-first walk over the surface at grid cell `seed` on the grid: 8-neighbours with a
-/// reading, less than kSurfaceStepM nearer or farther than the cell they are reached from (one
-/// surface: no depth jump). `on_cell(cell, z)` sees each cell taken, in order, and may end the walk
-/// (returns true: the walk returns true); `on_step(z)` decides for each neighbour: kTake, kSkip, or
-/// kAbort (the walk returns false). Shared by reaches_back, is_joint and arm_end.
+/// reading, less than kSurfaceStepM (with `depth_steps`, reaches_back's walk: or
+/// HandFinderParams::surface_step_quanta of the Kinect's depth steps, where coarser) nearer or
+/// farther than the cell they are reached from (one surface: no depth jump). `on_cell(cell, z)`
+/// sees each cell taken, in order, and may end the walk (returns true: the walk returns true);
+/// `on_step(z)` decides for each neighbour: kTake, kSkip, or kAbort (the walk returns false).
+/// Shared by reaches_back, is_joint and arm_end.
 template <class OnCell, class OnStep>
-bool HandFinder::Impl::walk_surface(cv::Point seed, OnCell&& on_cell, OnStep&& on_step) {
+bool HandFinder::Impl::walk_surface(cv::Point seed, OnCell&& on_cell, OnStep&& on_step, bool depth_steps) {
   if (++visit_generation == 0) {
     std::fill(visited.begin(), visited.end(), 0u);
     visit_generation = 1;
@@ -1197,7 +1204,8 @@ bool HandFinder::Impl::walk_surface(cv::Point seed, OnCell&& on_cell, OnStep&& o
         const std::uint16_t d = grid.at<std::uint16_t>(n);
         if (d >= kNoReading) continue;
         const float zn = model.metres(d);
-        if (zn <= 0 || std::abs(zn - zc) > static_cast<float>(kSurfaceStepM)) continue;
+        const float max_step = depth_steps ? surface_step[std::max(d, grid.at<std::uint16_t>(c))] : static_cast<float>(kSurfaceStepM);
+        if (zn <= 0 || std::abs(zn - zc) > max_step) continue;
         const Step step = on_step(zn);
         if (step == Step::kAbort) return false;
         if (step == Step::kSkip) continue;
@@ -1221,7 +1229,7 @@ bool HandFinder::Impl::reaches_back(cv::Point seed, std::uint16_t near_raw, bool
       seed, [&](cv::Point, float zc) { return zc >= goal; },
       // The surface goes on toward the sensor: a limb's middle, not its end.
       // `past_nearer`: a hand at an arm's geodesic end, whose forearm runs on nearer (an elbow).
-      [&](float zn) { return zn < nearer_floor && !past_nearer ? Step::kAbort : Step::kTake; });
+      [&](float zn) { return zn < nearer_floor && !past_nearer ? Step::kAbort : Step::kTake; }, true);
 }
 
 /// Whether the candidate at grid cell `seed` (nearest reading `near_raw`) is a limb's joint rather

@@ -128,6 +128,16 @@ struct HandFinderParams {
   /// around its own nearest reading: for a followed and a new track from the foreground alike; the
   /// search without a background asks is_joint first. Negative: the nearest reading is the hand.
   double arm_end_window_m = 0.2;
+  /// The arm's-end test (arm_protrusion_m, far_arm_protrusion_m) walks one surface on the grid,
+  /// stepping between neighbouring cells by at most 3 cm, or by this many of the Kinect's depth
+  /// steps where those are coarser. One raw unit of disparity is 0.0031 z^2 m (3 mm at 1 m, 1 cm at
+  /// 1.8 m, 1.5 cm at 2.2 m), and two readings of one surface differ by their slope's step plus up
+  /// to a unit of rounding and 0.3-0.85 units of noise: at 2.2 m a forearm running back from the
+  /// hand (1.5 cm between cells) read in steps of 3 cm and more, and a far user's raised hand was
+  /// refused as no arm's end (tuning seed 6: 20 frames). 3 units is 3 cm at 1.8 m: nearer, nothing
+  /// changes. Not for the joint and geodesic walks: with it there, the geodesic end of a far arm
+  /// moved onto the body (seed 321: a new track 28 cm from the hand). <= 0: 3 cm at every depth.
+  double surface_step_quanta = 3.0;
   /// A followed track that is no arm's end (the surface does not run back arm_protrusion_m from
   /// it: a second person's head) gives way to a nearer foreground component that is one and passes
   /// a new track's tests.

@@ -18,7 +18,7 @@ namespace tachi::test {
 /// the cloth moves while it is cut. A few milliseconds of delivery or scheduling move a point that lies near a
 /// cell's edge across it: two runs of straight_cut on a loaded machine, their strokes identical, ended one
 /// cell apart (20 and 21 points) in 1 of 10 pairs (2026-12-06), as a clean and a 10 %-loss run did in CI.
-/// A line that lost or gained more than its last cell, or moved a row, still fails.
+/// A line that lost or gained more than its last cell, or moved by more than a cell, still fails.
 inline ::testing::AssertionResult cut_lines_agree_within_a_cell(const nlohmann::json& a_summary,
                                                                 const nlohmann::json& b_summary) {
   const auto points = [](const nlohmann::json& summary) {

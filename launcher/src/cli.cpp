@@ -4,6 +4,8 @@
 #include "tachi/common/app.hpp"
 #include "tachi/launcher/config.hpp"
 
+#include <fmt/format.h>
+
 #include <iostream>
 #include <utility>
 
@@ -18,6 +20,9 @@ int parse_command(int argc, char** argv, Command& c) {
   common::add_log_level_flag(app, log_level);
 
   RunFlags& f = c.run;
+  // The defaults the help shows are the config's own (a flag unset leaves the config's value), so they cannot
+  // drift from what a run uses: --print-config shows the same.
+  const RunConfig defaults;
   auto* run = app.add_subcommand("run", "Start the pipeline (sensor, filter, sim, viewer; voice with a voice source) and supervise it");
   run->add_option("--config", f.config_file, "JSON file with any of the options below (flags override it)")->check(CLI::ExistingFile);
   run->add_flag("--print-config", f.print_config, "Print the effective config (defaults, --config, flags) as JSON and exit");
@@ -25,23 +30,27 @@ int parse_command(int argc, char** argv, Command& c) {
   run->add_flag("--live", f.live, "Use the live Kinect (the default without --recording)")->excludes(rec);
   run->add_flag("--mouse", f.mouse, "Cut with the mouse in the viewer's window (seed 001's blade): sim and viewer only")
       ->excludes(rec);
-  run->add_option("--rate", f.rate, "Recording pace: real (=1, the default), max or a factor (tachi-sensor --rate)");
-  run->add_option("--gate", f.gate, "What opens a stroke (default threshold; voice and either need --voice-wav or --voice-device)")
-      ->check(CLI::IsMember({"threshold", "voice", "either"}));
+  run->add_option("--rate", f.rate, "Recording pace: real (=1), max or a factor (tachi-sensor --rate)")->default_str(defaults.rate);
+  run->add_option("--gate", f.gate, "What opens a stroke (voice and either need --voice-wav or --voice-device)")
+      ->check(CLI::IsMember({"threshold", "voice", "either"}))
+      ->default_str(defaults.gate);
   auto* wav = run->add_option("--voice-wav", f.voice_wav, "Voice commands from a WAV file (starts tachi-voice)")->check(CLI::ExistingFile);
   run->add_option("--voice-device", f.voice_device, "Voice commands from an ALSA capture device (starts tachi-voice)")->excludes(wav);
   run->add_option("--blade", f.blade,
                   "tachi-sim --blade (razor, scalpel, utility, kitchen, hunting, worn; default: the simulator's, scalpel)");
-  run->add_option("--grid", f.grid, "Cloth particles per side (default 64)")->check(CLI::Range(2, 1024));
-  run->add_option("--domain", f.domain, "DDS domain id of this pipeline (default 0)")->check(CLI::Range(0u, 232u));
+  run->add_option("--grid", f.grid, "Cloth particles per side")->check(CLI::Range(2, 1024))->default_str(std::to_string(defaults.grid));
+  run->add_option("--domain", f.domain, "DDS domain id of this pipeline")
+      ->check(CLI::Range(0u, 232u))
+      ->default_str(std::to_string(defaults.domain));
   run->add_option("--dds-config", f.dds_config, "Cyclone DDS XML for every node (default: loopback only)")->check(CLI::ExistingFile);
   run->add_option("--lossy", f.lossy,
                   "Test a lossy link: every node drops PERMILLE of 1000 packets it sends (Cyclone's transmit loss), "
-                  "with retransmission timing for such a link (default 0)")
-      ->check(CLI::Range(0, kMaxLossyPermille));
+                  "with retransmission timing for such a link")
+      ->check(CLI::Range(0, kMaxLossyPermille))
+      ->default_str(std::to_string(defaults.lossy_permille));
   run->add_option("--secure", f.secure, "DDS Security folder (scripts/make_test_pki.sh) for every node; each uses its own identity")
       ->check(CLI::ExistingDirectory);
-  run->add_option("--out", f.out, "Output folder (summary.json, cloth.obj, plots, logs); default out/run");
+  run->add_option("--out", f.out, "Output folder (summary.json, cloth.obj, plots, logs)")->default_str(defaults.out);
   run->add_flag("--headless,!--window", f.headless, "Viewer without a window (default when DISPLAY is unset)");
   run->add_flag("--in-process", f.in_process,
                 "The nodes in one process (tachi-pipeline), each on its own thread and participant, as ROS 2 composes "
@@ -49,8 +58,9 @@ int parse_command(int argc, char** argv, Command& c) {
   run->add_option("--nodes", f.nodes,
                   "Start only these nodes, e.g. sensor,filter (the other host runs sim,viewer); default sensor,filter,sim,viewer "
                   "(sim,viewer with --mouse), and voice with a voice source");
-  run->add_option("--settle", f.settle_s, "With a recording: end this many seconds after the last hand sample (default 2)")
-      ->check(CLI::Range(0.1, 60.0));
+  run->add_option("--settle", f.settle_s, "With a recording: end this many seconds after the last hand sample")
+      ->check(CLI::Range(0.1, 60.0))
+      ->default_str(fmt::format("{:g}", defaults.settle_s));
   run->add_option("--run-id", f.run_id, "DDS partition of this run's nodes (default: a fresh one; none with --nodes)");
   run->add_option("--set", f.sets, "NODE.FLAG=VALUE passed to one node, e.g. sim.material=denim (repeatable)");
   auto* record_flag = run->add_flag("--record", f.record, "Record the run's whole bus into <out>/run.mcap (as `tachi record`)");

@@ -1195,7 +1195,8 @@ bool HandFinder::Impl::walk_surface(cv::Point seed, OnCell&& on_cell, OnStep&& o
   queue.push_back(seed);
   for (std::size_t head = 0; head < queue.size(); ++head) {
     const cv::Point c = queue[head];
-    const float zc = model.metres(grid.at<std::uint16_t>(c));
+    const std::uint16_t raw_c = grid.at<std::uint16_t>(c);
+    const float zc = model.metres(raw_c);
     if (on_cell(c, zc)) return true;
     for (int dy = -1; dy <= 1; ++dy)
       for (int dx = -1; dx <= 1; ++dx) {
@@ -1204,7 +1205,8 @@ bool HandFinder::Impl::walk_surface(cv::Point seed, OnCell&& on_cell, OnStep&& o
         const std::uint16_t d = grid.at<std::uint16_t>(n);
         if (d >= kNoReading) continue;
         const float zn = model.metres(d);
-        const float max_step = depth_steps ? surface_step[std::max(d, grid.at<std::uint16_t>(c))] : static_cast<float>(kSurfaceStepM);
+        // The farther reading's depth step: the coarser of the two.
+        const float max_step = depth_steps ? surface_step[std::max(d, raw_c)] : static_cast<float>(kSurfaceStepM);
         if (zn <= 0 || std::abs(zn - zc) > max_step) continue;
         const Step step = on_step(zn);
         if (step == Step::kAbort) return false;

@@ -6,7 +6,8 @@
 // Usage: cut_stability [--strokes N] [--first-seed S] [--grid G] [--recut] [--blade B] [--mode M] [--verbose]
 //                      [--keep-strokes DIR]   (defaults: 500 strokes from seed 1000, grid 32)
 // (--blade, --mode: only that blade or mode; --verbose: the pieces and cut length of both runs of each stroke
-// that differs; --keep-strokes: both strokes of each differing pair as CSV in DIR).
+// that differs; --keep-strokes: both strokes of each differing pair as CSV in DIR, and in SEED_BLADE_MODE.txt the
+// two tachi-sim runs that cut them the same way, run from DIR).
 //        cut_stability --blade-table   prints docs/cutting.md's blade table (blade_table(), cut_stability.hpp).
 #include "../bench_args.hpp"
 #include "tachi/sim/cut_stability.hpp"
@@ -94,11 +95,27 @@ int main(int argc, char** argv) {
         worst = std::max(worst, diff);
         const bool differs = a.pieces != b.pieces || (!recut && diff > 0.01);
         if (differs && !keep.empty()) {
-          // Both strokes, to run again through `tachi-sim --offline --stroke FILE --blade B --cut-mode M`.
+          // Both strokes, and the two tachi-sim runs that cut them as cut_outcome did (its cloth, steps and one
+          // thread: tachi-sim's default threads differ by machine, and so would the positions).
           const std::string stem = "seed" + std::to_string(seed) + "_" + std::string{to_string(blade)} + "_" +
                                    std::string{to_string(mode)};
+          const std::string other_stem = stem + (recut ? "_recut" : "_perturbed");
           write_stroke_csv(stroke, keep / (stem + "_once.csv"));
-          write_stroke_csv(other, keep / (stem + (recut ? "_recut.csv" : "_perturbed.csv")));
+          write_stroke_csv(other, keep / (other_stem + ".csv"));
+          if (std::FILE* f = std::fopen((keep / (stem + ".txt")).c_str(), "w")) {
+            const auto command = [&](const std::vector<StrokeSample>& s, const std::string& name) {
+              std::fprintf(f, "tachi-sim --offline --grid %d --pin top-edge --threads 1 --steps %d --blade %s --cut-mode %s "
+                              "--stroke %s.csv --export %s\n",
+                           grid, offline_steps(s), std::string{to_string(blade)}.c_str(),
+                           std::string{to_string(mode)}.c_str(), name.c_str(), name.c_str());
+            };
+            command(stroke, stem + "_once");
+            command(other, other_stem);
+            std::fprintf(f, "# cut_stability: %zu pieces %.4f m once, %zu pieces %.4f m %s (summary.json: pieces, "
+                            "cut_length_m)\n",
+                         a.pieces, a.cut_length_m, b.pieces, b.cut_length_m, recut ? "there, back and there" : "moved by 1e-6 m");
+            std::fclose(f);
+          }
         }
         if (verbose && differs) {
           std::printf("seed %llu: %zu pieces %.4f m / %zu pieces %.4f m\n", static_cast<unsigned long long>(seed),

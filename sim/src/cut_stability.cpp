@@ -75,6 +75,10 @@ void write_stroke_csv(const std::vector<StrokeSample>& stroke, const std::filesy
   if (!out) throw std::runtime_error("cannot write " + file.string());
 }
 
+int offline_steps(const std::vector<StrokeSample>& stroke) {
+  return stroke.empty() ? 0 : static_cast<int>(std::ceil((stroke.back().t + 0.5) * 60.0));
+}
+
 CutOutcome cut_outcome(const std::vector<StrokeSample>& stroke, Blade blade, CutMode mode, int grid,
                        const std::filesystem::path& scratch) {
   write_stroke_csv(stroke, scratch);
@@ -84,7 +88,7 @@ CutOutcome cut_outcome(const std::vector<StrokeSample>& stroke, Blade blade, Cut
   o.blade = blade;
   o.cut_mode = mode;
   o.stroke_file = scratch;
-  o.steps = stroke.empty() ? 0 : static_cast<int>(std::ceil((stroke.back().t + 0.5) * 60.0));
+  o.steps = offline_steps(stroke);
   const Summary s = run_offline(o);
   return {s.pieces, s.extra.at("cut_length_m").get<double>(), s.extra.at("stroke_outliers").get<std::size_t>()};
 }

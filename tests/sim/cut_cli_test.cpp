@@ -6,6 +6,10 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <sstream>
+#include <vector>
 #include <chrono>
 #include <filesystem>
 #include <fstream>
@@ -311,6 +315,57 @@ TEST_F(CutCli, BadRowsAreSkippedAndCounted) {
   const auto j = nlohmann::json::parse(in);
   EXPECT_EQ(j.at("stroke_rows_skipped").get<int>(), 1);
   EXPECT_EQ(j.at("pieces").get<int>(), 2);
+}
+
+// cut_stability --keep-strokes (bench/sim/cut_stability.cpp) keeps each pair of strokes that cut differently,
+// with the two tachi-sim runs that cut them as it did: what a user runs to look at a flip. Run from the
+// folder, they must give the pieces and cut lengths cut_stability reported.
+TEST_F(CutCli, CutStabilitysKeptStrokesCutTheSameThroughTachiSim) {
+  const fs::path keep = dir_ / "keep";
+  const auto r = tachi::test::run({tachi::test::executable("cut_stability"), "--strokes", "40", "--first-seed", "1",
+                                   "--recut", "--blade", "razor", "--mode", "exact", "--keep-strokes", keep.string()},
+                                  300s);
+  ASSERT_EQ(r.exit_code, 1) << r.out << r.err;  // some of them cut differently gone over again
+  std::vector<fs::path> notes;
+  for (const auto& entry : fs::directory_iterator(keep)) {
+    if (entry.path().extension() == ".txt") notes.push_back(entry.path());
+  }
+  // 6 of these 40 strokes cut differently when this was written; if none does, the re-cut target may be met
+  // here: take a range that still differs, or drop this test with the target.
+  ASSERT_FALSE(notes.empty()) << r.out;
+  std::sort(notes.begin(), notes.end());
+  std::ifstream note{notes.front()};
+  std::vector<std::string> commands(2);
+  std::string said;
+  ASSERT_TRUE(std::getline(note, commands[0]) && std::getline(note, commands[1]) && std::getline(note, said))
+      << notes.front();
+  std::size_t pieces[2] = {};
+  double lengths[2] = {};
+  ASSERT_EQ(std::sscanf(said.c_str(), "# cut_stability: %zu pieces %lf m once, %zu pieces %lf m", &pieces[0],
+                        &lengths[0], &pieces[1], &lengths[1]),
+            4)
+      << said;
+  for (std::size_t k = 0; k < 2; ++k) {
+    std::istringstream words{commands[k]};
+    std::vector<std::string> argv;
+    std::string export_dir;
+    for (std::string w; words >> w;) {
+      if (argv.empty()) {
+        ASSERT_EQ(w, "tachi-sim") << commands[k];
+        w = tachi::test::executable("tachi-sim");
+      } else if (argv.back() == "--stroke" || argv.back() == "--export") {
+        w = (keep / w).string();  // the note's paths are the folder's
+        if (argv.back() == "--export") export_dir = w;
+      }
+      argv.push_back(w);
+    }
+    const auto sim = tachi::test::run(argv, 120s);
+    ASSERT_EQ(sim.exit_code, 0) << commands[k] << "\n" << sim.err;
+    const auto summary = nlohmann::json::parse(std::ifstream{fs::path{export_dir} / "summary.json"});
+    EXPECT_EQ(summary.at("pieces").get<std::size_t>(), pieces[k]) << commands[k];
+    EXPECT_NEAR(summary.at("cut_length_m").get<double>(), lengths[k], 1e-4) << commands[k];
+  }
+  EXPECT_TRUE(pieces[0] != pieces[1] || std::abs(lengths[0] - lengths[1]) > 0.01 * lengths[0]) << said;
 }
 
 }  // namespace

@@ -36,6 +36,9 @@ struct CutOutcome {
   std::size_t outliers = 0;
 };
 
+/// The 1/60 s steps cut_outcome simulates for a stroke: its duration + 0.5 s.
+[[nodiscard]] int offline_steps(const std::vector<StrokeSample>& stroke);
+
 /// run_offline on a top-pinned cloth of `grid` x `grid` with this stroke (written to `scratch`), blade and
 /// mode, for the stroke's duration + 0.5 s.
 [[nodiscard]] CutOutcome cut_outcome(const std::vector<StrokeSample>& stroke, Blade blade, CutMode mode, int grid,

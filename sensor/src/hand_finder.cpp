@@ -229,6 +229,10 @@ struct HandFinder::Impl {
   int frames_since_seen = 1 << 20;
   Eigen::Vector3d last_step = Eigen::Vector3d::Zero();  // last_seen less the palm a frame before it
   bool step_known = false;                               // the palm was found in two frames running
+  // The last palm that kept its course (found a third frame running within max_off_course_m of where
+  // its step carried it): the jump test's reference while the hand is lost (jump_from_kept_course).
+  Eigen::Vector3d last_on_course = Eigen::Vector3d::Zero();
+  int frames_since_on_course = 1 << 20;
   bool continued_in_background = false;  // this frame (find clears it): find_arm_end found the last frame's hand where it was, or its step carried it
 
   Impl(const DepthModel& m, const HandFinderParams& p) : model(m), params(p) {
@@ -478,6 +482,7 @@ void HandFinder::reset() {
   impl_->first_frame = true;
   impl_->tracking = false;
   impl_->frames_since_seen = 1 << 20;
+  impl_->frames_since_on_course = 1 << 20;
   impl_->step_known = false;
 }
 
@@ -1566,10 +1571,19 @@ bool HandFinder::Impl::arm_end_candidate(std::span<const std::uint16_t> raw, cv:
 }
 
 /// Continuity: a hand that has just left (across an edge, say) does not reappear far away at
-/// once; what does is another part of the arm.
+/// once; what does is another part of the arm. A frame after a palm, it is measured from that palm
+/// (a hand does not leap max_jump_m in a frame). Later, with jump_from_kept_course, from the last
+/// palm that kept its course, and a glimpse since (a palm that never did: a one- or two-frame
+/// track) only widens what is let through: it does not hold the hand away. A glimpse is the hand
+/// seen once while it moves fast, then lost to other tests while it moves on (tuning seeds 4, 118),
+/// or something else taken for a frame or two (seeds 14, 139, 196: 18-32 cm from the hand); measured
+/// from it, the hand was refused until reacquire_frames had passed (12-15 frames each).
 bool HandFinder::Impl::jumped(const Palm& palm) const {
   if (frames_since_seen == 0 || frames_since_seen > params.reacquire_frames) return false;
-  return (model.back_project(palm.u, palm.v, palm.z) - last_seen).norm() > params.max_jump_m;
+  const Eigen::Vector3d at = model.back_project(palm.u, palm.v, palm.z);
+  const bool far_from_last = (at - last_seen).norm() > params.max_jump_m;
+  if (!params.jump_from_kept_course || frames_since_seen == 1 || frames_since_on_course == frames_since_seen) return far_from_last;
+  return far_from_last && frames_since_on_course <= params.reacquire_frames && (at - last_on_course).norm() > params.max_jump_m;
 }
 
 /// A followed palm found in the last two frames is where its last step carries it, within
@@ -1660,6 +1674,7 @@ bool HandFinder::Impl::follow_component(std::span<const std::uint16_t> raw, int 
 HandObservation HandFinder::Impl::find(std::span<const std::uint16_t> raw) {
   HandObservation out;
   if (frames_since_seen < (1 << 20)) ++frames_since_seen;
+  if (frames_since_on_course < (1 << 20)) ++frames_since_on_course;
   if (raw.size() != static_cast<std::size_t>(kDepthPixels)) return out;
 
   // 1. Grid sample; foreground = nearer than the background by foreground_m.
@@ -1761,6 +1776,12 @@ HandObservation HandFinder::Impl::find(std::span<const std::uint16_t> raw) {
   if (!found) return out;
 
   const Eigen::Vector3d p = model.back_project(palm.u, palm.v, palm.z);
+  // Kept its course: found as the same hand a third frame running, where off_course (or, within the
+  // background, still_hand_m) held it to its step.
+  if ((followed || continued_in_background) && step_known && frames_since_seen == 1) {
+    last_on_course = p;
+    frames_since_on_course = 0;
+  }
   // A new track's step would be a jump between two things; a hand found where it was (or where its
   // step carried it) within the background is the same hand.
   step_known = (followed || continued_in_background) && frames_since_seen == 1;

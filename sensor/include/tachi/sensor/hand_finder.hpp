@@ -60,6 +60,12 @@ struct HandFinderParams {
   int invalid_left_columns = 8;     ///< Kinect's band without readings at the left edge
   double max_jump_m = 0.2;          ///< a hand lost this many frames ago does not reappear farther away...
   int reacquire_frames = 15;        ///< ... within this many frames (0.5 s at 30 Hz)
+  /// ... farther from the last palm that kept its course (found a third frame running on its step,
+  /// max_off_course_m): a glimpse since (a one- or two-frame track: the hand seen once while it moves
+  /// fast, or an arm or a body taken for a frame) does not hold the hand away, it only lets through
+  /// what lies within max_jump_m of it too; with no such palm within reacquire_frames, no test. A
+  /// frame after a palm, the test is from that palm still. false: from the last palm, whatever it was.
+  bool jump_from_kept_course = true;
   /// A followed palm found in the last two frames must lie within this of where its last step
   /// carries it (constant velocity, one frame on): the hand's acceleration moves it ~1 cm off that
   /// at 30 Hz, a palm measured on the arm behind it 10-30 cm (max_jump_m let those through:

@@ -1582,7 +1582,9 @@ bool HandFinder::Impl::jumped(const Palm& palm) const {
   if (frames_since_seen == 0 || frames_since_seen > params.reacquire_frames) return false;
   const Eigen::Vector3d at = model.back_project(palm.u, palm.v, palm.z);
   const bool far_from_last = (at - last_seen).norm() > params.max_jump_m;
-  if (!params.jump_from_kept_course || frames_since_seen == 1 || frames_since_on_course == frames_since_seen) return far_from_last;
+  if (!params.jump_from_kept_course || frames_since_seen == 1 || frames_since_on_course == frames_since_seen) {
+    return far_from_last;
+  }
   return far_from_last && frames_since_on_course <= params.reacquire_frames && (at - last_on_course).norm() > params.max_jump_m;
 }
 

@@ -330,7 +330,8 @@ TEST(RandomScene, AHeadWithShouldersBeneathItIsNotTakenForAHand) {
 // away. Tuning seed 4: the hand, raised fast (15 cm a frame), is seen once at frame 33, then refused by
 // other tests for a frame and measured from there, 20 cm behind it, for the next 14 frames. Seed 139: the
 // hand is taken as a new track, then measured 18 cm off on the next frame (no course known yet), and the
-// hand itself was refused from there for 15 frames. With the test from the last palm, both are lost again.
+// hand itself was refused from there for 15 frames. Measured from the last palm whatever it was
+// (jump_from_kept_course false), both lose those frames again.
 TEST(RandomScene, AGlimpseOfTheHandDoesNotHoldItAwayAfterwards) {
   HandFinderParams from_last_palm;
   from_last_palm.jump_from_kept_course = false;

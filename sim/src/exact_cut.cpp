@@ -642,7 +642,19 @@ void ExactCutter::add_bends(std::uint32_t p, TopologyChange& change) {
         const double s2 = cross2(uv(b) - uv(a), uv(far2) - uv(a));
         const double s3 = cross2(uv(far2) - uv(far), uv(a) - uv(far));
         const double s4 = cross2(uv(far2) - uv(far), uv(b) - uv(far));
-        if (!(s1 * s2 < 0.0 && s3 * s4 < 0.0) || (uv(far2) - uv(far)).norm() < kMinBendCells) continue;
+        const double bend_cells = (uv(far2) - uv(far)).norm();
+        // An end of the shared edge on the bend's line is on neither side: the two triangles are flat along a
+        // straight line through it and the bend would run along their outer edges (springs already), not inside
+        // them. Where that line is a grid row s3 or s4 is exactly 0 and no bend was ever added; along a straight
+        // cut the new particles of a segment lie on one line only up to the rounding of their float rest
+        // coordinates, so between two of them across the edge at a third the sign was rounding noise, and a
+        // stroke moved by 1e-6 m put a bend along the cut on the other lip (docs/cutting.md, "The bend along a
+        // straight cut"). So "on the line" is within kTouchCells, the removal's "touching" above.
+        const double on_line = kTouchCells * bend_cells;
+        if (!(s1 * s2 < 0.0 && s3 * s4 < 0.0) || std::min(std::abs(s3), std::abs(s4)) <= on_line ||
+            bend_cells < kMinBendCells) {
+          continue;
+        }
         bend_there = true;
         // A spring far-far2 is in both ends' lists: the shorter one is searched.
         const bool from_far = cloth.springs_of(far).size() <= cloth.springs_of(far2).size();

@@ -316,6 +316,56 @@ std::size_t live_triangles(const Cloth& cloth) {
   return static_cast<std::size_t>(std::count(cloth.triangle_alive.begin(), cloth.triangle_alive.end(), 1));
 }
 
+// The bend along a straight cut (docs/cutting.md, "The bend along a straight cut"): the new particles of a straight
+// exact cut lie on one line, so two of them across the edge at a third make a flat pair of triangles, and whether a
+// bend joined them (on one lip or the other) was the sign of a rounding error: a stroke moved by 1e-6 m put it on
+// the other lip. A bend across a shared edge with an end on the bend's line runs along the triangles' outer edges,
+// not inside them: none lies along the cut now, whatever the stroke's angle.
+TEST(StrokeCutter, NoBendLiesAlongAStraightCut) {
+  constexpr int n = 33;
+  std::size_t along_in_all = 0;
+  for (int k = 0; k < 24; ++k) {
+    SCOPED_TRACE("stroke " + std::to_string(k));
+    Cloth cloth = flat_cloth(n, PinMode::None);
+    StrokeOptions options;
+    options.mode = CutMode::Exact;
+    StrokeCutter cutter{cloth, options};
+    // Across the cloth from beyond its left edge to beyond its right one, at slopes from -0.6 to 0.55.
+    const double slope = -0.6 + 0.05 * k;
+    const Eigen::Vector2d from{-2.0, 16.0 - 18.0 * slope + 0.37};
+    const Eigen::Vector2d to{34.0, 16.0 + 18.0 * slope + 0.37};
+    stroke_through(cutter, n, {from, to}, 0.3);
+    ASSERT_GT(cutter.total().cut_length_m, 0.0F);
+    const Eigen::Vector2d dir = (to - from).normalized();
+    const auto off_line = [&](std::uint32_t p) {
+      const Eigen::Vector2d r = cloth.rest_uv[p].cast<double>() - from;
+      return std::abs(r.x() * dir.y() - r.y() * dir.x());
+    };
+    // A bend along the cut: both ends on the stroke's line and a particle of the cut in between, on the bend (a
+    // bend may pass a cut particle that the sampling left a few hundredths of a cell off the line; that one
+    // stays inside its two triangles and no rounding flips it).
+    std::vector<std::uint32_t> on_cut;
+    for (std::uint32_t p = 0; p < cloth.particle_count(); ++p) {
+      if (off_line(p) < 1e-3) on_cut.push_back(p);
+    }
+    std::size_t along = 0;
+    for (std::uint32_t s = 0; s < cloth.spring_count(); ++s) {
+      if (cloth.alive[s] == 0 || cloth.kind[s] != SpringKind::Bend) continue;
+      const Eigen::Vector2d a = cloth.rest_uv[cloth.spring_a[s]].cast<double>();
+      const Eigen::Vector2d b = cloth.rest_uv[cloth.spring_b[s]].cast<double>();
+      if (off_line(cloth.spring_a[s]) >= 1e-3 || off_line(cloth.spring_b[s]) >= 1e-3) continue;
+      along += std::any_of(on_cut.begin(), on_cut.end(), [&](std::uint32_t q) {
+        const Eigen::Vector2d x = cloth.rest_uv[q].cast<double>();
+        const double along_bend = (x - a).dot(b - a) / (b - a).squaredNorm();
+        return along_bend > 1e-3 && along_bend < 1.0 - 1e-3 && (a + along_bend * (b - a) - x).norm() < 1e-4;
+      }) ? 1U : 0U;
+    }
+    EXPECT_EQ(along, 0U);
+    along_in_all += along;
+  }
+  EXPECT_EQ(along_in_all, 0U);
+}
+
 // Going over a cut again (docs/cutting.md, "Cuts that do not flip"): random curved strokes on a cloth
 // that does not move, cut once, then gone over backwards and forwards again a few hundredths of a cell
 // beside the first (within a tenth of a cell): no particle, no triangle, no piece more, in every mode.

@@ -351,8 +351,8 @@ TEST(RandomScene, AGlimpseOfTheHandDoesNotHoldItAwayAfterwards) {
   }
 }
 
-// The border-cut test against the hand's own palm (own_palm_shrink_m): a followed palm turned 20-25 degrees
-// from the line of sight holds a 3.7-3.9 cm circle, under the fixed whole palm's 3.9 cm, and with its fingers
+// The border-cut test against the hand's own palm (own_palm_shrink_m): a followed palm turned 15-30 degrees
+// from the line of sight holds a 3.6-3.9 cm circle, under the fixed whole palm's 3.9 cm, and with its fingers
 // or wrist across the image border it was refused as cut though its circle was within 2 cm of the truth.
 // Tuning seed 241: 93 of 111 visible frames tracked, 108 with the test; seed 188: 109 of 116, all with it.
 TEST(RandomScene, AFollowedPalmAsLargeAsItsOwnIsNotCutByTheBorder) {

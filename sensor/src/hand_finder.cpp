@@ -233,6 +233,9 @@ struct HandFinder::Impl {
   // its step carried it): the jump test's reference while the hand is lost (jump_from_kept_course).
   Eigen::Vector3d last_on_course = Eigen::Vector3d::Zero();
   int frames_since_on_course = 1 << 20;
+  // The largest circle of the palm this track has reported (own_palm_shrink_m): what the hand's whole
+  // palm holds at its turn, for the border-cut test of a followed palm.
+  double own_palm_radius_m = 0;
   bool continued_in_background = false;  // this frame (find clears it): find_arm_end found the last frame's hand where it was, or its step carried it
 
   Impl(const DepthModel& m, const HandFinderParams& p) : model(m), params(p) {
@@ -483,6 +486,7 @@ void HandFinder::reset() {
   impl_->tracking = false;
   impl_->frames_since_seen = 1 << 20;
   impl_->frames_since_on_course = 1 << 20;
+  impl_->own_palm_radius_m = 0;
   impl_->step_known = false;
 }
 
@@ -1658,6 +1662,14 @@ bool HandFinder::Impl::follow_component(std::span<const std::uint16_t> raw, int 
     // out of the image beyond a hand's reach of the palm (front_in_view_beyond_hand). Fingers cut by the
     // border are within that reach (seed 10, a user at 0.67 m); find_arm_end refuses any front surface
     // at the border, where there is no background to go by.
+    // Cut by the border, measured against the hand's own palm (own_palm_shrink_m): a followed palm whose
+    // circle is as large as the track's largest, within the tolerance, is whole, its fingers or wrist
+    // across the border; what the border cuts off a palm takes its circle down more than that. A new
+    // track has no palm of its own yet: the fixed size (whole_palm_radius_m) alone, so the end of an arm
+    // the border cuts does not start one.
+    if (continuing && palm.cut_by_border && params.own_palm_shrink_m > 0 &&
+        palm.radius_m >= own_palm_radius_m - params.own_palm_shrink_m)
+      palm.cut_by_border = false;
     const bool jump = !take_over && (jumped(palm) || (continuing && off_course(palm)));
     const bool found =
         palm_accepted(palm) && !jump &&
@@ -1787,6 +1799,7 @@ HandObservation HandFinder::Impl::find(std::span<const std::uint16_t> raw) {
   // A new track's step would be a jump between two things; a hand found where it was (or where its
   // step carried it) within the background is the same hand.
   step_known = (followed || continued_in_background) && frames_since_seen == 1;
+  own_palm_radius_m = followed || continued_in_background ? std::max(own_palm_radius_m, palm.radius_m) : palm.radius_m;
   last_step = p - last_seen;
   last_seen = p;
   last_seen_cell = {static_cast<int>(palm.u) / kStep, static_cast<int>(palm.v) / kStep};

@@ -83,6 +83,13 @@ struct HandFinderParams {
   /// The circle a whole palm holds: >= 3.95 cm in every visible frame of the bundled recordings;
   /// the remains of a cut palm 1.1-3.8 cm.
   double whole_palm_radius_m = 0.039;
+  /// A followed palm is measured against its own hand too: its circle within this of the largest one the
+  /// track has reported is the whole palm, even below whole_palm_radius_m. A palm turned 15-30 degrees from
+  /// the line of sight holds a 3.6-3.9 cm circle, and with its fingers or its wrist across the border it
+  /// was refused as cut (tuning seeds 1-300: 144 visible frames, the circle within 2 cm of the truth); the
+  /// border takes a palm's circle down more (the remains measured 0.9-3.4 cm, 6 of 47 3.5-3.8 cm). <= 0:
+  /// the fixed size alone.
+  double own_palm_shrink_m = 0.002;
   /// A new track starts only on a hand nearer than this: the user cuts at ~1 m in front of a body at
   /// ~1.45 m; a person walking by behind is not followed.
   double max_acquire_depth_m = 1.8;

@@ -1668,8 +1668,9 @@ bool HandFinder::Impl::follow_component(std::span<const std::uint16_t> raw, int 
     // track has no palm of its own yet: the fixed size (whole_palm_radius_m) alone, so the end of an arm
     // the border cuts does not start one.
     if (continuing && palm.cut_by_border && params.own_palm_shrink_m > 0 &&
-        palm.radius_m >= own_palm_radius_m - params.own_palm_shrink_m)
+        palm.radius_m >= own_palm_radius_m - params.own_palm_shrink_m) {
       palm.cut_by_border = false;
+    }
     const bool jump = !take_over && (jumped(palm) || (continuing && off_course(palm)));
     const bool found =
         palm_accepted(palm) && !jump &&

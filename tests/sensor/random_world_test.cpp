@@ -190,13 +190,8 @@ TEST(RandomScene, ANewTrackIsMeasuredAtTheArmsEndNotOnItsForearm) {
   EXPECT_LE(score.longest_captured_run, 3u);
 }
 
-// Tuning seeds 16 and 34: a followed hand held 15-30 cm in front of the body; the depth band around its
-// nearest reading took in the upper arm or the shoulder, whose wider circle was measured as the palm,
-// 20-40 cm away, and the jump test refused it: the hand was lost for 35 % and 27 % of its visible
-// frames. A followed palm is sought near the hand's nearest reading (palm_from_nearest_m); sought
-// anywhere in the band, the frames are lost again, so this can fail.
-/// Each seed's clip tracked (>= tracked share, within 1 cm, nothing captured), and below `without_below`
-/// with the rule under test switched off in `without`.
+// Each seed's clip tracked (>= `tracked` of its visible frames, within 1 cm, nothing captured), and below
+// `without_below` with the rule under test switched off in `without`.
 void expect_tracked_but_not_without(std::initializer_list<std::uint64_t> seeds, double tracked, const HandFinderParams& without,
                                     double without_below) {
   for (const std::uint64_t seed : seeds) {
@@ -208,6 +203,11 @@ void expect_tracked_but_not_without(std::initializer_list<std::uint64_t> seeds, 
   }
 }
 
+// Tuning seeds 16 and 34: a followed hand held 15-30 cm in front of the body; the depth band around its
+// nearest reading took in the upper arm or the shoulder, whose wider circle was measured as the palm,
+// 20-40 cm away, and the jump test refused it: the hand was lost for 35 % and 27 % of its visible
+// frames. A followed palm is sought near the hand's nearest reading (palm_from_nearest_m); sought
+// anywhere in the band, the frames are lost again, so this can fail.
 TEST(RandomScene, AFollowedPalmIsSoughtNearItsNearestReadingNotOnTheUpperArm) {
   HandFinderParams anywhere;
   anywhere.palm_from_nearest_m = 0;

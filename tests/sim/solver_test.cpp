@@ -253,11 +253,7 @@ TEST(Solver, BuiltAtConstructionStepsAsOneBuiltOnItsFirstStep) {
 // positions (Eigen::Vector4f) were left unmapped, so the first step of a 256 x 256 cloth cut in exact mode
 // faulted in 512 pages (2.2x the median frame in cut_bench).
 TEST(Solver, TheFirstStepAfterTheBuildFaultsInNoPageOfItsArrays) {
-  ClothConfig config;
-  config.columns = 128;
-  config.rows = 128;
-  config.pin = PinMode::TopEdge;
-  Cloth cloth{config};
+  Cloth cloth = make(128, PinMode::TopEdge);
   StrokeOptions options;
   options.mode = CutMode::Exact;
   const StrokeCutter cutter{cloth, options};  // reserves the cloth's room for cuts

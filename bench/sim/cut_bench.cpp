@@ -302,7 +302,7 @@ int main(int argc, char** argv) {
   const int reps = argc > 1 ? arg(1, 1, 100000) : 30;
   tachi::sim::SolverParams long_stroke_params;
   // 0: the solver's default (one budget for all pin groups since session 27; 2048 per group before).
-  if (argc > 2 && arg(2, 0, 1 << 30) > 0) long_stroke_params.repair_per_step = arg(2, 0, 1 << 30);
+  if (const int repair = argc > 2 ? arg(2, 0, 1 << 30) : 0; repair > 0) long_stroke_params.repair_per_step = repair;
   if (argc > 3) long_stroke_params.threads = arg(3, 1, 64);
   if (argc > 4) long_stroke_params.substeps = arg(4, 1, 64);
   tachi::sim::SolverParams exact_params;

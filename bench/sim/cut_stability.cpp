@@ -12,6 +12,7 @@
 #include "../bench_args.hpp"
 #include "tachi/sim/cut_stability.hpp"
 
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -102,7 +103,11 @@ int main(int argc, char** argv) {
           const std::string other_stem = stem + (recut ? "_recut" : "_perturbed");
           write_stroke_csv(stroke, keep / (stem + "_once.csv"));
           write_stroke_csv(other, keep / (other_stem + ".csv"));
-          if (std::FILE* f = std::fopen((keep / (stem + ".txt")).c_str(), "w")) {
+          const auto note = keep / (stem + ".txt");
+          std::FILE* f = std::fopen(note.c_str(), "w");
+          if (f == nullptr) {
+            std::fprintf(stderr, "cut_stability: --keep-strokes: cannot write %s: %s\n", note.c_str(), std::strerror(errno));
+          } else {
             const auto command = [&](const std::vector<StrokeSample>& s, const std::string& name) {
               std::fprintf(f, "tachi-sim --offline --grid %d --pin top-edge --threads 1 --steps %d --blade %s --cut-mode %s "
                               "--stroke %s.csv --export %s\n",

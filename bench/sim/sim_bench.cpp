@@ -220,14 +220,13 @@ Run run_fresh(const Measure& measure) {
   return r;
 }
 
-std::vector<int> parse_list(const std::string& text) {
+/// A comma-separated list of whole numbers in [min, max]; a bad item is an error naming `flag` (exit 2),
+/// not dropped or read as its leading digits.
+std::vector<int> parse_list(const std::string& text, const char* flag, int min, int max, const char* usage) {
   std::vector<int> out;
   std::stringstream ss{text};
   std::string item;
-  while (std::getline(ss, item, ',')) {
-    const int v = std::atoi(item.c_str());
-    if (v >= 2 && v <= 1024) out.push_back(v);
-  }
+  while (std::getline(ss, item, ',')) out.push_back(tachi::bench::int_argument(item.c_str(), flag, min, max, usage));
   return out;
 }
 
@@ -416,7 +415,7 @@ int main(int argc, char** argv) {
     const std::string arg = argv[i];
     const bool has_value = i + 1 < argc;
     if (arg == "--grids" && has_value) {
-      grids = parse_list(argv[++i]);
+      grids = parse_list(argv[++i], "sim_bench --grids", 2, 1024, usage);
     } else if (arg == "--warmup" && has_value) {
       warmup = tachi::bench::int_argument(argv[++i], "sim_bench --warmup", 0, 1000000, usage);
     } else if (arg == "--steps" && has_value) {
@@ -426,20 +425,11 @@ int main(int argc, char** argv) {
     } else if (arg == "--bullet-bending-helper") {
       bending_helper = true;
     } else if (arg == "--threads" && has_value) {
-      std::stringstream list{argv[++i]};
-      std::string item;
-      while (std::getline(list, item, ',')) {
-        const int t = std::atoi(item.c_str());
-        if (t < 1 || t > 64) {
-          std::fprintf(stderr, "sim_bench: --threads needs counts in 1..64, got '%s'\n", item.c_str());
-          return 2;
-        }
-        thread_counts.push_back(t);
-      }
+      thread_counts = parse_list(argv[++i], "sim_bench --threads", 1, 64, usage);
     } else if (arg == "--no-bullet") {
       bullet = false;
     } else if (arg == "--xpbd" && has_value) {
-      xpbd = std::clamp(std::atoi(argv[++i]), 2, 1024);
+      xpbd = tachi::bench::int_argument(argv[++i], "sim_bench --xpbd", 2, 1024, usage);
     } else {
       std::fprintf(stderr, "sim_bench: unknown or incomplete argument '%s'\n%s", arg.c_str(), usage);
       return 2;

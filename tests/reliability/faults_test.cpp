@@ -93,6 +93,7 @@ TEST(BadFlags, TheBenchmarksAnswerHelp) {
       {{kBin + "/render_bench", "--frames", "-3"}, "render_bench --frames: '-3' is not a whole number"},
       {{kBin + "/render_bench", "--fps", "30"}, "render_bench: unknown argument '--fps'"},
       {{kBin + "/sim_bench", "--steps", "many"}, "sim_bench --steps: 'many' is not a whole number"},
+      {{kBin + "/sim_bench", "--grids", "64,12x"}, "sim_bench --grids: '12x' is not a whole number in 2..1024"},
       {{kBin + "/cut_stability", "--grid", "1"}, "cut_stability --grid: '1' is not a whole number in 4..512"}};
   for (const auto& [argv, message] : wrong) {
     const auto r = tachi::test::run(argv, 20s);

@@ -44,35 +44,20 @@ BladeContact::Verdict BladeContact::press(Cloth& cloth, const Eigen::Vector3f& h
     met_at_ = cloth.position[*met];
     cloth.inverse_mass[*met] = 0.0F;
     cloth.velocity[*met].setZero();
-    last_.reset();
   }
   const std::uint32_t i = *held_;
   cloth.position[i] = hand + offset_;
+  drag_m_ = std::max(drag_m_, (cloth.position[i] - met_at_).norm());
   const float force = contact_force(cloth, i, params_.stiffness);
   max_force_n_ = std::max(max_force_n_, force);
-  if (force < params_.force_n) {
-    drag_m_ = std::max(drag_m_, (cloth.position[i] - met_at_).norm());
-    last_ = Pressed{hand, force};
-    return Verdict::Pushing;
-  }
-  // Penetrated (seed 001: sharpness is the force a blade needs to penetrate): this sample cuts. The force
-  // reached the sharpness between the last sample and this one, not at this one: the blade went through
-  // where the force crossed it (linear in the hand's path between the two samples), so the particle is let
-  // go there, not dragged on to this sample (docs/cutting.md, session 34). A hair's change of the force
-  // then moves the particle's release by a hair, where it moved it by a whole sample of the hand's path.
-  if (last_ && force > last_->force_n) {
-    const float a = std::clamp((params_.force_n - last_->force_n) / (force - last_->force_n), 0.0F, 1.0F);
-    cloth.position[i] = last_->hand + a * (hand - last_->hand) + offset_;
-  }
-  drag_m_ = std::max(drag_m_, (cloth.position[i] - met_at_).norm());
-  last_.reset();
+  if (force < params_.force_n) return Verdict::Pushing;
+  // Penetrated (seed 001: sharpness is the force a blade needs to penetrate): this sample cuts.
   let_go(cloth);
   cut_ = through_ = true;
   return Verdict::Cutting;
 }
 
 void BladeContact::let_go(Cloth& cloth) {
-  last_.reset();
   if (!held_) return;
   const std::uint32_t i = *held_;
   held_.reset();

@@ -70,12 +70,6 @@ class BladeContact {
   Eigen::Vector3f met_at_ = Eigen::Vector3f::Zero();  ///< the held particle's position when met
   float max_force_n_ = 0.0F;
   float drag_m_ = 0.0F;
-  /// The last press that held a particle below the sharpness: where the hand was and the force it met.
-  struct Pressed {
-    Eigen::Vector3f hand;
-    float force_n;
-  };
-  std::optional<Pressed> last_;
 };
 
 }  // namespace tachi::sim

@@ -19,6 +19,11 @@ int main(int argc, char** argv) try {
                                     "path, start, Kinect noise drawn from docs/sensor.md's distributions; seeds 1-1000 tune, "
                                     "100001-100300 are held out)");
   spec_opt->excludes(random_opt);
+  bool hanging_rest = false;
+  app.add_flag("--hanging-rest", hanging_rest,
+               "With --random: the hand rests at the arm's end, fingers down (docs/sensor.md, session 34), not at the "
+               "floating resting pose beyond the arm's reach")
+      ->needs(random_opt);
   app.add_option("--out", out_dir, "Output folder (created; must not hold an INDEX.txt yet)")->required();
   tachi::common::add_log_level_flag(app, log_level);
   if (const int rc = tachi::common::parse(app, argc, argv); rc >= 0) return rc;
@@ -27,7 +32,7 @@ int main(int argc, char** argv) try {
     std::cerr << "tachi-synth: give --spec FILE or --random SEED\n";
     return 2;
   }
-  const auto spec = random_opt->count() ? tachi::sensor::random_scenario(seed) : tachi::sensor::load_scenario(spec_file);
+  const auto spec = random_opt->count() ? tachi::sensor::random_scenario(seed, hanging_rest) : tachi::sensor::load_scenario(spec_file);
   const auto frames = tachi::sensor::write_synthetic_recording(spec, out_dir);
   spdlog::info("tachi-synth: {}: {} frames -> {}", spec.name, frames, out_dir);
   return 0;

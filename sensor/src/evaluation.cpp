@@ -24,9 +24,9 @@ void print(std::ostream& out, const char* format, ...) {
 
 unsigned long long ull(std::uint64_t v) { return static_cast<unsigned long long>(v); }
 
-void list_frames(std::uint64_t seed, std::ostream& out) {
+void list_frames(std::uint64_t seed, bool hanging_rest, std::ostream& out) {
   use_one_opencv_thread();
-  const ScenarioSpec spec = random_scenario(seed);
+  const ScenarioSpec spec = random_scenario(seed, hanging_rest);
   out << "frame,raised,visible,x,y,z,tracked,hx,hy,hz,error_m\n";
   score_clip(spec, {}, [&out](const GroundTruth& t, const HandObservation& h) {
     print(out, "%llu,%d,%d,%.4f,%.4f,%.4f,%d,%.4f,%.4f,%.4f,%.4f\n", ull(t.frame), t.raised ? 1 : 0, t.visible ? 1 : 0,
@@ -113,7 +113,7 @@ std::optional<SeedRange> parse_seed_range(const std::string& text) {
   return SeedRange{*first, *last};
 }
 
-RandomRun score_random(SeedRange seeds, unsigned jobs) {
+RandomRun score_random(SeedRange seeds, unsigned jobs, bool hanging_rest) {
   use_one_opencv_thread();
   RandomRun run;
   run.seeds = seeds;
@@ -123,7 +123,7 @@ RandomRun score_random(SeedRange seeds, unsigned jobs) {
   std::atomic<std::size_t> next{0};
   const auto worker = [&] {
     for (std::size_t i; (i = next++) < n;) {
-      run.specs[i] = random_scenario(seeds.first + i);
+      run.specs[i] = random_scenario(seeds.first + i, hanging_rest);
       run.clips[i] = score_clip(run.specs[i]);
     }
   };
@@ -152,11 +152,11 @@ bool EvaluationLimits::met(const Evaluation& e) const {
 
 int run_evaluation(const EvaluationOptions& o, std::ostream& out, std::ostream& err) {
   if (o.frames) {
-    list_frames(*o.frames, out);
+    list_frames(*o.frames, o.hanging_rest, out);
     return 0;
   }
   if (o.random) {
-    const RandomRun run = score_random(*o.random, o.jobs);
+    const RandomRun run = score_random(*o.random, o.jobs, o.hanging_rest);
     if (o.json) print_random_json(run, out);
     else print_random_text(run, out);
     return run.summary.passed || o.report_only ? 0 : 1;

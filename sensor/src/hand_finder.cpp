@@ -1586,6 +1586,16 @@ bool HandFinder::Impl::jumped(const Palm& palm) const {
   if (frames_since_seen == 0 || frames_since_seen > params.reacquire_frames) return false;
   const Eigen::Vector3d at = model.back_project(palm.u, palm.v, palm.z);
   const bool far_from_last = (at - last_seen).norm() > params.max_jump_m;
+  // Across a gap of missed frames (course_gap_frames): where k of the last step carry the hand, within k
+  // steps' slack, when the last palm reported kept its course (its step checked a frame before: a two-frame
+  // track's step may be from the hand to an arm, tuning seeds 32 and 140). Not a frame on (k = 1): that is
+  // off_course's, for a followed palm; the still hand's own test (still_hand_m) holds a hand within the
+  // background, whose tremor departs from its step by more.
+  if (params.course_gap_frames > 0 && params.max_off_course_m > 0 && step_known && frames_since_on_course == frames_since_seen &&
+      frames_since_seen >= 2 && frames_since_seen <= params.course_gap_frames) {
+    const double k = static_cast<double>(frames_since_seen);
+    if ((at - (last_seen + k * last_step)).norm() > k * params.max_off_course_m) return true;
+  }
   if (!params.jump_from_kept_course || frames_since_seen == 1 || frames_since_on_course == frames_since_seen) {
     return far_from_last;
   }

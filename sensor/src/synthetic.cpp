@@ -228,6 +228,12 @@ ScenarioSpec load_scenario(const std::filesystem::path& path) {
     if (!j[key].is_boolean()) throw std::runtime_error("scenario " + file + ": \"" + key + "\" must be true or false");
     *flag = j[key].get<bool>();
   }
+  if (j.contains("resting")) {
+    const auto& r = j["resting"];
+    if (!r.is_string() || (r.get<std::string>() != "floating" && r.get<std::string>() != "hanging"))
+      throw std::runtime_error("scenario " + file + ": \"resting\" must be \"floating\" or \"hanging\"");
+    s.hanging_rest = r.get<std::string>() == "hanging";
+  }
   s.second_person_z = number(j, "second_person_z", s.second_person_z, file);
   if (!(s.second_person_z >= 1.8 && s.second_person_z <= 2.6))
     throw std::runtime_error("scenario " + file + ": \"second_person_z\" must be in [1.8, 2.6] m (behind the user, before the wall)");
@@ -280,7 +286,30 @@ struct SyntheticScene::Impl {
 
   /// -1: the active arm is the user's right (camera left, x < 0); +1: the left.
   double side() const { return spec.left_handed ? 1.0 : -1.0; }
-  Vec3 rest_palm() const { return Vec3(side() * 0.27, 0.72, 1.40) + spec.user_offset; }
+  Vec3 rest_palm() const {
+    if (!spec.hanging_rest) return Vec3(side() * 0.27, 0.72, 1.40) + spec.user_offset;
+    // At the end of the relaxed arm, hanging beside the torso as the other arm does (its wrist
+    // 6 cm out, 58 cm down, 1 cm forward of the shoulder), fingers along it.
+    const Eigen::Matrix3d hang = hanging_rotation();
+    const Vec3 w = hang * Vec3(0, -1, 0), n = hang * Vec3(0, 0, -1);
+    const Vec3 shoulder = Vec3(side() * 0.19, 0.0, 1.44) + spec.user_offset;
+    return shoulder + reach() * hanging_direction() + 0.055 * w + 0.034 * n;
+  }
+  /// The arm's reach: 1 cm short of its length (floating rest, the bundled world's), or 2 mm (the
+  /// hanging rest: a relaxed arm, the elbow bent ~10 degrees; 2 cm bent it 30 degrees, knee-like).
+  double reach() const { return kUpperArm * spec.arm_scale + kForearm * spec.arm_scale - (spec.hanging_rest ? 0.002 : 0.01); }
+  Vec3 hanging_direction() const { return Vec3(side() * 0.06, 0.58, -0.01).normalized(); }
+  /// The hand hanging: fingers (w) along the hanging arm, the palm (n) toward the body's midline.
+  Eigen::Matrix3d hanging_rotation() const {
+    const Vec3 w = hanging_direction();
+    Vec3 n(-side(), 0, 0);
+    n = (n - n.dot(w) * w).normalized();
+    Eigen::Matrix3d m;
+    m.col(0) = w.cross(n);  // the hand frame's x: local (0,-1,0) is w, local (0,0,-1) is n
+    m.col(1) = -w;
+    m.col(2) = -n;
+    return m;
+  }
 
   Vec3 intended_at(double t) const { return pchip(spec.path, path_points, t); }
 
@@ -366,15 +395,21 @@ struct SyntheticScene::Impl {
     Vec3 shoulder = Vec3(s * 0.19, 0.0, 1.44) + user + sway;
     // Hand frame: n toward the sensor, w along the fingers, r across the palm.
     const double deg = std::numbers::pi / 180.0;
-    const Eigen::Matrix3d rot = (Eigen::AngleAxisd(spec.palm_yaw_deg * deg, Vec3::UnitY()) *
-                                 Eigen::AngleAxisd(spec.palm_pitch_deg * deg, Vec3::UnitX()) *
-                                 Eigen::AngleAxisd(spec.palm_roll_deg * deg, Vec3::UnitZ()))
-                                    .toRotationMatrix();
+    Eigen::Matrix3d rot = (Eigen::AngleAxisd(spec.palm_yaw_deg * deg, Vec3::UnitY()) *
+                           Eigen::AngleAxisd(spec.palm_pitch_deg * deg, Vec3::UnitX()) *
+                           Eigen::AngleAxisd(spec.palm_roll_deg * deg, Vec3::UnitZ()))
+                              .toRotationMatrix();
+    if (spec.hanging_rest) {
+      // The hand turns into its hanging pose over the last 15 cm of its way down (smoothly).
+      const double f = std::clamp(1.0 - off_rest(t) / 0.15, 0.0, 1.0);
+      const double e = f * f * (3 - 2 * f);
+      if (e > 0) rot = Eigen::Quaterniond(rot).slerp(e, Eigen::Quaterniond(hanging_rotation())).toRotationMatrix();
+    }
     const Vec3 n = rot * Vec3(0, 0, -1), w = rot * Vec3(0, -1, 0), r = -s * w.cross(n);  // r: toward the thumb
     Vec3 wrist = palm - 0.055 * w - 0.034 * n;
     // The body leans toward a target out of reach (a person steps or leans in).
     const double upper_arm = kUpperArm * spec.arm_scale, forearm = kForearm * spec.arm_scale;
-    const double reach = upper_arm + forearm - 0.01;
+    const double reach = this->reach();
     Vec3 lean = Vec3::Zero();
     if (const double d = (wrist - shoulder).norm(); d > reach) lean = (wrist - shoulder).normalized() * (d - reach);
     lean.y() = 0;
@@ -386,7 +421,9 @@ struct SyntheticScene::Impl {
     // from the truth). Below the shoulder the hand is left where the path puts it: the resting pose
     // (0.72 m below the shoulder, fingers up) is beyond the arm's reach as well, a known flaw of the
     // world (docs/sensor.md) that every bundled recording and tuning figure carries.
-    if (const Vec3 to_wrist = wrist - shoulder; to_wrist.y() < 0 && to_wrist.norm() > reach) {
+    // With the hanging rest (spec.hanging_rest) no target is drawn detached: below the shoulder the
+    // hand stops where the arm reaches too.
+    if (const Vec3 to_wrist = wrist - shoulder; (to_wrist.y() < 0 || spec.hanging_rest) && to_wrist.norm() > reach) {
       const Vec3 shift = shoulder + reach * to_wrist.normalized() - wrist;
       wrist += shift;
       palm += shift;

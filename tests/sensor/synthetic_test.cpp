@@ -74,6 +74,31 @@ TEST(SyntheticScene, RestingHandIsNotVisible) {
   EXPECT_FALSE(truth.visible);
 }
 
+// The hanging rest (spec.hanging_rest, the randomized world's): the resting hand is at the end of the
+// arm (within its length and the hand's 6 cm of the shoulder; the floating rest lies 0.73 m from it,
+// beyond the arm's 0.59 m), fingers down, and a target below the shoulder out of reach is drawn where
+// the arm ends, not detached below it. The resting and the lowered hand are neither raised nor visible.
+TEST(SyntheticScene, AHangingHandRestsAtTheArmsEnd) {
+  auto spec = short_spec();
+  const Eigen::Vector3d shoulder(-0.19, 0.0, 1.44);
+  EXPECT_GT((SyntheticScene(spec).rest_palm() - shoulder).norm(), 0.7);  // the floating rest, for the bundled scenes
+  spec.hanging_rest = true;
+  spec.path = {{0.0, Eigen::Vector3d::Zero(), true}, {0.5, Eigen::Vector3d::Zero(), true}, {1.0, {-0.2, 1.0, 1.42}, false}};
+  SyntheticScene scene(spec);
+  const Eigen::Vector3d rest = scene.rest_palm();
+  EXPECT_LT((rest - shoulder).norm(), 0.59 + 0.065);
+  EXPECT_GT((rest - shoulder).norm(), 0.59);
+  EXPECT_GT(rest.y(), 0.6);  // below the shoulder, the palm's centre below the wrist (fingers down)
+  GroundTruth truth;
+  scene.render(0, truth);
+  EXPECT_FALSE(truth.raised);
+  EXPECT_FALSE(truth.visible);
+  EXPECT_LT((truth.palm - rest).norm(), 0.02);  // the body sways; the hand stays on the arm
+  for (std::uint64_t i = 1; i < scene.frame_count(); ++i) scene.render(i, truth);
+  EXPECT_LT((truth.palm - shoulder).norm(), 0.59 + 0.065 + 0.02);  // the target 1 m below: where the arm reaches
+  EXPECT_GT((truth.intended - shoulder).norm(), 0.9);
+}
+
 TEST(SyntheticScene, WritesARecordingAndGroundTruth) {
   test::ScratchDir dir("synth");
   const auto frames = write_synthetic_recording(short_spec(), dir.path() / "rec");
@@ -115,6 +140,8 @@ TEST(ScenarioSpec, BadSpecsNameTheKey) {
   EXPECT_NE(error(R"({"name": "x", "path": [{"t": 0, "rest": true}, {"t": 1, "p": [0, 0]}]})").find("needs \"p\""), std::string::npos);
   EXPECT_NE(error(R"({"name": "x", "path": [{"t": 0, "rest": true}, {"t": 1, "p": [0, 0, 9]}]})").find("z must be"), std::string::npos);
   EXPECT_NE(error(R"({"name": "x", "jitter_m": "a", )" + path + "}").find("\"jitter_m\""), std::string::npos);
+  EXPECT_EQ(error(R"({"name": "x", "resting": "hanging", )" + path + "}"), "no error");
+  EXPECT_NE(error(R"({"name": "x", "resting": "down", )" + path + "}").find("\"resting\""), std::string::npos);
 }
 
 }  // namespace

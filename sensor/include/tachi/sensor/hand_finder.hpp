@@ -72,6 +72,15 @@ struct HandFinderParams {
   /// 0.2 m is a hand's reach in a frame from rest, not from its own course). The track is then
   /// refused as a jump is. Chosen on seeds 1-100 (4 cm lost tracked frames); <= 0: no such test.
   double max_off_course_m = 0.06;
+  /// ... and a palm found again 2 to this many frames (k) after the last palm reported, where that one kept
+  /// its course (found a third frame running on its step; missed frames between), by any path, must lie
+  /// within k * max_off_course_m of where k of that step carry it. A hand lowered out of view with its arm attached (the randomized world's
+  /// hanging rest, session 34) leaves its forearm in the component; a frame or two after the hand was
+  /// last seen, a palm-sized place on that forearm or the upper arm, 15-40 cm above where the hand went
+  /// (tuning seed 24: 3 frames 31-43 cm off), was followed: within max_jump_m of the last palm, with
+  /// no course known across the missed frame. 0: no such test (the course is tested on consecutive
+  /// frames of a followed hand only).
+  int course_gap_frames = 4;
   /// A new track starts only on an arm's end: the surface must continue without a depth jump to
   /// this far behind the hand (a hand at 1 m reaches 35-45 cm out of the body; a head, a torso or a
   /// person walking behind span ~10 cm).

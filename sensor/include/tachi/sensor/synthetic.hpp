@@ -73,6 +73,14 @@ struct ScenarioSpec {
   /// same noise level at a fifth of the cost (the generator was half the render time). The bundled
   /// scenes keep the sequence they were rendered with.
   bool hashed_noise = false;
+  /// Where the hand rests (`"resting"` in a spec): false ("floating", the bundled scenes' world),
+  /// 0.72 m below the shoulder, fingers up, facing the sensor: beyond the arm's reach, so a resting
+  /// hand floats ~20 cm below the arm's end. True ("hanging", the randomized world): at the end of a
+  /// relaxed arm (2 mm short of its length, the elbow bent ~10 degrees), fingers down, the palm
+  /// toward the thigh; the hand turns into that pose over the last 15 cm of its way down, and is
+  /// never drawn detached from the arm (a target below the shoulder out of reach is not reached
+  /// either).
+  bool hanging_rest = false;
 };
 
 /// Reads a scenario spec (JSON, see recordings/README.md). Throws std::runtime_error naming the

@@ -20,10 +20,8 @@ int main(int argc, char** argv) try {
                                     "100001-100300 are held out)");
   spec_opt->excludes(random_opt);
   bool hanging_rest = false;
-  app.add_flag("--hanging-rest", hanging_rest,
-               "With --random: the hand rests at the arm's end, fingers down (docs/sensor.md, session 34), not at the "
-               "floating resting pose beyond the arm's reach")
-      ->needs(random_opt);
+  app.add_flag("--hanging-rest", hanging_rest, "With --random: the hand rests at the arm's end, fingers down, not at the "
+               "floating resting pose beyond the arm's reach (docs/sensor.md)")->needs(random_opt);
   app.add_option("--out", out_dir, "Output folder (created; must not hold an INDEX.txt yet)")->required();
   tachi::common::add_log_level_flag(app, log_level);
   if (const int rc = tachi::common::parse(app, argc, argv); rc >= 0) return rc;

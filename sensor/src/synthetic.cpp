@@ -22,10 +22,17 @@ using Vec3 = Eigen::Vector3d;
 constexpr double kProjectorBaseline = 0.075;  // IR projector to the camera's right (+x)
 constexpr double kUpperArm = 0.31;
 constexpr double kForearm = 0.28;
+// The wrist from the palm's centre, in the hand's frame: back along the fingers, and behind the palm's face.
+constexpr double kWristAlongFingers = 0.055;
+constexpr double kWristBehindPalm = 0.034;
 constexpr double kPalmHalfWidth = 0.041;
 constexpr double kPalmHalfHeight = 0.045;
 constexpr double kPalmRadius = 0.042;  // keep equal to HandFinderParams::palm_radius_m
 constexpr std::int64_t kStartHostNs = 1'700'000'000'000'000'000LL;
+
+/// The shoulder on `side` (-1: the user's right, camera left; +1: the left), before the user's offset and the
+/// body's sway and lean.
+Vec3 shoulder_at(double side) { return Vec3(side * 0.19, 0.0, 1.44); }
 
 enum Part : std::uint8_t { kNone = 0, kWall, kBody, kArm, kPalm, kFinger, kDistractor };
 
@@ -292,8 +299,8 @@ struct SyntheticScene::Impl {
     // 6 cm out, 58 cm down, 1 cm forward of the shoulder), fingers along it.
     const Eigen::Matrix3d hang = hanging_rotation();
     const Vec3 w = hang * Vec3(0, -1, 0), n = hang * Vec3(0, 0, -1);
-    const Vec3 shoulder = Vec3(side() * 0.19, 0.0, 1.44) + spec.user_offset;
-    return shoulder + reach() * hanging_direction() + 0.055 * w + 0.034 * n;
+    const Vec3 shoulder = shoulder_at(side()) + spec.user_offset;
+    return shoulder + reach() * hanging_direction() + kWristAlongFingers * w + kWristBehindPalm * n;
   }
   /// The arm's reach: 1 cm short of its length (floating rest, the bundled world's), or 2 mm (the
   /// hanging rest: a relaxed arm, the elbow bent ~10 degrees; 2 cm bent it 30 degrees, knee-like).
@@ -392,7 +399,7 @@ struct SyntheticScene::Impl {
                     0.008 * std::sin(2 * std::numbers::pi * 0.23 * t + 1.0));
     const double s = side();
     const Vec3 user = spec.user_offset;
-    Vec3 shoulder = Vec3(s * 0.19, 0.0, 1.44) + user + sway;
+    Vec3 shoulder = shoulder_at(s) + user + sway;
     // Hand frame: n toward the sensor, w along the fingers, r across the palm.
     const double deg = std::numbers::pi / 180.0;
     Eigen::Matrix3d rot = (Eigen::AngleAxisd(spec.palm_yaw_deg * deg, Vec3::UnitY()) *
@@ -406,7 +413,7 @@ struct SyntheticScene::Impl {
       if (e > 0) rot = Eigen::Quaterniond(rot).slerp(e, Eigen::Quaterniond(hanging_rotation())).toRotationMatrix();
     }
     const Vec3 n = rot * Vec3(0, 0, -1), w = rot * Vec3(0, -1, 0), r = -s * w.cross(n);  // r: toward the thumb
-    Vec3 wrist = palm - 0.055 * w - 0.034 * n;
+    Vec3 wrist = palm - kWristAlongFingers * w - kWristBehindPalm * n;
     // The body leans toward a target out of reach (a person steps or leans in).
     const double upper_arm = kUpperArm * spec.arm_scale, forearm = kForearm * spec.arm_scale;
     const double reach = this->reach();
@@ -414,7 +421,7 @@ struct SyntheticScene::Impl {
     if (const double d = (wrist - shoulder).norm(); d > reach) lean = (wrist - shoulder).normalized() * (d - reach);
     lean.y() = 0;
     const Vec3 body = sway + lean + user;
-    shoulder = Vec3(s * 0.19, 0.0, 1.44) + body;
+    shoulder = shoulder_at(s) + body;
     // A raised target still out of reach (above the head: a person leans, but does not grow) is not
     // reached: the hand stops where the arm ends. It floated detached above the arm before, whose
     // rounded stump and raised elbow were then the hand in view (seed 16: 24 frames captured 0.5 m
@@ -432,7 +439,7 @@ struct SyntheticScene::Impl {
     prims.push_back({Primitive::Ellipsoid, kBody, Vec3(0, 0.30, 1.47) + body, Vec3::Zero(), Vec3(0.18, 0.34, 0.11)});
     prims.push_back(capsule(kBody, Vec3(0, -0.20, 1.47) + body, Vec3(0, 0.0, 1.47) + body, 0.05));
     prims.push_back(sphere(kBody, Vec3(0, -0.30, 1.47) + body, 0.10));
-    const Vec3 ls = Vec3(-s * 0.19, 0.0, 1.44) + body, le = Vec3(-s * 0.23, 0.31, 1.46) + body,
+    const Vec3 ls = shoulder_at(-s) + body, le = Vec3(-s * 0.23, 0.31, 1.46) + body,
                lw = Vec3(-s * 0.25, 0.58, 1.43) + body;
     prims.push_back(capsule(kBody, ls, le, 0.045));
     prims.push_back(capsule(kBody, le, lw, 0.033));

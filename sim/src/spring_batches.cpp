@@ -46,6 +46,18 @@ std::uint32_t sweep_key(SpringKind k, GridCoord a, GridCoord b) {
 
 using solver_detail::sweep_near_rest;
 
+namespace {
+
+/// A cut's loose springs (Solver::loosen_bend), one by one in order: project_distance near rest, the
+/// arithmetic of a quad's lane (Jakobsen 2001; XPBD, Macklin et al. 2016, eq. 18).
+void sweep_loose(Vec4* padded, const std::vector<Solver::PackedSpring>& springs, float alpha) {
+  for (const Solver::PackedSpring& sp : springs) {
+    solver_detail::project_distance<solver_detail::Length::NearRest>(padded[sp.a], padded[sp.b], sp.rest, alpha);
+  }
+}
+
+}  // namespace
+
 void Solver::pack_quads(const std::vector<PackedSpring>& springs, const std::vector<std::uint32_t>& keys,
                           std::vector<SpringQuad>& quads) {
   // Four springs of one sweep class (same row and colour) never share a particle on the grid; the check
@@ -199,11 +211,48 @@ void Solver::place_cut_quads(const Cloth& cloth, std::size_t family, std::size_t
   }
 }
 
+void Solver::loosen_bend(const Cloth& cloth, const std::vector<std::uint32_t>& edited) {
+  // Issue 25: on two threads the step of an exact cut at 128 x 128 missed 1.5x the median step by ~0.03 ms,
+  // and batching the cut's ~1,300 bend springs (sorted by sweep key, packed four to a quad, their slots
+  // written, the quads placed in bands: 0.06-0.08 ms, the dearest of the update's sections) is on its
+  // critical path. Here they are only listed, each in the band of its rows by the rule of place_cut_quads
+  // (else after the bands), and swept one by one in index order with that band; the next step batches them
+  // (fold_loose_bend). Batching them a step late instead, with no sweep meanwhile, let a sliver corner's cut
+  // flip under a 1e-6 m hair and a long stroke's strain grow (docs/benchmarks.md "Threads", session 34b):
+  // here they act from the cut's step on, as batched ones would, in another Gauss-Seidel order.
+  loose_bend_swept_ = false;
+  loose_bend_bands_.resize(band_reach_.size() + 1);
+  for (const std::uint32_t k : edited) {
+    if (cloth.alive[k] == 0 || cloth.kind[k] != SpringKind::Bend) continue;
+    loose_bend_.push_back(k);
+    const std::uint32_t a = cloth.spring_a[k];
+    const std::uint32_t b = cloth.spring_b[k];
+    const int low = std::min(cloth.grid[a].v, cloth.grid[b].v);
+    const int high = std::max(cloth.grid[a].v, cloth.grid[b].v);
+    const auto j = static_cast<std::size_t>(
+        std::max<std::ptrdiff_t>(0, std::upper_bound(band_first_row_.begin(), band_first_row_.end(), low) -
+                                        band_first_row_.begin() - 1));
+    const bool fits = low >= band_reach_[j].first && high <= band_reach_[j].second;
+    loose_bend_bands_[fits ? j : band_reach_.size()].push_back({a + 1, b + 1, cloth.rest_length[k]});
+  }
+}
+
+void Solver::fold_loose_bend(const Cloth& cloth) {
+  // Batched now as the update would have (append_family, placed in bands), from the springs' present state: a
+  // cut since may have removed or rewired some (append_family skips the dead; the update that follows blanks
+  // the rewired ones' new lanes and batches them again, as for any edited spring).
+  append_family(cloth, loose_bend_, 2);
+  loose_bend_.clear();
+  for (auto& springs : loose_bend_bands_) springs.clear();
+  loose_bend_swept_ = false;
+}
+
 std::size_t Solver::unbanded_cut_quads() const {
   std::size_t quads = 0;
   for (const auto& runs : unbanded_runs_) {
     for (const QuadRun& r : runs) quads += r.end - r.begin;
   }
+  if (!loose_bend_bands_.empty()) quads += loose_bend_bands_.back().size();  // a quad each, in effect
   return quads;
 }
 
@@ -217,16 +266,23 @@ bool Solver::bands_independent() const {
       for (std::size_t f = 0; f < 3; ++f) {
         std::vector<QuadRun> runs = band_cut_runs_[f][j];
         runs.push_back({static_cast<std::uint32_t>(bands_[f][j]), static_cast<std::uint32_t>(bands_[f][j + 1])});
+        const auto own = [&](std::uint32_t p) {
+          if (p == 0) return true;
+          if (p >= owner.size()) owner.resize(p + 1, 0);
+          if (owner[p] != 0 && owner[p] != j + 1) return false;
+          owner[p] = static_cast<std::uint32_t>(j + 1);
+          return true;
+        };
         for (const QuadRun& r : runs) {
           for (std::uint32_t q = r.begin; q < r.end; ++q) {
             for (std::size_t l = 0; l < 4; ++l) {
-              for (const std::uint32_t p : {quads_[f][q].a[l], quads_[f][q].b[l]}) {
-                if (p == 0) continue;
-                if (p >= owner.size()) owner.resize(p + 1, 0);
-                if (owner[p] != 0 && owner[p] != j + 1) return false;
-                owner[p] = static_cast<std::uint32_t>(j + 1);
-              }
+              if (!own(quads_[f][q].a[l]) || !own(quads_[f][q].b[l])) return false;
             }
+          }
+        }
+        if (f == 2 && j < loose_bend_bands_.size()) {
+          for (const PackedSpring& sp : loose_bend_bands_[j]) {
+            if (!own(sp.a) || !own(sp.b)) return false;
           }
         }
       }
@@ -312,11 +368,13 @@ void Solver::sweep_band(Vec4* padded, std::size_t family, std::size_t band, floa
   const SpringQuad* g = quads_[family].data();
   sweep_near_rest(padded, g + bands_[family][band], g + bands_[family][band + 1], alpha);
   for (const QuadRun& r : band_cut_runs_[family][band]) sweep_near_rest(padded, g + r.begin, g + r.end, alpha);
+  if (family == 2 && band < loose_bend_bands_.size()) sweep_loose(padded, loose_bend_bands_[band], alpha);
 }
 
 void Solver::sweep_unbanded(Vec4* padded, std::size_t family, float alpha) const {
   const SpringQuad* g = quads_[family].data();
   for (const QuadRun& r : unbanded_runs_[family]) sweep_near_rest(padded, g + r.begin, g + r.end, alpha);
+  if (family == 2 && !loose_bend_bands_.empty()) sweep_loose(padded, loose_bend_bands_.back(), alpha);
 }
 
 void Solver::sweep_springs(Vec4* padded, std::size_t family, float alpha) const {

@@ -289,6 +289,11 @@ class Solver {
   void sweep_band(Eigen::Vector4f* padded, std::size_t family, std::size_t band, float alpha) const;
   /// The cut's quads that fit no band, in the order they came (one thread, after the bands).
   void sweep_unbanded(Eigen::Vector4f* padded, std::size_t family, float alpha) const;
+  /// On several threads in bands: the update's part of a cut's bend springs (the live ones among `edited`),
+  /// listed in the band of their rows and swept one by one (loose_bend_), not batched (loosen_bend). The
+  /// next step batches them (fold_loose_bend, at its start, before any update reads their slots).
+  void loosen_bend(const Cloth& cloth, const std::vector<std::uint32_t>& edited);
+  void fold_loose_bend(const Cloth& cloth);
   /// Returns whether it also read which springs are over `limit` into limit_dirty_ (limit > 0, no cut's
   /// springs after the bands).
   template <typename Predict>
@@ -346,6 +351,12 @@ class Solver {
   /// every other band of its parity; build_bands).
   std::array<std::vector<std::vector<QuadRun>>, 3> band_cut_runs_;
   std::array<std::vector<QuadRun>, 3> unbanded_runs_;
+  /// The last cut's bend springs, not yet batched (loosen_bend): their indices in increasing order, and per
+  /// band (the last entry: those that fit no band) their ends (plus one, as in a quad) and rest lengths, in
+  /// that order; whether a step has swept them (the next refresh_caches then batches them).
+  std::vector<std::uint32_t> loose_bend_;
+  std::vector<std::vector<PackedSpring>> loose_bend_bands_;
+  bool loose_bend_swept_ = false;
   std::vector<int> band_first_row_;
   std::vector<std::pair<int, int>> band_reach_;
   /// Where each pin group's block of tethers ends in attachments_, as the full build made them (in a block

@@ -346,12 +346,12 @@ TEST(RandomScene, AHeadWithShouldersBeneathItIsNotTakenForAHand) {
 // The jump test after a glimpse (jump_from_kept_course): a lost hand does not reappear farther than
 // max_jump_m from the last palm that kept its course; a one- or two-frame track since does not hold it
 // away. Tuning seed 80 (session 35, the hanging world): as the hand rises from the hanging arm, still below
-// the image, a place on the arm 16 cm off it is taken for one frame (32); measured from there the hand itself
-// was refused for the next 15 frames (28 of 43 visible frames tracked; with the test 41, two missed). Seed 181,
-// a user 1 m away, the same on its rise (the arm taken 21 cm off at frame 35): 28 of 44 without the test, 42. (On the
-// floating world seeds 4 and 139 showed it, 14 and 15 frames; in the hanging world their clips lose 0-3
-// frames without the test.) Measured from the last palm whatever it was (jump_from_kept_course false), the
-// frames are lost again, so this can fail.
+// the image, a place on the arm 16 cm off it is taken for one frame (32); measured from there the hand
+// itself was refused for the next 15 frames (28 of 43 visible frames tracked; with the test 41). Seed 181,
+// a user 1 m away, the same on its rise (the arm 21 cm off at frame 35): 28 of 44 without the test, 42
+// with it. (On the floating world seeds 4 and 139 showed it, 14 and 15 frames; in the hanging world their
+// clips track the same frames without the test, 50 of 53 and 47 of 47.) Measured from the last palm
+// whatever it was (jump_from_kept_course false), the frames are lost again, so this can fail.
 TEST(RandomScene, AGlimpseOfTheHandDoesNotHoldItAwayAfterwards) {
   HandFinderParams from_last_palm;
   from_last_palm.jump_from_kept_course = false;

@@ -19,9 +19,9 @@ int main(int argc, char** argv) try {
                                     "path, start, Kinect noise drawn from docs/sensor.md's distributions; seeds 1-1000 tune, "
                                     "100001-100300 are held out)");
   spec_opt->excludes(random_opt);
-  bool hanging_rest = false;
-  app.add_flag("--hanging-rest", hanging_rest, "With --random: the hand rests at the arm's end, fingers down, not at the "
-               "floating resting pose beyond the arm's reach (docs/sensor.md)")->needs(random_opt);
+  bool hanging_rest = true;
+  app.add_flag("--hanging-rest,!--floating-rest", hanging_rest, "With --random: the hand rests at the arm's end (the default), or, with "
+               "--floating-rest, where the previous world put it: 0.72 m below the shoulder, beyond the arm's reach, physically impossible (docs/sensor.md)")->needs(random_opt);
   app.add_option("--out", out_dir, "Output folder (created; must not hold an INDEX.txt yet)")->required();
   tachi::common::add_log_level_flag(app, log_level);
   if (const int rc = tachi::common::parse(app, argc, argv); rc >= 0) return rc;

@@ -104,14 +104,16 @@ TEST(RandomScene, AnElbowAtTheHandsDepthDoesNotStartATrack) {
   EXPECT_GT(captured_early(no_ridge_test), 3);
 }
 
-// Seed 42: the hand leaves the image across a side with the arm bent; the bend, its nearest reading
-// at the border, held a palm-sized circle and was followed for 31 frames. A track does not start
-// where a component's nearest reading is at the border (nearest_border_cells), nor where its front
-// surface runs out of the image beyond a hand's reach (front_in_view_beyond_hand): either refuses the
-// bend; with both off it is taken again, so this can fail.
+// The hand leaves the image across a side with the arm bent; the bend, its nearest reading at the
+// border, holds a palm-sized circle. Tuning seed 46 (session 35, the hanging world; seed 42 on the
+// floating world, 31 frames): a user 2 m away holds the hand out of the image's side for 26 frames,
+// the bend 34 cm from the palm. A track does not start where a component's nearest reading is at the
+// border (nearest_border_cells), nor where its front surface runs out of the image beyond a hand's
+// reach (front_in_view_beyond_hand): either refuses the bend; with both off it is taken for those 26
+// frames, so this can fail.
 TEST(RandomScene, AnArmLeavingTheImageDoesNotStartATrackAtItsBend) {
   const auto captured = [](const HandFinderParams& params) {
-    return score_clip(random_scenario(42), params).captured;
+    return score_clip(random_scenario(46), params).captured;
   };
   EXPECT_EQ(captured({}), 0u);
   HandFinderParams no_nearest_test;
@@ -126,7 +128,9 @@ TEST(RandomScene, AnArmLeavingTheImageDoesNotStartATrackAtItsBend) {
 // pointing at the camera, 5-9 cm nearer). The arm's hand is its geodesic end (arm_end), not its
 // nearest reading. Tuning seed 25: the hand is up and still from the first frame (acquired without
 // a background, find_arm_end): the elbow was taken from frame 0 for 51 frames, 34 cm off. Tuning
-// seed 3: a user at 1.9 m raises the hand; the elbow was followed for 20 frames. With
+// seed 292 (session 35, the hanging world; seed 3 on the floating world, whose rise from the hanging
+// arm now costs a frame 20 cm off): a user 1.2 m away, the hand up from the first frame, the elbow
+// 6 cm nearer; it was taken for 21 frames running, 31 cm below the hand. With
 // arm_end_window_m negative (no geodesic end), without the dome test (which now refuses these
 // elbows as well) and with a followed palm sought anywhere in the band (palm_from_nearest_m, which
 // keeps it near the nearest reading) both come back, so this can fail.
@@ -135,7 +139,7 @@ TEST(RandomScene, AnElbowNearerThanTheRaisedHandIsNotTakenForIt) {
   nearest_is_hand.arm_end_window_m = -1;
   nearest_is_hand.dome_significance = 0;
   nearest_is_hand.palm_from_nearest_m = 0;
-  for (const std::uint64_t seed : {25u, 3u}) {
+  for (const std::uint64_t seed : {25u, 292u}) {
     const auto with_end = score_clip(random_scenario(seed));
     EXPECT_EQ(with_end.captured, 0u) << "seed " << seed;
     EXPECT_LE(with_end.rms_m, 0.01) << "seed " << seed;
@@ -163,16 +167,18 @@ TEST(RandomScene, ARaisedHandTakesTheTrackFromASecondPersonsHead) {
 }
 
 // A head, an elbow or a shoulder's round end facing the sensor fills the depth band's disc as a palm
-// does. Tuning seed 37: a user 0.8 m away raises the hand from below the image; the upper arm's round
-// end at the shoulder was taken (4 frames, 48 mm RMS over the clip). Seed 52: the hand down, a second
-// person's head 1.7 m away was taken for 11 frames (RMS 203 mm). Seed 64: the elbow of an arm rising
-// from below, 4 frames. A new track does not start on a circle that bulges toward the sensor like a
+// does. Tuning seed 52: the hand down, a second person's head 1.7 m away was taken for 10 frames
+// (RMS 195 mm). Seed 56 (session 35, the hanging world): a user 1.5 m away holds the hand above the
+// image, and the elbow below it, 34 cm from the palm, was taken for 16 frames running. (On the floating
+// world seeds 37, a shoulder's round end, and 64, the elbow of an arm rising from below, were the
+// other cases; in the hanging world 37's is taken for 2 frames only and 64 has 3 frames captured by
+// something else.) A new track does not start on a circle that bulges toward the sensor like a
 // sphere (dome_significance); with the test off they are taken again, so this can fail.
 TEST(RandomScene, AHeadOrAnElbowFacingTheSensorDoesNotStartATrack) {
   HandFinderParams no_dome_test;
   no_dome_test.dome_significance = 0;
   no_dome_test.head_shoulders_half_m = 0;  // seed 52's head has the second person's shoulders beneath it too
-  for (const std::uint64_t seed : {37u, 52u, 64u}) {
+  for (const std::uint64_t seed : {52u, 56u}) {
     const auto with_test = score_clip(random_scenario(seed));
     EXPECT_EQ(with_test.captured, 0u) << "seed " << seed;
     EXPECT_LE(with_test.rms_m, 0.01) << "seed " << seed;
@@ -203,28 +209,30 @@ void expect_tracked_but_not_without(std::initializer_list<std::uint64_t> seeds, 
   }
 }
 
-// Tuning seeds 16 and 34: a followed hand held 15-30 cm in front of the body; the depth band around its
+// Tuning seeds 34 and 285: a followed hand held 15-30 cm in front of the body; the depth band around its
 // nearest reading took in the upper arm or the shoulder, whose wider circle was measured as the palm,
-// 20-40 cm away, and the jump test refused it: the hand was lost for 35 % and 27 % of its visible
-// frames. A followed palm is sought near the hand's nearest reading (palm_from_nearest_m); sought
-// anywhere in the band, the frames are lost again, so this can fail.
+// 20-40 cm away, and the jump test refused it: the hand was lost for 27 % and 35 % of its visible
+// frames (the hanging world, session 35; on the floating world seed 16 was the second, 35 %, which the
+// hanging world's clip loses for 14 % only). A followed palm is sought near the hand's nearest reading
+// (palm_from_nearest_m); sought anywhere in the band, the frames are lost again, so this can fail.
 TEST(RandomScene, AFollowedPalmIsSoughtNearItsNearestReadingNotOnTheUpperArm) {
   HandFinderParams anywhere;
   anywhere.palm_from_nearest_m = 0;
-  expect_tracked_but_not_without({16u, 34u}, 0.95, anywhere, 0.8);
+  expect_tracked_but_not_without({34u, 285u}, 0.95, anywhere, 0.8);
 }
 
-// Tuning seed 113: the hand is lowered out of the image across its bottom edge; the followed component,
-// the arm alone once the hand had gone, held a palm-sized place off the hand's course within the jump
-// test's 20 cm of the last palm, and was followed for 13 frames, 25-47 cm from the hand. A followed palm must lie near where its last step
-// carries it (max_off_course_m); without that test the arm is followed again, so this can fail.
+// Tuning seed 87 (session 35, the hanging world; seed 113 on the floating world): the hand is lowered out
+// of the image across its bottom edge; the followed component, the arm alone once the hand had gone, held a
+// palm-sized place off the hand's course within the jump test's 20 cm of the last palm, and was followed for
+// 13 frames, 28-50 cm above the hand. A followed palm must lie near where its last step carries it
+// (max_off_course_m); without that test the arm is followed again, so this can fail.
 TEST(RandomScene, AFollowedPalmThatLeavesItsCourseIsNotTheHand) {
-  const auto score = score_clip(random_scenario(113));
+  const auto score = score_clip(random_scenario(87));
   EXPECT_EQ(score.captured, 0u);
   EXPECT_GE(score.tracked_ratio(), 0.95);
   HandFinderParams no_course;
   no_course.max_off_course_m = 0;
-  EXPECT_GT(score_clip(random_scenario(113), no_course).longest_captured_run, 3u);
+  EXPECT_GT(score_clip(random_scenario(87), no_course).longest_captured_run, 3u);
 }
 
 // Tuning seeds 7 and 75: the hand is up and still from the first frame (so part of the background), with
@@ -233,8 +241,9 @@ TEST(RandomScene, AFollowedPalmThatLeavesItsCourseIsNotTheHand) {
 // 100 %), until it moved. A hand found last frame is tried first where it was (still_hand_m), and before any
 // hand was seen more candidates are tried (start_candidates). With both as before, the frames are lost
 // again, so this can fail. Captures are counted while the hand is raised: seed 75's user stands 2.3 m
-// away and lowers the hand at the end, into the world's resting pose, which floats in view facing the
-// sensor (docs/sensor.md, "A flaw left in the world"); the finder follows it there (11 frames).
+// away and lowers the hand at the end; on the floating world (before session 35) it came to rest in view,
+// detached from the arm, and the finder followed it there (11 frames). Hanging at the arm's end nothing is
+// captured, but the count stays as it was.
 TEST(RandomScene, AHandHeldStillFromTheFirstFrameIsTrackedFromTheStart) {
   HandFinderParams as_before;
   as_before.still_hand_m = 0;
@@ -254,8 +263,9 @@ TEST(RandomScene, AHandHeldStillFromTheFirstFrameIsTrackedFromTheStart) {
 // Tuning seed 86: the hand is held up beside the head from the first frame, its forearm and upper arm at
 // its depth; a new track's band took them in and its widest place was the elbow, a tube refused by the
 // ridge test, so the hand was untracked for its first 15 frames and again for 11 (65 % of visible frames,
-// now 97.5 %). Such a candidate is looked at again near its nearest reading (second_look_near_nearest);
-// without that look the frames are lost again, so this can fail.
+// now 97.5 %; the hanging world, the default since session 35: 54 of 82 without the look, 80 with it).
+// Such a candidate is looked at again near its nearest reading (second_look_near_nearest); without that
+// look the frames are lost again, so this can fail.
 TEST(RandomScene, AHandHeldUpWithItsArmAtItsDepthIsFoundAtItsFingertipsNotTheElbow) {
   HandFinderParams first_look_only;
   first_look_only.second_look_near_nearest = false;
@@ -335,15 +345,17 @@ TEST(RandomScene, AHeadWithShouldersBeneathItIsNotTakenForAHand) {
 
 // The jump test after a glimpse (jump_from_kept_course): a lost hand does not reappear farther than
 // max_jump_m from the last palm that kept its course; a one- or two-frame track since does not hold it
-// away. Tuning seed 4: the hand, raised fast (15 cm a frame), is seen once at frame 33, then refused by
-// other tests for a frame and measured from there, 20 cm behind it, for the next 14 frames. Seed 139: the
-// hand is taken as a new track, then measured 18 cm off on the next frame (no course known yet), and the
-// hand itself was refused from there for 15 frames. Measured from the last palm whatever it was
-// (jump_from_kept_course false), both lose those frames again.
+// away. Tuning seed 80 (session 35, the hanging world): as the hand rises from the hanging arm, still below
+// the image, a place on the arm 16 cm off it is taken for one frame (32); measured from there the hand
+// itself was refused for the next 15 frames (28 of 43 visible frames tracked; with the test 41). Seed 181,
+// a user 1 m away, the same on its rise (the arm 21 cm off at frame 35): 28 of 44 without the test, 42
+// with it. (On the floating world seeds 4 and 139 showed it, 14 and 15 frames; in the hanging world their
+// clips track the same frames without the test, 50 of 53 and 47 of 47.) Measured from the last palm
+// whatever it was (jump_from_kept_course false), the frames are lost again, so this can fail.
 TEST(RandomScene, AGlimpseOfTheHandDoesNotHoldItAwayAfterwards) {
   HandFinderParams from_last_palm;
   from_last_palm.jump_from_kept_course = false;
-  for (const std::uint64_t seed : {4u, 139u}) {
+  for (const std::uint64_t seed : {80u, 181u}) {
     const auto score = score_clip(random_scenario(seed));
     EXPECT_GE(score.tracked_ratio(), 0.9) << "seed " << seed;
     EXPECT_LE(score.longest_captured_run, 1u) << "seed " << seed;
@@ -354,22 +366,23 @@ TEST(RandomScene, AGlimpseOfTheHandDoesNotHoldItAwayAfterwards) {
 // The border-cut test against the hand's own palm (own_palm_shrink_m): a followed palm turned 15-30 degrees
 // from the line of sight holds a 3.6-3.9 cm circle, under the fixed whole palm's 3.9 cm, and with its fingers
 // or wrist across the image border it was refused as cut though its circle was within 2 cm of the truth.
-// Tuning seed 241: 93 of 111 visible frames tracked, 108 with the test; seed 188: 109 of 116, all with it.
+// The hanging world (session 35): tuning seed 507, 89 of 109 visible frames tracked without the test, 106
+// with it; seed 38, 97 of 103, 100 with it. (On the floating world seeds 241 and 188 showed it.)
 TEST(RandomScene, AFollowedPalmAsLargeAsItsOwnIsNotCutByTheBorder) {
   HandFinderParams fixed_size_only;
   fixed_size_only.own_palm_shrink_m = 0;
-  expect_tracked_but_not_without({241u, 188u}, 0.97, fixed_size_only, 0.95);
+  expect_tracked_but_not_without({507u, 38u}, 0.97, fixed_size_only, 0.95);
 }
 
-// The randomized world's resting pose (docs/sensor.md, session 34). Floating (the default, 0.72 m below the
-// shoulder, beyond the arm's reach), a far user's lowered hand hangs in view detached from the arm, and the
-// finder follows it down there, scored captured because it is not raised: tuning seeds 51, 75 and 91 (users
-// 2.1-2.5 m away), runs of 10-12 frames. Hanging at the arm's end, fingers down (random_scenario's
-// hanging_rest), the same clips have nothing captured.
+// The randomized world's resting pose (docs/sensor.md, sessions 34 and 35). Floating (the previous world,
+// random_scenario(seed, false): 0.72 m below the shoulder, beyond the arm's reach), a far user's lowered hand
+// hangs in view detached from the arm, and the finder follows it down there, scored captured because it is
+// not raised: tuning seeds 51, 75 and 91 (users 2.1-2.5 m away), runs of 10-12 frames. Hanging at the arm's
+// end, fingers down (random_scenario's default since session 35), the same clips have nothing captured.
 TEST(RandomScene, AHandRestingAtTheArmsEndIsNotFollowedDownToAFloatingPose) {
   for (const std::uint64_t seed : {51u, 75u, 91u}) {
-    EXPECT_GE(score_clip(random_scenario(seed)).longest_captured_run, 10u) << "seed " << seed;
-    const auto hanging = score_clip(random_scenario(seed, true));
+    EXPECT_GE(score_clip(random_scenario(seed, false)).longest_captured_run, 10u) << "seed " << seed;
+    const auto hanging = score_clip(random_scenario(seed));
     EXPECT_EQ(hanging.captured, 0u) << "seed " << seed;
     EXPECT_GE(hanging.tracked_ratio(), 0.95) << "seed " << seed;
   }

@@ -31,7 +31,7 @@ struct RandomRun {
   Summary summary;
 };
 /// Renders and scores every clip of `seeds`, `jobs` at a time (each with one OpenCV thread).
-RandomRun score_random(SeedRange seeds, unsigned jobs, bool hanging_rest = false);
+RandomRun score_random(SeedRange seeds, unsigned jobs, bool hanging_rest = true);
 
 /// "up", "raised", "never": when the clip's hand comes up.
 const char* start_name(HandStart start);
@@ -50,7 +50,7 @@ struct EvaluationOptions {
   std::optional<SeedRange> random;     ///< --random: score these clips instead of a CSV
   std::optional<std::uint64_t> frames; ///< --frames: list this clip frame by frame
   unsigned jobs = 1;
-  bool hanging_rest = false;  ///< --hanging-rest: the randomized world with the hand resting at the arm's end
+  bool hanging_rest = true;  ///< the randomized world's hand rests at the arm's end; false: --floating-rest, the previous world
   bool json = false;
   bool report_only = false;  ///< --random: exit 0 even when a rate is missed
   EvaluationLimits limits;

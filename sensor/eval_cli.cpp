@@ -1,6 +1,7 @@
 #include "eval_cli.hpp"
 
 #include "tachi/common/app.hpp"
+#include "resting_flags.hpp"
 
 #include <iostream>
 
@@ -26,11 +27,7 @@ int parse_eval_flags(int argc, char** argv, EvaluationOptions& o) {
                      ->check(seed_range);
   app.add_option("--jobs", o.jobs, "With --random: clips scored in parallel (default 1: the machine is shared)")->check(CLI::Range(1, 64));
   auto* frames = app.add_option("--frames", frames_seed, "List the randomized clip of this seed frame by frame (CSV: truth and what was tracked)");
-  app.add_flag("--hanging-rest,!--floating-rest", o.hanging_rest,
-               "With --random or --frames: the hand rests at the arm's end, fingers down (the default since session 35; "
-               "docs/sensor.md), or, with --floating-rest, where the previous world put it: 0.72 m below the shoulder, "
-               "beyond the arm's reach and drawn detached from the arm, physically impossible (for comparison with "
-               "figures taken before session 35)");
+  add_resting_flags(app, o.hanging_rest, "--random or --frames");
   app.add_flag("--report-only", o.report_only, "With --random: exit 0 even when a rate is missed");
   app.add_flag("--json", o.json, "Print one JSON object instead of text");
   app.add_option("--max-rms-m", o.limits.max_rms_m, "Exit 1 if the RMS 3D error exceeds this (metres)")->check(CLI::NonNegativeNumber);

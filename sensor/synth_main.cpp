@@ -7,6 +7,7 @@
 #include "tachi/common/app.hpp"
 #include "tachi/sensor/random_scene.hpp"
 #include "tachi/sensor/synthetic.hpp"
+#include "resting_flags.hpp"
 
 int main(int argc, char** argv) try {
   CLI::App app{"tachi-synth: render a synthetic Kinect recording (fakenect format) and its ground truth"};
@@ -20,8 +21,7 @@ int main(int argc, char** argv) try {
                                     "100001-100300 are held out)");
   spec_opt->excludes(random_opt);
   bool hanging_rest = true;
-  app.add_flag("--hanging-rest,!--floating-rest", hanging_rest, "With --random: the hand rests at the arm's end (the default), or, with "
-               "--floating-rest, where the previous world put it: 0.72 m below the shoulder, beyond the arm's reach, physically impossible (docs/sensor.md)")->needs(random_opt);
+  tachi::sensor::add_resting_flags(app, hanging_rest, "--random", random_opt);
   app.add_option("--out", out_dir, "Output folder (created; must not hold an INDEX.txt yet)")->required();
   tachi::common::add_log_level_flag(app, log_level);
   if (const int rc = tachi::common::parse(app, argc, argv); rc >= 0) return rc;

@@ -200,15 +200,15 @@ void Solver::place_cut_quads(const Cloth& cloth, std::size_t family, std::size_t
       }
     }
     if (low > high) continue;  // all lanes padding: nothing to sweep
-    const auto j = static_cast<std::size_t>(
-        std::max<std::ptrdiff_t>(0, std::upper_bound(band_first_row_.begin(), band_first_row_.end(), low) -
-                                        band_first_row_.begin() - 1));
-    if (low >= band_reach_[j].first && high <= band_reach_[j].second) {
-      add(runs[j], q);
-    } else {
-      add(unbanded, q);
-    }
+    const std::size_t j = band_of_rows(low, high);
+    add(j < band_reach_.size() ? runs[j] : unbanded, q);
   }
+}
+
+std::size_t Solver::band_of_rows(int low, int high) const {
+  const auto j = static_cast<std::size_t>(std::max<std::ptrdiff_t>(
+      0, std::upper_bound(band_first_row_.begin(), band_first_row_.end(), low) - band_first_row_.begin() - 1));
+  return low >= band_reach_[j].first && high <= band_reach_[j].second ? j : band_reach_.size();
 }
 
 void Solver::loosen_bend(const Cloth& cloth, const std::vector<std::uint32_t>& edited) {
@@ -227,13 +227,8 @@ void Solver::loosen_bend(const Cloth& cloth, const std::vector<std::uint32_t>& e
     loose_bend_.push_back(k);
     const std::uint32_t a = cloth.spring_a[k];
     const std::uint32_t b = cloth.spring_b[k];
-    const int low = std::min(cloth.grid[a].v, cloth.grid[b].v);
-    const int high = std::max(cloth.grid[a].v, cloth.grid[b].v);
-    const auto j = static_cast<std::size_t>(
-        std::max<std::ptrdiff_t>(0, std::upper_bound(band_first_row_.begin(), band_first_row_.end(), low) -
-                                        band_first_row_.begin() - 1));
-    const bool fits = low >= band_reach_[j].first && high <= band_reach_[j].second;
-    loose_bend_bands_[fits ? j : band_reach_.size()].push_back({a + 1, b + 1, cloth.rest_length[k]});
+    const std::size_t j = band_of_rows(std::min(cloth.grid[a].v, cloth.grid[b].v), std::max(cloth.grid[a].v, cloth.grid[b].v));
+    loose_bend_bands_[j].push_back({a + 1, b + 1, cloth.rest_length[k]});
   }
 }
 

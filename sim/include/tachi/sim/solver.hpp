@@ -285,6 +285,9 @@ class Solver {
   /// Gives quads_[family]'s quads from `first` on (a cut's, just appended, in row order) to the band of
   /// their rows where that keeps the band apart from the others of its parity, else to the unbanded tail.
   void place_cut_quads(const Cloth& cloth, std::size_t family, std::size_t first);
+  /// The band whose reach holds grid rows [low, high] (the band of `low`'s rows, if its reach takes in `high`),
+  /// else band_reach_.size(): after the bands. The one rule of place_cut_quads and loosen_bend.
+  std::size_t band_of_rows(int low, int high) const;
   /// A band's batches, then the cut's quads placed in it, in the order they came.
   void sweep_band(Eigen::Vector4f* padded, std::size_t family, std::size_t band, float alpha) const;
   /// The cut's quads that fit no band, in the order they came (one thread, after the bands).

@@ -427,7 +427,7 @@ struct SyntheticScene::Impl {
     // rounded stump and raised elbow were then the hand in view (seed 16: 24 frames captured 0.5 m
     // from the truth). Below the shoulder the hand is left where the path puts it: the resting pose
     // (0.72 m below the shoulder, fingers up) is beyond the arm's reach as well, a known flaw of the
-    // world (docs/sensor.md) that every bundled recording and tuning figure carries.
+    // world (docs/sensor.md) that every bundled recording and every randomized figure before session 35 carry.
     // With the hanging rest (spec.hanging_rest) no target is drawn detached: below the shoulder the
     // hand stops where the arm reaches too.
     if (const Vec3 to_wrist = wrist - shoulder; (to_wrist.y() < 0 || spec.hanging_rest) && to_wrist.norm() > reach) {

@@ -242,8 +242,8 @@ TEST(RandomScene, AFollowedPalmThatLeavesItsCourseIsNotTheHand) {
 // hand was seen more candidates are tried (start_candidates). With both as before, the frames are lost
 // again, so this can fail. Captures are counted while the hand is raised: seed 75's user stands 2.3 m
 // away and lowers the hand at the end; on the floating world (before session 35) it came to rest in view,
-// detached from the arm, and the finder followed it there (11 frames). Hanging at the arm's end nothing is
-// captured, but the count stays as it was.
+// detached from the arm, and the finder followed it there (11 frames). Hanging at the arm's end (the default
+// since session 35) nothing is captured there; the test still counts only the raised hand's captures.
 TEST(RandomScene, AHandHeldStillFromTheFirstFrameIsTrackedFromTheStart) {
   HandFinderParams as_before;
   as_before.still_hand_m = 0;

@@ -76,6 +76,10 @@ void ChildProcess::drain(int timeout_ms) {
 }
 
 bool ChildProcess::running() {
+  // What the child wrote so far is read too (without waiting): a test that only polls running() then says
+  // the child's stderr in its failure message (err() was empty when the viewer's window never appeared in
+  // CI, 2026-12-06), and a chatty child cannot fill its pipe and block on it.
+  drain(0);
   if (exited_) return false;
   if (waitpid(pid_, &status_, WNOHANG) == pid_) exited_ = true;
   return !exited_;

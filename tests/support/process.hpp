@@ -26,6 +26,7 @@ class ChildProcess {
   int wait(std::chrono::milliseconds timeout);
   /// Sends a signal (e.g. SIGINT to test a clean stop).
   void signal(int signo);
+  /// Whether the child is still running; reads what it wrote meanwhile (out(), err()).
   bool running();
   pid_t pid() const { return pid_; }
   /// Reads the child's output until stdout contains `text` (true) or the timeout passes or the

@@ -61,6 +61,7 @@ class VirtualDisplay {
         if (in >> owner && owner == server_->pid()) {
           if (Display* display = XOpenDisplay(name_.c_str())) {
             XCloseDisplay(display);
+            ready_ = true;
             return;
           }
         }
@@ -70,8 +71,14 @@ class VirtualDisplay {
         server_->signal(SIGTERM);
         server_->wait(3s);
       }
+      server_->wait(1s);  // exited: its stderr says why
+      failure_ = "Xvfb " + name_ + " did not start: " + server_->err();
     }
   }
+  /// Whether an X server of this test's own answered (else why not: the last Xvfb's stderr). A test
+  /// asserts it first: a viewer started on a display no server of ours holds can only time out.
+  bool ready() const { return ready_; }
+  const std::string& failure() const { return failure_; }
   /// Whether a display's lock names a live server (Xvfb replaces a lock whose server is gone).
   static bool held(const std::filesystem::path& lock) {
     std::ifstream in(lock);
@@ -101,11 +108,13 @@ class VirtualDisplay {
     run({kImport, "-window", "root", file.string()});
     return cv::imread(file.string());
   }
-  /// The id of the viewer's window, waiting until it is mapped.
-  std::string viewer_window() const {
-    for (int i = 0; i < 200; ++i) {
+  /// The id of the viewer's window, waiting until it is mapped (up to 40 s: a loaded ctest -j3 on two
+  /// cores runs a dozen processes at once), or none once the viewer has exited.
+  std::string viewer_window(ChildProcess& viewer) const {
+    for (const auto deadline = std::chrono::steady_clock::now() + 40s; std::chrono::steady_clock::now() < deadline;) {
       const auto r = tachi::test::run({kXdotool, "search", "--onlyvisible", "--name", "^tachi$"}, 10s, env());
       if (r.exit_code == 0 && !r.out.empty()) return r.out.substr(0, r.out.find('\n'));
+      if (!viewer.running()) return {};
       std::this_thread::sleep_for(100ms);
     }
     return {};
@@ -138,6 +147,8 @@ class VirtualDisplay {
  private:
   std::string name_;
   std::unique_ptr<ChildProcess> server_;
+  bool ready_ = false;
+  std::string failure_;
 };
 
 bool tools_present() {
@@ -183,21 +194,30 @@ std::string last_detail(bus::Reader<tachi_msg_NodeStatus>& status) {
   return said;
 }
 
+// Why no viewer window was found: which side is gone, what the display holds, the viewer's last
+// heartbeat and its stderr (read after running(), which drains it: err() alone says only what an
+// earlier wait read, and said nothing when the mouse-drag test failed in CI, 2026-12-06).
+std::string no_window(const VirtualDisplay& display, ChildProcess& viewer, bus::Reader<tachi_msg_NodeStatus>& status) {
+  const bool viewer_running = viewer.running();
+  return "X server " + std::string(display.running() ? "up" : "gone") + " on " + display.name() + ", viewer " +
+         (viewer_running ? "running" : "exited") + "; " + display.window_names() +
+         "; viewer's heartbeat: " + last_detail(status) + "; stderr: " + viewer.err();
+}
+
 }  // namespace
 
 TEST(ViewerWindow, FitsASmallScreenShowsTheClothAndSavesASnapshotOnAKey) {
   if (!tools_present()) GTEST_SKIP() << "Xvfb, xdotool or imagemagick missing (scripts/setup.sh installs them)";
   const tachi::test::ScratchDir dir{"viewer_window"};
   const VirtualDisplay display(1024, 700);
+  ASSERT_TRUE(display.ready()) << display.failure();
   const std::string domain = "155";
   ChildProcess sim({kSim, "--grid", "16", "--pin", "top-edge", "--domain", domain, "--duration", "30"});
   ChildProcess viewer({kViewer, "--domain", domain, "--size", "1000", "--snapshot-dir", dir.path().string()}, display.env());
   bus::Participant dds{155};
   bus::Reader<tachi_msg_NodeStatus> status{dds, bus::topics::node_status};
-  const std::string window = display.viewer_window();
-  ASSERT_FALSE(window.empty()) << "X server " << (display.running() ? "up" : "gone") << ", viewer "
-                               << (viewer.running() ? "running" : "exited") << "; " << display.window_names()
-                               << "; viewer's heartbeat: " << last_detail(status) << "; stderr: " << viewer.err();
+  const std::string window = display.viewer_window(viewer);
+  ASSERT_FALSE(window.empty()) << no_window(display, viewer, status);
   ASSERT_TRUE(viewer_has_cloth(status)) << last_detail(status) << "; stderr: " << viewer.err();
 
   // Qt applies the fitted size asynchronously (seen once in a loaded ctest -j2 run: still 1000 px after
@@ -255,6 +275,7 @@ TEST(ViewerWindow, FitsASmallScreenShowsTheClothAndSavesASnapshotOnAKey) {
 TEST(ViewerWindow, AMouseDragCutsTheClothAlongTheDraggedLine) {
   if (!tools_present()) GTEST_SKIP() << "Xvfb, xdotool or imagemagick missing (scripts/setup.sh installs them)";
   const VirtualDisplay display(1024, 900);
+  ASSERT_TRUE(display.ready()) << display.failure();
   constexpr unsigned kDomain = 156;
   ChildProcess sim({kSim, "--grid", "16", "--pin", "top-edge", "--domain", std::to_string(kDomain), "--duration", "40"});
   ChildProcess viewer({kViewer, "--domain", std::to_string(kDomain), "--size", "600", "--mouse"}, display.env());
@@ -264,8 +285,8 @@ TEST(ViewerWindow, AMouseDragCutsTheClothAlongTheDraggedLine) {
   bus::Reader<tachi_msg_ClothState> states{dds, bus::topics::cloth_state};
   bus::Reader<tachi_msg_ClothTopology> topologies{dds, bus::topics::cloth_topology};
   bus::Reader<tachi_msg_NodeStatus> status{dds, bus::topics::node_status};
-  const std::string window = display.viewer_window();
-  ASSERT_FALSE(window.empty()) << viewer.err();
+  const std::string window = display.viewer_window(viewer);
+  ASSERT_FALSE(window.empty()) << no_window(display, viewer, status);
   ASSERT_TRUE(states.wait_for_data(20s)) << sim.err();
   ASSERT_TRUE(viewer_has_cloth(status)) << viewer.err();  // the cloth to cast the cursor onto
 

@@ -24,6 +24,8 @@ namespace tachi::launcher {
 namespace {
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
+// How long a node's flag check may take (run_flag_check: mostly the program's start).
+constexpr std::chrono::seconds kFlagCheckDeadline{30};
 
 // Measured on the bundled recordings (top_edge, grid 64, 5.6 s): cloth.obj ~172 B per particle, written
 // twice (sim/ and --out); each journal ~95 B per hand sample; trace/ ~170 B per frame; an MPEG-4 frame of
@@ -102,8 +104,11 @@ FlagCheck run_flag_check(const fs::path& program, const std::vector<std::string>
   }
   ::close(pipe_fds[1]);
   FlagCheck result;
-  // Parsing flags takes milliseconds; a node that is still busy after this long ignored the check.
-  const auto deadline = Clock::now() + std::chrono::seconds(10);
+  // Parsing flags takes milliseconds, but starting the program does not: tachi-viewer loads 264 shared
+  // libraries (OpenCV's video and image codecs, Qt), 0.45 s of CPU before main, and took 4-7 s of wall time
+  // with 14 runnable tasks on two cores; a full ctest beside two builds ran past 10 s (2026-12-06). A node
+  // still busy after this long ignored the check.
+  const auto deadline = Clock::now() + kFlagCheckDeadline;
   char buffer[4096];
   while (Clock::now() < deadline) {
     pollfd p{pipe_fds[0], POLLIN, 0};
@@ -233,7 +238,9 @@ std::optional<PreflightError> check_node_flags(const RunConfig& config, const fs
       return PreflightError{spec.program + " not found next to tachi (" + program.string() + ")", kRunFailure};
     const FlagCheck check = run_flag_check(program, spec.args);
     if (check.status == -1)
-      return PreflightError{spec.program + " did not answer the flag check within 10 s", kRunFailure};
+      return PreflightError{spec.program + " did not answer the flag check within " +
+                                std::to_string(kFlagCheckDeadline.count()) + " s",
+                            kRunFailure};
     if (WIFEXITED(check.status) && WEXITSTATUS(check.status) == 0) continue;
     const std::string reason = first_line(check.output);
     if (WIFEXITED(check.status) && WEXITSTATUS(check.status) == kRunUsage)

@@ -17,6 +17,11 @@ source "$(dirname "$0")/../support/two_hosts.sh"
 
 ip netns exec "$b" timeout 120 "$bin/tachi" run --nodes sim,viewer --grid 32 --domain $dom --dds-config "$work/$if_b.xml" "${loss[@]}" \
   --recording "$recording" --headless --settle 1.5 --set sim.cut-mode=grid --out "$work/b" >"$work/b.out" 2>"$work/b.err" & run_b=$!; pids+=("$run_b")
+# Host A once host B's simulator runs (its first log line): host A's sensor waits only for its own filter,
+# and plays the recording in ~2.5 s, so a host B still starting its nodes (4-7 s a process with a dozen
+# runnable tasks on two cores) met no live sensor and reported 0 frames (a full ctest beside two builds,
+# 2026-12-06). A user starts the receiving host first too.
+for _ in $(seq 600); do grep -q "\[tachi-sim\]" "$work/b/sim.log" 2>/dev/null && break; kill -0 "$run_b" 2>/dev/null || break; sleep 0.1; done
 ip netns exec "$a" timeout 120 "$bin/tachi" run --nodes sensor,filter --domain $dom --dds-config "$work/$if_a.xml" "${loss[@]}" \
   --recording "$recording" "${pace[@]}" --headless --out "$work/a" >"$work/a.out" 2>"$work/a.err"
 a_status=$?

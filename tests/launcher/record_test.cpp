@@ -4,6 +4,7 @@
 // Domain ids 140-145 (tests/launcher owns 120-149; docs/testing.md).
 #include "paths.hpp"
 #include "cut_lines.hpp"
+#include "files.hpp"
 #include "process.hpp"
 #include "scratch_dir.hpp"
 
@@ -92,6 +93,11 @@ TEST_F(RecordedRun, PlayingTheRawHandIntoAFreshFilterAndSimulatorReproducesTheCu
   EXPECT_EQ(json::parse(play.out)["published"]["tachi/hand/raw"], depth_frames("straight_cut")) << play.out;
   ASSERT_EQ(replay.wait(120s), 0) << replay.err();
   const auto replayed = read_json(b / "summary.json");
+  // The replay's own logs when it differs: it made no cut once in a full ctest under load (2026-12-06) and its
+  // scratch folder, with the reason, went with the test.
+  std::string logs;
+  for (const char* log : {"filter.log", "sim.log"}) logs += std::string("\n--- ") + log + "\n" + tachi::test::read_text(b / log);
+  SCOPED_TRACE("the replay's launcher:\n" + replay.err() + logs);
   EXPECT_EQ(replayed["cuts"], recorded["cuts"]);
   EXPECT_EQ(replayed["pieces"], recorded["pieces"]);
   EXPECT_EQ(replayed["fallen_pieces"], recorded["fallen_pieces"]);

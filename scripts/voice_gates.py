@@ -9,6 +9,9 @@ time, score, margin, phrase_score, phrase_margin, level, garbage_score, garbage_
 ratio became an acceptance test) the phrase's seconds as the phrase grammar and as the garbage grammar align it.
 
   scripts/voice_gates.py DUMP [--gate margin=8 level=14 garbage_margin=0 garbage_ratio=-60 min_seconds=0.5 ...] [--search]
+
+A phrase's own garbage ratio (phrases[].verify_min_garbage_log_ratio) is the key garbage_ratio@PHRASE, e.g.
+"garbage_ratio@begin cutting=-70" (none: the top-level one).
 """
 import argparse
 import itertools
@@ -25,10 +28,14 @@ def shipped_gates():
     path = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "config", "voice.json")
     with open(path) as f:
         c = json.load(f)
-    return dict(ratio=c["verify_min_log_ratio"], margin=c["verify_min_margin"], phrase_margin=c.get("verify_min_phrase_margin", 0.0),
-                level=c.get("verify_min_level_db"), garbage_margin=c.get("verify_min_garbage_margin"),
-                phrase_ratio=c.get("verify_min_phrase_log_ratio"), garbage_ratio=c.get("verify_min_garbage_log_ratio"),
-                min_seconds=c.get("verify_min_phrase_seconds"))
+    g = dict(ratio=c["verify_min_log_ratio"], margin=c["verify_min_margin"], phrase_margin=c.get("verify_min_phrase_margin", 0.0),
+             level=c.get("verify_min_level_db"), garbage_margin=c.get("verify_min_garbage_margin"),
+             phrase_ratio=c.get("verify_min_phrase_log_ratio"), garbage_ratio=c.get("verify_min_garbage_log_ratio"),
+             min_seconds=c.get("verify_min_phrase_seconds"))
+    for p in c["phrases"]:
+        if "verify_min_garbage_log_ratio" in p:
+            g["garbage_ratio@" + p["phrase"]] = p["verify_min_garbage_log_ratio"]
+    return g
 
 
 DEFAULT = shipped_gates()
@@ -69,7 +76,10 @@ def accepts(g, d):
         return False
     if g["min_seconds"] is not None and not ge(d["garbage_duration"], g["min_seconds"]):
         return False
-    return (d["score"] >= g["ratio"] or (g["garbage_ratio"] is not None and d["garbage_score"] >= g["garbage_ratio"]) or
+    garbage_ratio = g["garbage_ratio"]
+    if garbage_ratio is not None and g.get("garbage_ratio@" + d["phrase"]) is not None:
+        garbage_ratio = g["garbage_ratio@" + d["phrase"]]
+    return (d["score"] >= g["ratio"] or (garbage_ratio is not None and d["garbage_score"] >= garbage_ratio) or
             (g["phrase_ratio"] is not None and d["phrase_score"] >= g["phrase_ratio"]))
 
 
@@ -115,7 +125,7 @@ def show(g, t):
 def parse_gate(items):
     g = dict(DEFAULT)
     for it in items or []:
-        k, v = it.split("=")
+        k, v = it.rsplit("=", 1)
         g[k] = None if v in ("none", "null") else float(v)
     return g
 

@@ -55,6 +55,8 @@ std::optional<std::string> validate(const VoiceConfig& config) {
     if (!seen.insert(p.phrase).second) return "phrases: \"" + p.phrase + "\" appears twice";
     if (!std::isfinite(p.threshold) || p.threshold <= 0.0 || p.threshold > 1.0)
       return "phrases: threshold of \"" + p.phrase + "\" must be in (0, 1] (e.g. 1e-15)";
+    if (p.verify_min_garbage_log_ratio && std::isnan(*p.verify_min_garbage_log_ratio))
+      return "phrases: verify_min_garbage_log_ratio of \"" + p.phrase + "\" must be a number";
     start = start || p.command == VoiceCommand::Start;
     stop = stop || p.command == VoiceCommand::Stop;
   }
@@ -133,7 +135,7 @@ VoiceConfig parse_voice_config(const std::string& json_text) {
       c.phrases.clear();
       for (const auto& p : root.at("phrases")) {
         for (const auto& item : p.items())
-          if (item.key() != "phrase" && item.key() != "command" && item.key() != "threshold")
+          if (item.key() != "phrase" && item.key() != "command" && item.key() != "threshold" && item.key() != "verify_min_garbage_log_ratio")
             fail("unknown key phrases[]." + item.key());
         VoicePhrase vp;
         vp.phrase = normalise_phrase(p.at("phrase").get<std::string>());
@@ -142,6 +144,10 @@ VoiceConfig parse_voice_config(const std::string& json_text) {
         if (!kind) fail("phrases[].command must be \"start\", \"stop\", \"grab\" or \"release\" (got \"" + command + "\")");
         vp.command = *kind;
         if (p.contains("threshold")) vp.threshold = p.at("threshold").get<double>();
+        if (p.contains("verify_min_garbage_log_ratio")) {
+          if (!p.at("verify_min_garbage_log_ratio").is_number()) fail("phrases[].verify_min_garbage_log_ratio must be a number");
+          vp.verify_min_garbage_log_ratio = p.at("verify_min_garbage_log_ratio").get<double>();
+        }
         c.phrases.push_back(vp);
       }
     }
@@ -165,7 +171,8 @@ void set_phrase(VoiceConfig& config, VoiceCommand command, const std::string& ph
     else
       kept.push_back(p);
   }
-  kept.push_back({normalise_phrase(phrase), command, threshold});
+  // The old phrase's own garbage ratio is not carried over: it was measured on that phrase's audio.
+  kept.push_back({normalise_phrase(phrase), command, threshold, std::nullopt});
   config.phrases = std::move(kept);
 }
 

@@ -497,8 +497,12 @@ bool verification_accepts(const VoiceConfig& config, const VoiceDetection& d) {
   // Said on its own, the whole window passes; said inside other words, which the whole window's
   // grammar can explain only with silence, the garbage model's ratio (the words explained by its phone
   // loop) or the phrase's own frames.
-  return d.verification_score >= *config.verify_min_log_ratio ||
-         (config.verify_min_garbage_log_ratio && d.garbage_score >= *config.verify_min_garbage_log_ratio) ||
+  // The garbage ratio's threshold may be the phrase's own: the phrases' ratios are not on one scale.
+  auto garbage_min = config.verify_min_garbage_log_ratio;
+  if (const auto p = std::find_if(config.phrases.begin(), config.phrases.end(), [&](const VoicePhrase& q) { return q.phrase == d.phrase; });
+      garbage_min && p != config.phrases.end() && p->verify_min_garbage_log_ratio)
+    garbage_min = p->verify_min_garbage_log_ratio;
+  return d.verification_score >= *config.verify_min_log_ratio || (garbage_min && d.garbage_score >= *garbage_min) ||
          (config.verify_min_phrase_log_ratio && d.phrase_score >= *config.verify_min_phrase_log_ratio);
 }
 

@@ -6,6 +6,16 @@
 namespace tachi::sensor {
 namespace {
 
+/// What parse_voice_config says about `json`: its error, or "accepted".
+std::string error_of(const std::string& json) {
+  try {
+    parse_voice_config(json);
+  } catch (const std::invalid_argument& e) {
+    return e.what();
+  }
+  return "accepted";
+}
+
 TEST(VoiceCommands, DefaultsAreTwoWordPhrasesForStartAndStop) {
   const VoiceConfig c;
   ASSERT_EQ(c.phrases.size(), 2U);
@@ -59,14 +69,6 @@ TEST(VoiceCommands, ConfigParsesAndRejectsBadValuesByName) {
   ASSERT_EQ(c.phrases.size(), 2U);
   EXPECT_EQ(c.phrases[0].threshold, 1e-25);
   EXPECT_EQ(c.phrases[1].threshold, 1e-15);  // the default phrases' when the key is missing
-  const auto error_of = [](const std::string& json) -> std::string {
-    try {
-      parse_voice_config(json);
-    } catch (const std::invalid_argument& e) {
-      return e.what();
-    }
-    return "";
-  };
   EXPECT_NE(error_of(R"({"phrases": [{"phrase": "go", "command": "start"}]})").find("stop"), std::string::npos);
   EXPECT_NE(error_of(R"({"phrases": [{"phrase": "go", "command": "jump"}]})").find("command"), std::string::npos);
   EXPECT_NE(error_of(R"({"phrases": [{"phrase": "a", "command": "start", "threshold": 2},
@@ -103,6 +105,22 @@ TEST(VoiceCommands, TheShippedConfigFileMatchesTheDefaults) {
   EXPECT_EQ(file.verify_min_garbage_margin, defaults.verify_min_garbage_margin);
   EXPECT_EQ(file.verify_min_garbage_log_ratio, defaults.verify_min_garbage_log_ratio);
   EXPECT_EQ(file.verify_min_phrase_seconds, defaults.verify_min_phrase_seconds);
+  ASSERT_EQ(file.phrases.size(), defaults.phrases.size());
+  for (std::size_t i = 0; i < file.phrases.size(); ++i)
+    EXPECT_EQ(file.phrases[i].verify_min_garbage_log_ratio, defaults.phrases[i].verify_min_garbage_log_ratio) << file.phrases[i].phrase;
+}
+
+TEST(VoiceCommands, APhrasesOwnGarbageRatioParsesIsValidatedAndIsNotCarriedToAReplacingPhrase) {
+  const VoiceConfig c = parse_voice_config(R"({"phrases": [
+      {"phrase": "begin cutting", "command": "start", "verify_min_garbage_log_ratio": -70},
+      {"phrase": "stop cutting", "command": "stop"}]})");
+  EXPECT_EQ(c.phrases[0].verify_min_garbage_log_ratio, -70.0);
+  EXPECT_FALSE(c.phrases[1].verify_min_garbage_log_ratio.has_value());  // the top-level one
+  EXPECT_NE(error_of(R"({"phrases": [{"phrase": "a", "command": "start", "verify_min_garbage_log_ratio": "low"},
+                                     {"phrase": "b", "command": "stop"}]})").find("verify_min_garbage_log_ratio"), std::string::npos);
+  VoiceConfig replaced = c;  // measured on "begin cutting"'s audio: another phrase starts from the top-level one
+  set_phrase(replaced, VoiceCommand::Start, "start cutting");
+  EXPECT_FALSE(replaced.phrases[1].verify_min_garbage_log_ratio.has_value());
 }
 
 TEST(VoiceCommands, ThePhraseRatioMarginAndLevelKeysParseAndAreValidated) {
@@ -113,14 +131,6 @@ TEST(VoiceCommands, ThePhraseRatioMarginAndLevelKeysParseAndAreValidated) {
   // null turns a check off.
   EXPECT_FALSE(parse_voice_config(R"({"verify_min_phrase_log_ratio": null})").verify_min_phrase_log_ratio.has_value());
   EXPECT_FALSE(parse_voice_config(R"({"verify_min_level_db": null})").verify_min_level_db.has_value());
-  const auto error_of = [](const std::string& json) {
-    try {
-      parse_voice_config(json);
-    } catch (const std::invalid_argument& e) {
-      return std::string(e.what());
-    }
-    return std::string("accepted");
-  };
   EXPECT_NE(error_of(R"({"verify_min_level_db": "loud"})").find("verify_min_level_db"), std::string::npos);
   EXPECT_NE(error_of(R"({"verify_min_phrase_log_ratio": [1]})").find("verify_min_phrase_log_ratio"), std::string::npos);
   EXPECT_NE(error_of(R"({"verify_min_phrase_margin": -1})").find("verify_min_phrase_margin"), std::string::npos);

@@ -297,6 +297,59 @@ TEST(VoiceSpotter, APhraseInsideWordsIsAcceptedOnItsGarbageModelRatioWhenItLasts
   EXPECT_TRUE(verification_accepts(whole_window_only, squeezed));
 }
 
+TEST(VoiceSpotter, ACommandTheGarbageGrammarPrefersByLessThanTheMarginIsDropped) {
+  const VoiceConfig c;  // the shipped gates: garbage margin 4, as the whole window's
+  VoiceDetection d;     // the second tune set's reverb case: "begin cutting" said, "stop cutting" reported
+  d.phrase = "stop cutting";
+  d.verification_score = -9.1;  // every whole-window figure looks like a command said alone
+  d.command_margin = 7.8;
+  d.phrase_margin = 10.2;
+  d.level_db = 40.0;
+  d.garbage_score = -55.7;
+  d.garbage_duration_s = 0.52;
+  d.garbage_margin = 1.4;  // but with a phone loop around them the commands nearly tie
+  EXPECT_FALSE(verification_accepts(c, d));
+  VoiceConfig zero = c;  // the garbage grammar needing only to prefer the command (before session 36)
+  zero.verify_min_garbage_margin = 0.0;
+  EXPECT_TRUE(verification_accepts(zero, d));
+  d.garbage_margin = 4.0;
+  EXPECT_TRUE(verification_accepts(c, d));
+}
+
+TEST(VoiceSpotter, BeginCuttingInsideWordsIsAcceptedAtItsOwnLowerGarbageRatioAndStopCuttingIsNot) {
+  const VoiceConfig c;  // the shipped gates: garbage ratio -55, "begin cutting" its own -60
+  VoiceDetection d;     // "okay begin cutting now": the words around it sink the whole window
+  d.phrase = "begin cutting";
+  d.verification_score = -35.0;
+  d.command_margin = 9.0;
+  d.phrase_margin = 1.0;
+  d.level_db = 25.0;
+  d.garbage_score = -58.0;  // below the top-level -55, above the phrase's own -60
+  d.garbage_margin = 30.0;
+  d.garbage_duration_s = 0.68;
+  EXPECT_TRUE(verification_accepts(c, d));
+  VoiceConfig one_scale = c;  // the per-phrase threshold off: the top-level one refuses it
+  for (auto& p : one_scale.phrases) p.verify_min_garbage_log_ratio.reset();
+  EXPECT_FALSE(verification_accepts(one_scale, d));
+  VoiceDetection stop = d;  // the same scores as "stop cutting", which keeps the top-level -55
+  stop.phrase = "stop cutting";
+  EXPECT_FALSE(verification_accepts(c, stop));
+  stop.garbage_score = -54.0;
+  EXPECT_TRUE(verification_accepts(c, stop));
+  VoiceDetection poor = d;  // below the phrase's own threshold too
+  poor.garbage_score = -62.0;
+  EXPECT_FALSE(verification_accepts(c, poor));
+  VoiceConfig whole_window_only = c;  // the top-level garbage ratio off turns it off for every phrase
+  whole_window_only.verify_min_garbage_log_ratio.reset();
+  EXPECT_FALSE(verification_accepts(whole_window_only, d));
+  VoiceDetection squeezed = d;  // the duration check and the margins still hold
+  squeezed.garbage_duration_s = 0.4;
+  EXPECT_FALSE(verification_accepts(c, squeezed));
+  squeezed = d;
+  squeezed.garbage_margin = -1.0;
+  EXPECT_FALSE(verification_accepts(c, squeezed));
+}
+
 TEST(VoiceSpotter, UnknownWordsAndMissingModelsAreClearErrors) {
   VoiceConfig c;
   set_phrase(c, VoiceCommand::Start, "start qzxqzx");

@@ -26,6 +26,13 @@ struct VoicePhrase {
   std::string phrase;        ///< lower-case words of the pronunciation dictionary, one space apart
   VoiceCommand command = VoiceCommand::Start;
   double threshold = 1e-15;  ///< pocketsphinx kws threshold: larger = fewer detections, fewer false alarms
+  /// The second pass's garbage-model acceptance ratio for this phrase (VoiceConfig::verify_min_garbage_log_ratio
+  /// when nothing; off for every phrase when that is off). Per phrase because the phrases do not fail alike:
+  /// on two tune sets (seeds +0 and +20000) what is not "stop cutting" reaches -56 as "stop cutting" once the
+  /// margins, level and duration hold (the CI subset's LibriVox false alarm: -57.6), what is not "begin
+  /// cutting" reaches -66 as "begin cutting" ("that is enough, stop cutting": "-nough" ends like "-gin"),
+  /// while said commands run from about -95 to -11 for both (docs/voice.md, session 36).
+  std::optional<double> verify_min_garbage_log_ratio;
 };
 
 struct VoiceConfig {
@@ -37,8 +44,10 @@ struct VoiceConfig {
   // voices (espeak-ng en) "start" has no R and the en-us model hears "stop"; "begin" differs from "stop"
   // in every phone and a syllable.
   // "start cutting" stays selectable (--start-phrase "start cutting" or the config).
-  std::vector<VoicePhrase> phrases{{"begin cutting", VoiceCommand::Start, 1e-15},
-                                   {"stop cutting", VoiceCommand::Stop, 1e-15}};
+  // "begin cutting" accepts a lower garbage-model ratio than the top-level one (VoicePhrase): -60, the
+  // middle of the stretch from -55 to -66 where no wrong command is added on the tune sets.
+  std::vector<VoicePhrase> phrases{{"begin cutting", VoiceCommand::Start, 1e-15, -60.0},
+                                   {"stop cutting", VoiceCommand::Stop, 1e-15, std::nullopt}};
   /// pocketsphinx's `-kws_plp`: the probability of its phone loop, the garbage model a key phrase
   /// competes with. Smaller = more detections (and false alarms). pocketsphinx's own 0.1 finds 21% of
   /// commands in white noise at 20 dB SNR; 1e-10 finds 92-95% and, alone, false-alarms on ordinary
@@ -71,9 +80,11 @@ struct VoiceConfig {
   std::optional<double> verify_min_level_db = 14.0;
   /// Second pass: the margin over another command once more, each phrase scored with a garbage model
   /// (a free phone loop) before and after it, so that the words around a phrase are explained
-  /// (voice_spotter.cpp). Nothing: not checked. 0: the garbage grammar must prefer the same command
-  /// (chosen on the tune set; docs/voice.md).
-  std::optional<double> verify_min_garbage_margin = 0.0;
+  /// (voice_spotter.cpp). Nothing: not checked. 4, as verify_min_margin (0 until session 36): a command
+  /// the garbage grammar prefers by less is a coin toss between the commands, as with silence around
+  /// them; on the second tune set (seeds +20000) a "begin cutting" said in reverb was reported as "stop
+  /// cutting" at 1.4, and the said commands below 4 were 3 of 1,276 (docs/voice.md, session 36).
+  std::optional<double> verify_min_garbage_margin = 4.0;
   /// Second pass, the garbage model as an acceptance test: a hit whose whole-window ratio misses
   /// verify_min_log_ratio (a phrase inside a sentence: its grammar must explain the words around it with
   /// silence) is still a command when its garbage-model ratio reaches this; the margins, level and

@@ -47,7 +47,8 @@ struct VoiceDetection {
 /// The second pass's decision on one scored hit (VoiceConfig's verify_* thresholds): a command when
 /// its level is high enough, it beats every other command by the margins, the phrase lasts long enough
 /// as the garbage grammar aligns it, and its whole-window ratio, its garbage-model ratio or its
-/// phrase-frames ratio reaches its threshold. The spotter and tachi-voice-eval use this.
+/// phrase-frames ratio reaches its threshold (the garbage ratio's the phrase's own when its VoicePhrase sets
+/// one and the top-level one is on). The spotter and tachi-voice-eval use this.
 bool verification_accepts(const VoiceConfig& config, const VoiceDetection& scored);
 
 class KeywordSpotter {

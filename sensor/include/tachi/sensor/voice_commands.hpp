@@ -32,7 +32,7 @@ struct VoicePhrase {
   /// margins, level and duration hold (the CI subset's LibriVox false alarm: -57.6), what is not "begin
   /// cutting" reaches -66 as "begin cutting" ("that is enough, stop cutting": "-nough" ends like "-gin"),
   /// while said commands run from about -95 to -11 for both (docs/voice.md, session 36).
-  std::optional<double> verify_min_garbage_log_ratio;
+  std::optional<double> verify_min_garbage_log_ratio = std::nullopt;
 };
 
 struct VoiceConfig {

@@ -31,9 +31,9 @@ void Solver::refresh_caches(const Cloth& cloth) {
   const bool topology_same = cache_valid_ && cached_version_ == cloth.topology_version &&
                              cached_springs_ == cloth.spring_count() &&
                              cached_particles_ == cloth.particle_count();
-  // A cut's bend springs that its update left loose (loosen_bend) are batched once a step has swept them, or
+  // A cut's springs that its update left loose (loosen_cut_springs) are batched once a step has swept them, or
   // before anything else reads or changes the batches.
-  if (!loose_bend_.empty() && (loose_bend_swept_ || !(topology_same && pins_same))) fold_loose_bend(cloth);
+  if (!loose_springs_.empty() && (loose_swept_ || !(topology_same && pins_same))) fold_loose_springs(cloth);
   if (topology_same && pins_same) return;
   // Incremental only when the change is one the cloth logged: springs edited through its functions and
   // particles appended. Anything else (new pins, a grab, arrays edited directly) is rebuilt in full.
@@ -62,8 +62,8 @@ void Solver::full_build(const Cloth& cloth, std::vector<std::uint32_t> pins) {
   ++full_builds_;
   clear_cut_work();  // the new pin groups' searches start from scratch
   for (auto& g : quads_) g.clear();
-  loose_bend_.clear();  // batched below with every other live spring
-  loose_bend_bands_.clear();
+  loose_springs_.clear();  // batched below with every other live spring
+  for (auto& bands : loose_bands_) bands.clear();
   banded_ = false;  // the bands are drawn over the new batches (build_bands), not the old ones
   // As much room as the cloth reserved for its cuts (Cloth::reserve): the first cut then grows the solver's
   // per-particle arrays in place instead of reallocating (and faulting in) every one of them at once, which
@@ -296,22 +296,27 @@ void Solver::update_incrementally(const Cloth& cloth) {
           update_tethers();
           append_to_strain_limit();
         }
-        // The bend springs' batching (the dearest family, 0.06-0.08 ms after the exact cut) second, beside the
-        // tethers' part: listed last, it went to whichever thread freed first, after the tethers' part and
-        // the strain limit's 0.07-0.10 ms, while the other thread had finished the two other families.
+        // In bands, the cut's springs are only listed (loosen_cut_springs), swept one by one in this step and
+        // batched on the next. Else each family is batched here, the bend springs' (the dearest family,
+        // 0.06-0.08 ms after the exact cut) second, beside the tethers' part: listed last, it went to whichever
+        // thread freed first, after the tethers' part and the strain limit's 0.07-0.10 ms, while the other
+        // thread had finished the two other families.
 #pragma omp section
         {
-          // In bands, the bend springs are only listed (loosen_bend) and batched on the next step.
           if (banded_) {
-            loosen_bend(cloth, edited);
+            loosen_cut_springs(cloth, edited);
           } else {
             append_family(cloth, edited, 2);
           }
         }
 #pragma omp section
-        append_family(cloth, edited, 0);
+        {
+          if (!banded_) append_family(cloth, edited, 0);
+        }
 #pragma omp section
-        append_family(cloth, edited, 1);
+        {
+          if (!banded_) append_family(cloth, edited, 1);
+        }
       }
     }
     blanked_ += blanked;

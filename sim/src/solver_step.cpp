@@ -86,7 +86,7 @@ void Solver::step(Cloth& cloth, const Colliders& colliders) {
   });
   const float h = params_.dt / static_cast<float>(params_.substeps);
   for (int s = 0; s < params_.substeps; ++s) substep(cloth, colliders, h, s == 0, s + 1 == params_.substeps);
-  loose_bend_swept_ = !loose_bend_.empty();  // the next refresh_caches batches them (fold_loose_bend)
+  loose_swept_ = !loose_springs_.empty();  // the next refresh_caches batches them (fold_loose_springs)
   if (params_.threads > 1 && banded()) return;  // the last sub-step wrote the positions back (substep)
   for_chunks(n, params_.threads, [&](std::size_t begin, std::size_t end) {
     for (std::size_t i = begin; i < end; ++i) cloth.position[i] = work_[i + 1].head<3>();
@@ -122,7 +122,7 @@ bool Solver::front_in_bands(Vec4* x, std::size_t n, const Predict& predict, bool
   // per sub-step.
   bool mark = limit > 0.0F;
   for (std::size_t f = 0; f < 3; ++f) mark = mark && unbanded_runs_[f].empty();
-  mark = mark && (loose_bend_bands_.empty() || loose_bend_bands_.back().empty());
+  for (const auto& loose : loose_bands_) mark = mark && (loose.empty() || loose.back().empty());
   const auto words = static_cast<std::ptrdiff_t>(limit_dirty_.size());
   const auto run = [&](const auto& at) {
     // The first place in [from, to) of a block (sorted by particle) whose tether holds `particle` or a later one.

@@ -48,7 +48,7 @@ using solver_detail::sweep_near_rest;
 
 namespace {
 
-/// A cut's loose springs (Solver::loosen_bend), one by one in order: project_distance near rest, the
+/// A cut's loose springs (Solver::loosen_cut_springs), one by one in order: project_distance near rest, the
 /// arithmetic of a quad's lane (Jakobsen 2001; XPBD, Macklin et al. 2016, eq. 18).
 void sweep_loose(Vec4* padded, const std::vector<Solver::PackedSpring>& springs, float alpha) {
   for (const Solver::PackedSpring& sp : springs) {
@@ -211,43 +211,50 @@ std::size_t Solver::band_of_rows(int low, int high) const {
   return low >= band_reach_[j].first && high <= band_reach_[j].second ? j : band_reach_.size();
 }
 
-void Solver::loosen_bend(const Cloth& cloth, const std::vector<std::uint32_t>& edited) {
-  // Issue 25: on two threads the step of an exact cut at 128 x 128 missed 1.5x the median step by ~0.03 ms,
-  // and batching the cut's ~1,300 bend springs (sorted by sweep key, packed four to a quad, their slots
-  // written, the quads placed in bands: 0.06-0.08 ms, the dearest of the update's sections) is on its
-  // critical path. Here they are only listed, each in the band of its rows by the rule of place_cut_quads
-  // (else after the bands), and swept one by one in index order with that band; the next step batches them
-  // (fold_loose_bend). Batching them a step late instead, with no sweep meanwhile, let a sliver corner's cut
-  // flip under a 1e-6 m hair and a long stroke's strain grow (docs/benchmarks.md "Threads", session 34b):
-  // here they act from the cut's step on, as batched ones would, in another Gauss-Seidel order.
-  loose_bend_swept_ = false;
-  loose_bend_bands_.resize(band_reach_.size() + 1);
+void Solver::loosen_cut_springs(const Cloth& cloth, const std::vector<std::uint32_t>& edited) {
+  // Issue 25: on two threads the step of an exact cut at 128 x 128 missed 1.5x the median step, and batching
+  // the cut's springs (sorted by sweep key, packed four to a quad, their slots written, the quads placed in
+  // bands: 0.06-0.10 ms a family) was on its critical path beside the tethers' part. Here they are only listed,
+  // each in the band of its rows by the rule of place_cut_quads (else after the bands), and swept one by one in
+  // index order with that band, family by family as the batches are; the next step batches them
+  // (fold_loose_springs). Session 35 did this for the bend springs alone (the dearest family); session 37 for
+  // every family (docs/benchmarks.md "Threads"). Batching them a step late instead, with no sweep meanwhile,
+  // let a sliver corner's cut flip under a 1e-6 m hair and a long stroke's strain grow (session 34b): here
+  // they act from the cut's step on, as batched ones would, in another Gauss-Seidel order.
+  loose_swept_ = false;
+  for (auto& bands : loose_bands_) bands.resize(band_reach_.size() + 1);
   for (const std::uint32_t k : edited) {
-    if (cloth.alive[k] == 0 || cloth.kind[k] != SpringKind::Bend) continue;
-    loose_bend_.push_back(k);
+    if (cloth.alive[k] == 0) continue;
+    loose_springs_.push_back(k);
     const std::uint32_t a = cloth.spring_a[k];
     const std::uint32_t b = cloth.spring_b[k];
     const std::size_t j = band_of_rows(std::min(cloth.grid[a].v, cloth.grid[b].v), std::max(cloth.grid[a].v, cloth.grid[b].v));
-    loose_bend_bands_[j].push_back({a + 1, b + 1, cloth.rest_length[k]});
+    loose_bands_[static_cast<std::size_t>(cloth.kind[k])][j].push_back({a + 1, b + 1, cloth.rest_length[k]});
   }
 }
 
-void Solver::fold_loose_bend(const Cloth& cloth) {
+void Solver::fold_loose_springs(const Cloth& cloth) {
   // Batched now as the update would have (append_family, placed in bands), from the springs' present state: a
   // cut since may have removed or rewired some (append_family skips the dead; the update that follows blanks
-  // the rewired ones' new lanes and batches them again, as for any edited spring).
-  append_family(cloth, loose_bend_, 2);
-  loose_bend_.clear();
-  for (auto& springs : loose_bend_bands_) springs.clear();
-  loose_bend_swept_ = false;
+  // the rewired ones' new lanes and batches them again, as for any edited spring). Each family has its own
+  // scratch, quads, runs and springs' slots, so the families are batched at once, as in the update.
+#pragma omp parallel for num_threads(params_.threads > 1 ? 2 : 1) schedule(dynamic, 1)
+  for (std::size_t f = 0; f < 3; ++f) append_family(cloth, loose_springs_, f);
+  for (auto& bands : loose_bands_) bands.clear();
+  loose_springs_.clear();
+  loose_swept_ = false;
 }
+
+std::size_t Solver::loose_springs() const { return loose_springs_.size(); }
 
 std::size_t Solver::unbanded_cut_quads() const {
   std::size_t quads = 0;
   for (const auto& runs : unbanded_runs_) {
     for (const QuadRun& r : runs) quads += r.end - r.begin;
   }
-  if (!loose_bend_bands_.empty()) quads += loose_bend_bands_.back().size();  // a quad each, in effect
+  for (const auto& bands : loose_bands_) {
+    if (!bands.empty()) quads += bands.back().size();  // a quad each, in effect
+  }
   return quads;
 }
 
@@ -275,8 +282,8 @@ bool Solver::bands_independent() const {
             }
           }
         }
-        if (f == 2 && j < loose_bend_bands_.size()) {
-          for (const PackedSpring& sp : loose_bend_bands_[j]) {
+        if (j < loose_bands_[f].size()) {
+          for (const PackedSpring& sp : loose_bands_[f][j]) {
             if (!own(sp.a) || !own(sp.b)) return false;
           }
         }
@@ -363,13 +370,13 @@ void Solver::sweep_band(Vec4* padded, std::size_t family, std::size_t band, floa
   const SpringQuad* g = quads_[family].data();
   sweep_near_rest(padded, g + bands_[family][band], g + bands_[family][band + 1], alpha);
   for (const QuadRun& r : band_cut_runs_[family][band]) sweep_near_rest(padded, g + r.begin, g + r.end, alpha);
-  if (family == 2 && band < loose_bend_bands_.size()) sweep_loose(padded, loose_bend_bands_[band], alpha);
+  if (band < loose_bands_[family].size()) sweep_loose(padded, loose_bands_[family][band], alpha);
 }
 
 void Solver::sweep_unbanded(Vec4* padded, std::size_t family, float alpha) const {
   const SpringQuad* g = quads_[family].data();
   for (const QuadRun& r : unbanded_runs_[family]) sweep_near_rest(padded, g + r.begin, g + r.end, alpha);
-  if (family == 2 && !loose_bend_bands_.empty()) sweep_loose(padded, loose_bend_bands_.back(), alpha);
+  if (!loose_bands_[family].empty()) sweep_loose(padded, loose_bands_[family].back(), alpha);
 }
 
 void Solver::sweep_springs(Vec4* padded, std::size_t family, float alpha) const {

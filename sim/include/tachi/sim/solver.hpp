@@ -114,6 +114,8 @@ class Solver {
   /// Quads of a cut's springs that fit no band (their particles reach into another band of their parity):
   /// swept after the bands on one thread. The others are swept with the band of their rows.
   [[nodiscard]] std::size_t unbanded_cut_quads() const;
+  /// A cut's springs its update left loose on several threads (loosen_cut_springs), not yet batched.
+  [[nodiscard]] std::size_t loose_springs() const;
   /// Whether every two bands of one parity share no particle, the cuts' springs in them included: what lets
   /// them be swept at once. Reads every quad (for tests).
   [[nodiscard]] bool bands_independent() const;
@@ -286,17 +288,18 @@ class Solver {
   /// their rows where that keeps the band apart from the others of its parity, else to the unbanded tail.
   void place_cut_quads(const Cloth& cloth, std::size_t family, std::size_t first);
   /// The band whose reach holds grid rows [low, high] (the band of `low`'s rows, if its reach takes in `high`),
-  /// else band_reach_.size(): after the bands. The one rule of place_cut_quads and loosen_bend.
+  /// else band_reach_.size(): after the bands. The one rule of place_cut_quads and loosen_cut_springs.
   std::size_t band_of_rows(int low, int high) const;
   /// A band's batches, then the cut's quads placed in it, in the order they came.
   void sweep_band(Eigen::Vector4f* padded, std::size_t family, std::size_t band, float alpha) const;
   /// The cut's quads that fit no band, in the order they came (one thread, after the bands).
   void sweep_unbanded(Eigen::Vector4f* padded, std::size_t family, float alpha) const;
-  /// On several threads in bands: the update's part of a cut's bend springs (the live ones among `edited`),
-  /// listed in the band of their rows and swept one by one (loose_bend_), not batched (loosen_bend). The
-  /// next step batches them (fold_loose_bend, at its start, before any update reads their slots).
-  void loosen_bend(const Cloth& cloth, const std::vector<std::uint32_t>& edited);
-  void fold_loose_bend(const Cloth& cloth);
+  /// On several threads in bands: the update's part of a cut's springs (the live ones among `edited`, every
+  /// family), listed in the band of their rows and swept one by one (loose_bands_), not batched
+  /// (loosen_cut_springs). The next step batches them (fold_loose_springs, at its start, before any update
+  /// reads their slots).
+  void loosen_cut_springs(const Cloth& cloth, const std::vector<std::uint32_t>& edited);
+  void fold_loose_springs(const Cloth& cloth);
   /// Returns whether it also read which springs are over `limit` into limit_dirty_ (limit > 0, no cut's
   /// springs after the bands).
   template <typename Predict>
@@ -354,12 +357,12 @@ class Solver {
   /// every other band of its parity; build_bands).
   std::array<std::vector<std::vector<QuadRun>>, 3> band_cut_runs_;
   std::array<std::vector<QuadRun>, 3> unbanded_runs_;
-  /// The last cut's bend springs, not yet batched (loosen_bend): their indices in increasing order, and per
-  /// band (the last entry: those that fit no band) their ends (plus one, as in a quad) and rest lengths, in
-  /// that order; whether a step has swept them (the next refresh_caches then batches them).
-  std::vector<std::uint32_t> loose_bend_;
-  std::vector<std::vector<PackedSpring>> loose_bend_bands_;
-  bool loose_bend_swept_ = false;
+  /// The last cut's springs, not yet batched (loosen_cut_springs): their indices in increasing order, and per
+  /// family and band (the last entry: those that fit no band) their ends (plus one, as in a quad) and rest
+  /// lengths, in that order; whether a step has swept them (the next refresh_caches then batches them).
+  std::vector<std::uint32_t> loose_springs_;
+  std::array<std::vector<std::vector<PackedSpring>>, 3> loose_bands_;
+  bool loose_swept_ = false;
   std::vector<int> band_first_row_;
   std::vector<std::pair<int, int>> band_reach_;
   /// Where each pin group's block of tethers ends in attachments_, as the full build made them (in a block

@@ -323,6 +323,7 @@ TEST(RandomScene, AHandThatMovesOnWithinTheBackgroundIsStillFollowed) {
 TEST(RandomScene, AnArmThatRunsOutOfTheImageIsNotTakenForAHandButFingersThatDoAre) {
   HandFinderParams no_border_test;
   no_border_test.front_in_view_beyond_hand = false;
+  no_border_test.body_surround_share = 0;  // seed 48's hanging forearm is set in the torso at its depth too (session 37)
   for (const std::uint64_t seed : {156u, 48u}) {
     EXPECT_EQ(score_clip(random_scenario(seed)).captured, 0u) << "seed " << seed;
     EXPECT_GT(score_clip(random_scenario(seed), no_border_test).longest_captured_run, 3u) << "seed " << seed;

@@ -420,6 +420,27 @@ struct HandFinder::Impl {
     }
     return false;
   }
+  /// HandFinderParams::body_surround_share: the palm circle lies in the static scene's surface at its
+  /// own depth (a near user's upper arm or shoulder beside the torso), not in front of it as a hand does.
+  bool set_in_static_surface(const Palm& palm) const {
+    if (params.body_surround_share <= 0 || params.body_surround_share > 1 || palm.z <= 0) return false;
+    const double fx = model.intrinsics().fx;
+    // Grid cell (gx, gy) samples pixel (kStep gx + kStep / 2, kStep gy + kStep / 2).
+    const double cx = (palm.u - kStep / 2) / kStep, cy = (palm.v - kStep / 2) / kStep;
+    const double r0 = params.body_ring_inner_m * fx / palm.z / kStep, r1 = params.body_ring_outer_m * fx / palm.z / kStep;
+    int readings = 0, static_near = 0;
+    for (int gy = std::max(0, static_cast<int>(cy - r1)); gy <= std::min(kGridH - 1, static_cast<int>(cy + r1)); ++gy) {
+      const auto* g = grid.ptr<std::uint16_t>(gy);
+      const auto* f = fg.ptr<std::uint8_t>(gy);
+      for (int gx = std::max(0, static_cast<int>(cx - r1)); gx <= std::min(kGridW - 1, static_cast<int>(cx + r1)); ++gx) {
+        const double d = std::hypot(gx - cx, gy - cy);
+        if (d < r0 || d > r1 || g[gx] == 0 || g[gx] >= kNoReading) continue;  // outside the ring, or a dropout
+        ++readings;
+        if (f[gx] == 0 && std::abs(model.metres(g[gx]) - palm.z) <= params.body_depth_m) ++static_near;
+      }
+    }
+    return readings > 0 && static_near > params.body_surround_share * readings;
+  }
   bool palm_sized(const Palm& palm) const {
     return palm.radius_m >= params.min_palm_radius_m && palm.radius_m <= params.max_palm_radius_m;
   }
@@ -1685,7 +1706,7 @@ bool HandFinder::Impl::follow_component(std::span<const std::uint16_t> raw, int 
     const bool found =
         palm_accepted(palm) && !jump &&
         (continuing || (palm.radius_m <= params.max_new_palm_radius_m && palm.ridge_m <= params.max_palm_ridge_m && !is_dome(palm) &&
-                        !shoulders_below(palm) && ((palm.z <= params.max_acquire_depth_m && !take_over) ||
+                        !shoulders_below(palm) && !set_in_static_surface(palm) && ((palm.z <= params.max_acquire_depth_m && !take_over) ||
                          (palm.z <= params.max_track_depth_m && reaches_back(seed, near_raw, at_end))) &&
                         !is_joint(seed, near_raw) && !nearest_at_border(arm_nearest) &&
                         !front_crosses_border_beyond_hand(seed, near_raw, at_end, palm)));

@@ -186,6 +186,25 @@ TEST(RandomScene, AHeadOrAnElbowFacingTheSensorDoesNotStartATrack) {
   }
 }
 
+// A near user's upper arm or shoulder at the torso's depth is no hand. Tuning seeds 204 and 228 (session
+// 37, the hanging world): users 0.77 and 0.95 m away lower the hand to hang; the upper arm, moving beside a
+// torso that stood still, is foreground at the torso's depth and holds a palm-sized circle: it was taken
+// as a new track and followed (runs of 14 and 8 captured frames). Half to two thirds of the ring 8-12 cm
+// around its circle is the static torso at its depth, where a hand reaches out of what is behind it
+// (body_surround_share); with the test off they are taken again, so this can fail.
+TEST(RandomScene, AnUpperArmSetInTheTorsoDoesNotStartATrack) {
+  HandFinderParams no_body_test;
+  no_body_test.body_surround_share = 0;
+  for (const std::uint64_t seed : {204u, 228u}) {
+    const auto with_test = score_clip(random_scenario(seed));
+    const auto without = score_clip(random_scenario(seed), no_body_test);
+    EXPECT_EQ(with_test.captured, 0u) << "seed " << seed;
+    EXPECT_EQ(with_test.tracked_visible, without.tracked_visible) << "seed " << seed;  // the hand is not refused
+    EXPECT_LE(with_test.rms_m, 0.01) << "seed " << seed;
+    EXPECT_GE(without.longest_captured_run, 8u) << "seed " << seed;
+  }
+}
+
 // Tuning seed 146: a new track was measured at the arm's nearest reading unless that reading was
 // also a joint (is_joint), and the arm was taken instead of the hand (RMS 68 mm over the clip). A new track from the foreground is now measured at
 // the arm's geodesic end whenever the nearest reading lies on the way to it, as a followed one is;
@@ -304,6 +323,7 @@ TEST(RandomScene, AHandThatMovesOnWithinTheBackgroundIsStillFollowed) {
 TEST(RandomScene, AnArmThatRunsOutOfTheImageIsNotTakenForAHandButFingersThatDoAre) {
   HandFinderParams no_border_test;
   no_border_test.front_in_view_beyond_hand = false;
+  no_border_test.body_surround_share = 0;  // seed 48's hanging forearm is set in the torso at its depth too (session 37)
   for (const std::uint64_t seed : {156u, 48u}) {
     EXPECT_EQ(score_clip(random_scenario(seed)).captured, 0u) << "seed " << seed;
     EXPECT_GT(score_clip(random_scenario(seed), no_border_test).longest_captured_run, 3u) << "seed " << seed;

@@ -192,6 +192,19 @@ struct HandFinderParams {
   /// 459, 466: runs of 8-21 frames). <= 0: no such test.
   double head_shoulders_half_m = 0.10;
   double head_depth_m = 0.06;
+  /// A new track from the foreground does not start on a palm circle set in the static scene at its
+  /// own depth: of the readings 8-12 cm from its centre (body_ring_*_m), more than this share are
+  /// background (not foreground) within body_depth_m of the palm's depth. A near user's upper arm or
+  /// shoulder, moving as the hand is lowered or leaves the image, is foreground beside a torso that
+  /// stood still: it is set in the torso at its depth; a hand reaches out of what is behind it, which
+  /// lies >= foreground_m farther, and its own forearm and fingers in the ring move with it. Tuning
+  /// seeds 1-300 (session 37): 16 of the 22 new tracks 10+ cm off the hand had 38-78 % of their ring so,
+  /// 327 of the 329 good ones at most 23 % (the other two 35 and 49 %: a hand rising past the hip, taken
+  /// 1-3 frames later). <= 0 or > 1: no such test.
+  double body_surround_share = 0.3;
+  double body_ring_inner_m = 0.08;
+  double body_ring_outer_m = 0.12;
+  double body_depth_m = 0.04;
 };
 
 struct HandObservation {

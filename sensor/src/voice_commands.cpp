@@ -87,9 +87,6 @@ std::optional<std::string> validate(const VoiceConfig& config) {
     for (std::size_t j = 0; j < i; ++j)
       if (config.warps[j] == config.warps[i]) return "warps: " + std::to_string(config.warps[i]) + " appears twice";
   }
-  // One pass reports every keyword hit at once: the hits of several lanes on one utterance would be
-  // reported once each.
-  if (config.warps.size() > 1 && !config.verify_min_log_ratio) return "warps: more than one warp needs the second pass (verify_min_log_ratio)";
   return std::nullopt;
 }
 

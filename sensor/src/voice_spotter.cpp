@@ -438,7 +438,12 @@ KeywordSpotter::KeywordSpotter(const VoiceConfig& config) : impl_(std::make_uniq
     throw std::runtime_error("pronunciation dictionary " + config.dictionary + " not found (install pocketsphinx-en-us)");
   impl_->config = config;
   const std::lock_guard setup{decoder_setup};
-  for (const double warp : config.warps) impl_->add_lane(warp);
+  // One pass reports each keyword hit at once, with nothing to judge the hits of several lanes on one
+  // utterance together: it searches unwarped.
+  if (config.verify_min_log_ratio)
+    for (const double warp : config.warps) impl_->add_lane(warp);
+  else
+    impl_->add_lane(1.0);
 }
 
 KeywordSpotter::~KeywordSpotter() = default;
@@ -522,14 +527,17 @@ void KeywordSpotter::Impl::verify_pending(long ended_by, std::vector<VoiceDetect
   while (!pending.empty() && pending.front().end <= ended_by) {
     const PendingHit hit = pending.front();
     pending.erase(pending.begin());
-    // Another lane's hit on an utterance already judged: the same utterance, judged once.
-    if (hit.begin < judged_end) continue;
+    // Another lane's hit on an utterance already judged, ending within 0.5 s of it (as kRedetectSamples
+    // within a lane): the same utterance, judged once.
+    if (hit.end - judged_end < kRedetectSamples) continue;
     // Every phrase competes for the hit's audio, not only those the keyword search hit: the search
     // reports the first phrase whose last state scores well enough, and "start cutting" and "stop
     // cutting" share most of their phones, so it named the wrong one for espeak-ng's British voices.
     // Hits overlapping this one are the same utterance, judged once.
+    // With several lanes, the next phrase said straight after ("go forward ten meters") may begin a
+    // frame before this one ends in another lane's search: only hits ending near this one's end merge.
     long end = hit.end;
-    while (!pending.empty() && pending.front().begin < hit.end) {
+    while (!pending.empty() && pending.front().begin < hit.end && pending.front().end - hit.end < kRedetectSamples) {
       end = std::max(end, pending.front().end);
       pending.erase(pending.begin());
     }

@@ -339,7 +339,7 @@ std::vector<SpeakerRun> run_no_commands(const VoiceConfig& config, const std::st
 int speakers_main(VoiceConfig config, const std::string& set, unsigned seed_offset, int threads, double no_command_s,
                   const std::string& cache, std::optional<std::pair<double, double>> sweep_ratio, bool check,
                   const std::vector<std::string>& only_conditions, const std::vector<std::string>& only_contexts,
-                  const std::string& dump) {
+                  const std::vector<std::string>& only_variants, const std::string& dump) {
   const Gate gate{config};
   // Decode with no gate: the thresholds are applied when scoring (a sweep needs one decoding only).
   if (config.verify_min_log_ratio) config.verify_min_log_ratio = -std::numeric_limits<double>::infinity();
@@ -391,6 +391,8 @@ int speakers_main(VoiceConfig config, const std::string& set, unsigned seed_offs
   if (!only_conditions.empty())
     std::erase_if(conditions, [&](const Condition& c) { return std::find(only_conditions.begin(), only_conditions.end(), c.name) == only_conditions.end(); });
   if (!only_contexts.empty()) contexts = only_contexts;
+  if (!only_variants.empty())
+    std::erase_if(jobs, [&](const Job& j) { return std::find(only_variants.begin(), only_variants.end(), j.variant) == only_variants.end(); });
   std::vector<std::vector<SpeakerRun>> results(jobs.size() + 2);
   std::atomic<std::size_t> next{0};
   std::mutex log_mutex;
@@ -467,6 +469,9 @@ int speakers_main(VoiceConfig config, const std::string& set, unsigned seed_offs
               std::find_if(config.phrases.begin(), config.phrases.end(), [](const VoicePhrase& p) { return p.command == VoiceCommand::Start; })->phrase.c_str(),
               std::find_if(config.phrases.begin(), config.phrases.end(), [](const VoicePhrase& p) { return p.command == VoiceCommand::Stop; })->phrase.c_str(),
               gate.thresholds.verify_min_log_ratio.value_or(-std::numeric_limits<double>::infinity()), gate.thresholds.verify_min_margin);
+  std::printf("second pass at the warps (VTLN):");
+  for (const double w : config.warps) std::printf(" %g", w);
+  std::printf("\n");
   const auto table = [&](const std::string& title, auto&& key) {
     std::printf("\n| %s | commands | found | rate | WRONG | false alarms |\n|---|---|---|---|---|---|\n", title.c_str());
     for (const auto& [k, t] : totals(gate, key))
@@ -535,10 +540,12 @@ int main(int argc, char** argv) try {
   std::string cache = tachi::test::binary_dir() + "/voice-cache";
   std::vector<double> sweep_ratio;
   bool check = false;
-  std::vector<std::string> only_conditions, only_contexts;
+  std::vector<std::string> only_conditions, only_contexts, only_variants;
   app.add_option("--conditions", only_conditions, "--speakers: only these conditions")
       ->check(CLI::IsMember({"clean", "white 20 dB", "white 10 dB", "babble 20 dB", "babble 10 dB", "reverb"}));
   app.add_option("--contexts", only_contexts, "--speakers: only these contexts")->check(CLI::IsMember({"alone", "sentence"}));
+  app.add_option("--variants", only_variants, "--speakers: only these variants of the voices (the pitch-shifted ones are found least)")
+      ->check(CLI::IsMember({"as synthesised", "pitch-shifted", "tempo-changed"}));
   app.add_option("--speakers", speakers,
                  "evaluate across speakers (docs/voice.md): every voice and condition of the set: tune (the thresholds were "
                  "chosen on it), heldout (the other voices, other seeds), all, ci (4 voices, 4 conditions: the ctest)")
@@ -565,7 +572,7 @@ int main(int argc, char** argv) try {
     if (phone_loop) c.phone_loop_probability = *phone_loop;
     std::optional<std::pair<double, double>> sweep_range;
     if (sweep_ratio.size() == 2) sweep_range = std::pair{sweep_ratio[0], sweep_ratio[1]};
-    return speakers_main(c, speakers, seed_offset, threads, no_command_s, cache, sweep_range, check, only_conditions, only_contexts, dump);
+    return speakers_main(c, speakers, seed_offset, threads, no_command_s, cache, sweep_range, check, only_conditions, only_contexts, only_variants, dump);
   }
   if (threshold) for (auto& p : commands.phrases) p.threshold = *threshold;
   if (phone_loop) commands.phone_loop_probability = *phone_loop;

@@ -78,6 +78,15 @@ std::optional<std::string> validate(const VoiceConfig& config) {
     return "verify_min_garbage_log_ratio must be a number (or null)";
   if (config.verify_min_phrase_seconds && !(*config.verify_min_phrase_seconds >= 0.0))
     return "verify_min_phrase_seconds must be a number >= 0 (or null)";
+  // A warp far from 1 moves the mel filters past what any adult vocal tract needs (adults span about
+  // 0.8-1.2; Lee & Rose 1998 search 0.88-1.12); the first filter must stay above 0 Hz and the last below
+  // the Nyquist frequency.
+  if (config.warps.empty()) return "warps must hold at least one warp factor (e.g. [1.0]: no warping)";
+  for (std::size_t i = 0; i < config.warps.size(); ++i) {
+    if (!(config.warps[i] >= 0.7 && config.warps[i] <= 1.4)) return "warps: each warp factor must be a number in [0.7, 1.4] (e.g. [0.88, 1.0, 1.13])";
+    for (std::size_t j = 0; j < i; ++j)
+      if (config.warps[j] == config.warps[i]) return "warps: " + std::to_string(config.warps[i]) + " appears twice";
+  }
   return std::nullopt;
 }
 
@@ -100,7 +109,7 @@ VoiceConfig parse_voice_config(const std::string& json_text) {
         item.key() != "verify_min_log_ratio" && item.key() != "verify_min_margin" && item.key() != "verify_min_phrase_log_ratio" &&
         item.key() != "verify_min_phrase_margin" && item.key() != "verify_min_level_db" &&
         item.key() != "verify_min_garbage_margin" && item.key() != "verify_min_garbage_log_ratio" &&
-        item.key() != "verify_min_phrase_seconds")
+        item.key() != "verify_min_phrase_seconds" && item.key() != "warps")
       fail("unknown key " + item.key());
   try {
     if (root.contains("model_dir")) c.model_dir = root.at("model_dir").get<std::string>();
@@ -129,6 +138,15 @@ VoiceConfig parse_voice_config(const std::string& json_text) {
         *target = v.get<double>();
       else
         fail(std::string(key) + " must be a number or null");
+    }
+    if (root.contains("warps")) {
+      const auto& w = root.at("warps");
+      if (!w.is_array()) fail("warps must be an array of warp factors (e.g. [0.88, 1.0, 1.13])");
+      c.warps.clear();
+      for (const auto& a : w) {
+        if (!a.is_number()) fail("warps must hold numbers (warp factors, e.g. [0.88, 1.0, 1.13])");
+        c.warps.push_back(a.get<double>());
+      }
     }
     if (root.contains("verify_min_phrase_margin")) c.verify_min_phrase_margin = root.at("verify_min_phrase_margin").get<double>();
     if (root.contains("phrases")) {

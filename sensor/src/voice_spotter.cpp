@@ -4,6 +4,7 @@
 
 #include <pocketsphinx.h>
 #include <cmn.h>
+#include <fe.h>
 #include <feat.h>
 #include <fsg_model.h>
 
@@ -16,6 +17,7 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <mutex>
 #include <optional>
 #include <sstream>
 #include <stdexcept>
@@ -25,23 +27,31 @@ namespace tachi::sensor {
 
 struct KeywordSpotter::Impl {
   VoiceConfig config;
-  cmd_ln_t* cmdln = nullptr;
-  ps_decoder_t* decoder = nullptr;
-  // The second pass has its own decoder: switching the keyword decoder to other searches and back
-  // shifted the frames of its later hits by the frames the other searches had read.
-  cmd_ln_t* verifier_cmdln = nullptr;
-  ps_decoder_t* verifier = nullptr;
-  // The garbage-model grammars have a decoder of their own with beams wide enough that a phrase the
-  // audio does not hold still reaches the grammar's end (with the default beams the free phone loop
-  // outscores it in every frame and the path is pruned: no score at all).
-  cmd_ln_t* garbage_cmdln = nullptr;
-  ps_decoder_t* garbage_verifier = nullptr;
+  // One lane per warp factor (VoiceConfig::warps): a keyword search and the second pass's decoders, all
+  // with the same front end (its mel filters are built once, when a decoder is made, so each warp needs
+  // decoders of its own). Every lane hears all the audio; their hits are judged together (verify()).
+  struct Lane {
+    double warp = 1.0;
+    cmd_ln_t* cmdln = nullptr;
+    ps_decoder_t* decoder = nullptr;  // the keyword search
+    long utterance_start = 0;          // sample at which its current utterance began
+    long frames_before_utterance = 0;  // frames it read in earlier utterances
+    long last_hit_end = -1L << 30;     // sample at which its last reported hit ended (none yet)
+    // The second pass has its own decoder: switching the keyword decoder to other searches and back
+    // shifted the frames of its later hits by the frames the other searches had read.
+    cmd_ln_t* verifier_cmdln = nullptr;
+    ps_decoder_t* verifier = nullptr;
+    // The garbage-model grammars have a decoder of their own with beams wide enough that a phrase the
+    // audio does not hold still reaches the grammar's end (with the default beams the free phone loop
+    // outscores it in every frame and the path is pruned: no score at all).
+    cmd_ln_t* garbage_cmdln = nullptr;
+    ps_decoder_t* garbage_verifier = nullptr;
+  };
+  std::vector<Lane> lanes;
   long samples = 0;
-  long utterance_start = 0;         // sample at which the current utterance began
-  long frames_before_utterance = 0;  // frames the decoder read in earlier utterances
   std::vector<std::int16_t> audio;  // the latest audio, from sample audio_start on
   long audio_start = 0;
-  long last_hit_end = -1L << 30;  // sample at which the last reported hit ended (none yet)
+  long judged_end = -1L << 30;  // where the last hit the second pass judged ended (another lane's hit on it is the same)
 
   std::size_t phrase_index(const std::string& phrase) const {
     return static_cast<std::size_t>(std::find_if(config.phrases.begin(), config.phrases.end(),
@@ -79,17 +89,23 @@ struct KeywordSpotter::Impl {
     int garbage_frames = 0;
   };
   Verdict verify(long begin, long end, long before);
+  /// Makes the keyword search (and, with the second pass, its decoders) at one warp factor.
+  void add_lane(double warp);
+  /// Runs one lane's keyword search over new samples; queues its hits (or, in one pass, reports them).
+  void search(Lane& lane, std::span<const std::int16_t> block, std::vector<VoiceDetection>& found);
 
   ~Impl() {
-    if (decoder != nullptr) {
-      ps_end_utt(decoder);
-      ps_free(decoder);
+    for (auto& lane : lanes) {
+      if (lane.decoder != nullptr) {
+        ps_end_utt(lane.decoder);
+        ps_free(lane.decoder);
+      }
+      if (lane.cmdln != nullptr) cmd_ln_free_r(lane.cmdln);
+      if (lane.verifier != nullptr) ps_free(lane.verifier);
+      if (lane.verifier_cmdln != nullptr) cmd_ln_free_r(lane.verifier_cmdln);
+      if (lane.garbage_verifier != nullptr) ps_free(lane.garbage_verifier);
+      if (lane.garbage_cmdln != nullptr) cmd_ln_free_r(lane.garbage_cmdln);
     }
-    if (cmdln != nullptr) cmd_ln_free_r(cmdln);
-    if (verifier != nullptr) ps_free(verifier);
-    if (verifier_cmdln != nullptr) cmd_ln_free_r(verifier_cmdln);
-    if (garbage_verifier != nullptr) ps_free(garbage_verifier);
-    if (garbage_cmdln != nullptr) cmd_ln_free_r(garbage_cmdln);
   }
 };
 
@@ -162,6 +178,18 @@ double level_above_floor_db(const std::vector<std::int16_t>& audio, long audio_s
   return 10.0 * std::log10((phrase_power / static_cast<double>(phrase_samples) + 1.0) / (*q + 1.0));
 }
 
+/// sphinxbase keeps the warp factor of its front ends in static variables, read while a decoder is made
+/// (the mel filters are built then): decoders are made one at a time, and each names its warp
+/// (a decoder made without one would leave the next one with the same warp unwarped).
+std::mutex decoder_setup;
+
+/// "1.13" for -warp_params.
+std::string warp_text(double warp) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.6g", warp);
+  return text;
+}
+
 // pocketsphinx reads keyword lists from a file only.
 std::string write_kws_file(const std::string& text) {
   std::string path = (std::filesystem::temp_directory_path() / "tachi-voice-XXXXXX").string();
@@ -192,11 +220,9 @@ KeywordSpotter::Impl::Verdict KeywordSpotter::Impl::verify(long begin, long end,
   const long from = std::max(begin - before, audio_start);
   const long to = std::min(end + kVerifyAfterSamples, audio_start + static_cast<long>(audio.size()));
   if (to <= from) return verdict;
-  // Both decodings normalise the cepstra with the keyword search's live mean: a short window alone
-  // would start from the model's initial estimate.
-  cmn_t* cmn = ps_get_feat(decoder)->cmn_struct;
-  std::vector<mfcc_t> cepstral_mean(static_cast<std::size_t>(cmn->veclen));
-  cmn_live_get(cmn, cepstral_mean.data());
+  // Both decodings normalise the cepstra with the live mean of the keyword search at the same warp: a
+  // short window alone would start from the model's initial estimate.
+  std::vector<mfcc_t> cepstral_mean;
   const auto decode = [&](const char* search, ps_decoder_t* ps) {
     if (ps_set_search(ps, search) < 0) throw std::runtime_error(std::string("pocketsphinx has no search ") + search);
     cmn_live_set(ps_get_feat(ps)->cmn_struct, cepstral_mean.data());
@@ -206,41 +232,61 @@ KeywordSpotter::Impl::Verdict KeywordSpotter::Impl::verify(long begin, long end,
     ps_end_utt(ps);
     return best_path(ps);
   };
-  double loop_score = 0.0;
-  auto loop_path = decode(kPhoneLoopSearch.c_str(), verifier);
-  // The decoder numbers frames on from earlier utterances: frames relative to the window's start.
-  const int loop_base = loop_path.empty() ? 0 : loop_path.front().first_frame;
-  for (const auto& seg : loop_path) loop_score += seg.acoustic;
-  // The phone loop's score over frames [first, last] of the window, each segment pro-rated.
-  const auto loop_over = [&](int first, int last) {
-    double sum = 0.0;
-    for (const auto& seg : loop_path) {
-      const int a = std::max(first, seg.first_frame - loop_base), b = std::min(last, seg.last_frame - loop_base);
-      if (b >= a) sum += seg.acoustic * (b - a + 1) / (seg.last_frame - seg.first_frame + 1);
-    }
-    return sum;
+  // Each phrase's scores, the best over the warps (VoiceConfig::warps): a phrase is scored at the warp
+  // where the voice's formants fit the model best (Lee & Rose 1998 choose the warp of the highest
+  // likelihood; here the ratio against the phone loop at the same warp, so that the warps compare).
+  // The commands then compete on their best scores, so another command's better fit at any warp
+  // counts against the margin: a command two warps disagree on is dropped, not guessed.
+  const std::size_t n = config.phrases.size();
+  constexpr double kNone = -std::numeric_limits<double>::infinity();
+  std::vector<double> log_ratio(n, kNone), phrase_only(n, kNone), garbage_ratio(n, kNone);
+  std::vector<std::pair<int, int>> phrase_span(n, {-1, -1});
+  std::vector<int> phrase_frame_count(n, 0), garbage_frame_count(n, 0);
+  std::vector<double> loop_scores(lanes.size(), 0.0);
+  const auto live_mean = [&](const Lane& lane) {
+    cmn_t* cmn = ps_get_feat(lane.decoder)->cmn_struct;
+    cepstral_mean.assign(static_cast<std::size_t>(cmn->veclen), 0);
+    cmn_live_get(cmn, cepstral_mean.data());
   };
-  std::vector<double> log_ratio(config.phrases.size(), -std::numeric_limits<double>::infinity());
-  std::vector<double> phrase_only(config.phrases.size(), -std::numeric_limits<double>::infinity());
-  std::vector<std::pair<int, int>> phrase_span(config.phrases.size(), {-1, -1});
-  std::vector<int> phrase_frame_count(config.phrases.size(), 0);
-  for (std::size_t i = 0; i < config.phrases.size(); ++i) {
-    double phrase_score = 0.0, words_score = 0.0;
-    int phrase_frames = 0;
-    const auto path = decode(grammar_search(i).c_str(), verifier);
-    const int base = path.empty() ? 0 : path.front().first_frame;
-    for (const auto& seg : path) {
-      phrase_score += seg.acoustic;
-      if (is_filler(seg.word)) continue;
-      phrase_frames += seg.last_frame - seg.first_frame + 1;
-      words_score += seg.acoustic;
-      if (phrase_span[i].first < 0) phrase_span[i].first = seg.first_frame - base;
-      phrase_span[i].second = seg.last_frame - base;
+  for (std::size_t l = 0; l < lanes.size(); ++l) {
+    live_mean(lanes[l]);
+    double loop_score = 0.0;
+    const auto loop_path = decode(kPhoneLoopSearch.c_str(), lanes[l].verifier);
+    // The decoder numbers frames on from earlier utterances: frames relative to the window's start.
+    const int loop_base = loop_path.empty() ? 0 : loop_path.front().first_frame;
+    for (const auto& seg : loop_path) loop_score += seg.acoustic;
+    loop_scores[l] = loop_score;
+    // The phone loop's score over frames [first, last] of the window, each segment pro-rated.
+    const auto loop_over = [&](int first, int last) {
+      double sum = 0.0;
+      for (const auto& seg : loop_path) {
+        const int a = std::max(first, seg.first_frame - loop_base), b = std::min(last, seg.last_frame - loop_base);
+        if (b >= a) sum += seg.acoustic * (b - a + 1) / (seg.last_frame - seg.first_frame + 1);
+      }
+      return sum;
+    };
+    for (std::size_t i = 0; i < n; ++i) {
+      double phrase_score = 0.0, words_score = 0.0;
+      int phrase_frames = 0;
+      std::pair<int, int> span{-1, -1};
+      const auto path = decode(grammar_search(i).c_str(), lanes[l].verifier);
+      const int base = path.empty() ? 0 : path.front().first_frame;
+      for (const auto& seg : path) {
+        phrase_score += seg.acoustic;
+        if (is_filler(seg.word)) continue;
+        phrase_frames += seg.last_frame - seg.first_frame + 1;
+        words_score += seg.acoustic;
+        if (span.first < 0) span.first = seg.first_frame - base;
+        span.second = seg.last_frame - base;
+      }
+      if (phrase_frames == 0) continue;  // the phrase cannot be aligned to this audio
+      const double ratio = (phrase_score - loop_score) / phrase_frames;
+      if (!(ratio > log_ratio[i])) continue;
+      log_ratio[i] = ratio;
+      phrase_frame_count[i] = phrase_frames;
+      phrase_span[i] = span;
+      phrase_only[i] = (words_score - loop_over(span.first, span.second)) / phrase_frames;
     }
-    if (phrase_frames == 0) continue;  // the phrase cannot be aligned to this audio
-    phrase_frame_count[i] = phrase_frames;
-    log_ratio[i] = (phrase_score - loop_score) / phrase_frames;
-    phrase_only[i] = (words_score - loop_over(phrase_span[i].first, phrase_span[i].second)) / phrase_frames;
   }
   // A phrase that cannot be aligned may be longer than the one the search hit and begin before the
   // window ("stop cutting" hit on flite rms's "begin cutting": "be" lay before it): judged again over
@@ -256,19 +302,24 @@ KeywordSpotter::Impl::Verdict KeywordSpotter::Impl::verify(long begin, long end,
   // grammar of "begin cutting" stretches "begin" over "enough" ("-nough" ends like "-gin") and beats
   // "stop cutting", whose grammar leaves "that is enough" to the silence model. With the phone loop
   // around both, each phrase is aligned where it fits best and the commands compete on the phrase.
-  // Score: the ratio of the whole window against the free phone loop, per frame of the phrase, as above.
-  std::vector<double> garbage_ratio(config.phrases.size(), -std::numeric_limits<double>::infinity());
-  std::vector<int> garbage_frame_count(config.phrases.size(), 0);
-  for (std::size_t i = 0; i < config.phrases.size(); ++i) {
-    double score = 0.0;
-    int frames = 0;
-    const auto gpath = decode(garbage_search(i).c_str(), garbage_verifier);
-    for (const auto& seg : gpath) {
-      score += seg.acoustic;
-      if (!is_filler(seg.word) && seg.word.rfind(kGarbagePrefix, 0) != 0) frames += seg.last_frame - seg.first_frame + 1;
+  // Score: the ratio of the whole window against the free phone loop, per frame of the phrase, as above;
+  // the best over the warps, as above.
+  for (std::size_t l = 0; l < lanes.size(); ++l) {
+    live_mean(lanes[l]);
+    for (std::size_t i = 0; i < n; ++i) {
+      double score = 0.0;
+      int frames = 0;
+      const auto gpath = decode(garbage_search(i).c_str(), lanes[l].garbage_verifier);
+      for (const auto& seg : gpath) {
+        score += seg.acoustic;
+        if (!is_filler(seg.word) && seg.word.rfind(kGarbagePrefix, 0) != 0) frames += seg.last_frame - seg.first_frame + 1;
+      }
+      if (frames == 0) continue;
+      const double ratio = (score - loop_scores[l]) / frames;
+      if (!(ratio > garbage_ratio[i]) && garbage_frame_count[i] > 0) continue;
+      garbage_ratio[i] = ratio;
+      garbage_frame_count[i] = frames;
     }
-    if (frames > 0) garbage_ratio[i] = (score - loop_score) / frames;
-    garbage_frame_count[i] = frames;
   }
   verdict.phrase = config.phrases[best];
   verdict.log_ratio = log_ratio[best];
@@ -294,6 +345,90 @@ KeywordSpotter::Impl::Verdict KeywordSpotter::Impl::verify(long begin, long end,
   return verdict;
 }
 
+// One pair of second-pass decoders at one warp factor (made under decoder_setup, as every decoder).
+void KeywordSpotter::Impl::add_lane(double warp) {
+  Lane& lane = lanes.emplace_back();  // freed by ~Impl whatever is made of it
+  lane.warp = warp;
+  const std::string warp_params = warp_text(warp);
+  char phone_loop[32];
+  std::snprintf(phone_loop, sizeof phone_loop, "%g", config.phone_loop_probability);
+  lane.cmdln = cmd_ln_init(nullptr, ps_args(), TRUE, "-hmm", config.model_dir.c_str(), "-dict", config.dictionary.c_str(), "-kws_plp",
+                           phone_loop,
+                           // Every frame is searched: with pocketsphinx's voice-activity gate dropping
+                           // silent frames, a hit's frame numbers cannot be mapped back to stream time
+                           // (after the first restart they pointed past the audio: the replay and
+                           // the second pass lost the hits that followed).
+                           "-remove_silence", "no", "-warp_type", "inverse_linear", "-warp_params", warp_params.c_str(), "-logfn",
+                           "/dev/null", nullptr);
+  if (lane.cmdln == nullptr) throw std::runtime_error("pocketsphinx rejected its arguments");
+  lane.decoder = ps_init(lane.cmdln);
+  if (lane.decoder == nullptr) throw std::runtime_error("pocketsphinx could not load " + config.model_dir);
+  for (const auto& p : config.phrases) {
+    std::istringstream words(p.phrase);
+    std::string word;
+    while (words >> word)
+      if (ps_lookup_word(lane.decoder, word.c_str()) == nullptr)
+        throw std::runtime_error("word \"" + word + "\" of phrase \"" + p.phrase + "\" is not in " + config.dictionary);
+  }
+  const std::string kws = write_kws_file(kws_file_text(config.phrases));
+  const int rc = ps_set_kws(lane.decoder, kKeywordSearch, kws.c_str());
+  std::filesystem::remove(kws);
+  if (rc < 0) throw std::runtime_error("pocketsphinx rejected the keyword list");
+  if (ps_set_search(lane.decoder, kKeywordSearch) < 0) throw std::runtime_error("pocketsphinx rejected the keyword list");
+  if (ps_start_utt(lane.decoder) < 0) throw std::runtime_error("pocketsphinx could not start decoding");
+  if (!config.verify_min_log_ratio) return;
+  lane.verifier_cmdln = cmd_ln_init(nullptr, ps_args(), TRUE, "-hmm", config.model_dir.c_str(), "-dict", config.dictionary.c_str(),
+                                      "-remove_silence", "no", "-allphone_ci", "yes", "-warp_type", "inverse_linear", "-warp_params",
+                                      warp_params.c_str(), "-logfn", "/dev/null", nullptr);
+  if (lane.verifier_cmdln != nullptr) lane.verifier = ps_init(lane.verifier_cmdln);
+  if (lane.verifier == nullptr) throw std::runtime_error("pocketsphinx could not load " + config.model_dir + " for the second pass");
+  for (std::size_t i = 0; i < config.phrases.size(); ++i) {
+    // One grammar per phrase, each of its own name (pocketsphinx keeps grammars by name).
+    const std::string grammar = "#JSGF V1.0;\ngrammar phrase" + std::to_string(i) + ";\npublic <phrase> = " + config.phrases[i].phrase + ";\n";
+    if (ps_set_jsgf_string(lane.verifier, grammar_search(i).c_str(), grammar.c_str()) < 0)
+      throw std::runtime_error("pocketsphinx rejected the grammar " + grammar);
+  }
+  // The garbage words, then per phrase a finite-state grammar: a free loop of them, the phrase's
+  // words, a free loop again. Built as an FSG rather than JSGF because JSGF gives each of the 39
+  // alternatives probability 1/39, and with the language weight that penalty per phone made the
+  // decoder stretch the phrase over the words around it (or lose the path in the beam) instead of
+  // using the loop. A garbage phone here costs no grammar probability, as a phone costs nothing in
+  // the allphone background loop it is compared with.
+  lane.garbage_cmdln = cmd_ln_init(nullptr, ps_args(), TRUE, "-hmm", config.model_dir.c_str(), "-dict", config.dictionary.c_str(),
+                                     "-remove_silence", "no", "-beam", "1e-300", "-pbeam", "1e-300", "-wbeam", "1e-300", "-warp_type",
+                                     "inverse_linear", "-warp_params", warp_params.c_str(), "-logfn", "/dev/null", nullptr);
+  if (lane.garbage_cmdln != nullptr) lane.garbage_verifier = ps_init(lane.garbage_cmdln);
+  if (lane.garbage_verifier == nullptr) throw std::runtime_error("pocketsphinx could not load " + config.model_dir + " for the garbage model");
+  std::vector<std::string> garbage_words;
+  for (const char* phone : kGarbagePhones) {
+    std::string word = kGarbagePrefix + std::string(phone);
+    std::transform(word.begin(), word.end(), word.begin(), [](unsigned char ch) { return static_cast<char>(std::tolower(ch)); });
+    if (ps_add_word(lane.garbage_verifier, word.c_str(), phone, FALSE) < 0)
+      throw std::runtime_error(std::string("the acoustic model has no phone ") + phone + " for the garbage model");
+    garbage_words.push_back(std::move(word));
+  }
+  const auto lw = static_cast<float>(cmd_ln_float32_r(lane.garbage_cmdln, "-lw"));
+  for (std::size_t i = 0; i < config.phrases.size(); ++i) {
+    std::vector<std::string> words;
+    std::istringstream in(config.phrases[i].phrase);
+    for (std::string w; in >> w;) words.push_back(w);
+    const auto n = static_cast<int>(words.size());
+    fsg_model_t* fsg = fsg_model_init(garbage_search(i).c_str(), ps_get_logmath(lane.garbage_verifier), lw, n + 1);
+    fsg->start_state = 0;
+    fsg->final_state = n;
+    for (int k = 0; k < n; ++k) fsg_model_trans_add(fsg, k, k + 1, 0, fsg_model_word_add(fsg, words[static_cast<std::size_t>(k)].c_str()));
+    for (const auto& g : garbage_words) {
+      const int wid = fsg_model_word_add(fsg, g.c_str());
+      fsg_model_trans_add(fsg, 0, 0, 0, wid);
+      fsg_model_trans_add(fsg, n, n, 0, wid);
+    }
+    const int set = ps_set_fsg(lane.garbage_verifier, garbage_search(i).c_str(), fsg);
+    fsg_model_free(fsg);  // the search keeps its own reference
+    if (set < 0) throw std::runtime_error("pocketsphinx rejected the garbage grammar of \"" + config.phrases[i].phrase + "\"");
+  }
+  if (ps_set_allphone(lane.verifier, kPhoneLoopSearch.c_str(), nullptr) < 0) throw std::runtime_error("pocketsphinx could not set up a phone loop");
+}
+
 KeywordSpotter::KeywordSpotter(const VoiceConfig& config) : impl_(std::make_unique<Impl>()) {
   if (const auto why = validate(config)) throw std::runtime_error("voice config: " + *why);
   namespace fs = std::filesystem;
@@ -302,82 +437,13 @@ KeywordSpotter::KeywordSpotter(const VoiceConfig& config) : impl_(std::make_uniq
   if (!fs::is_regular_file(config.dictionary))
     throw std::runtime_error("pronunciation dictionary " + config.dictionary + " not found (install pocketsphinx-en-us)");
   impl_->config = config;
-  char phone_loop[32];
-  std::snprintf(phone_loop, sizeof phone_loop, "%g", config.phone_loop_probability);
-  impl_->cmdln = cmd_ln_init(nullptr, ps_args(), TRUE, "-hmm", config.model_dir.c_str(), "-dict", config.dictionary.c_str(),
-                             "-kws_plp", phone_loop,
-                             // Every frame is searched: with pocketsphinx's voice-activity gate dropping
-                             // silent frames, a hit's frame numbers cannot be mapped back to stream time
-                             // (after the first restart they pointed past the audio: the replay and
-                             // the second pass lost the hits that followed).
-                             "-remove_silence", "no", "-logfn", "/dev/null", nullptr);
-  if (impl_->cmdln == nullptr) throw std::runtime_error("pocketsphinx rejected its arguments");
-  impl_->decoder = ps_init(impl_->cmdln);
-  if (impl_->decoder == nullptr) throw std::runtime_error("pocketsphinx could not load " + config.model_dir);
-  for (const auto& p : config.phrases) {
-    std::istringstream words(p.phrase);
-    std::string word;
-    while (words >> word)
-      if (ps_lookup_word(impl_->decoder, word.c_str()) == nullptr)
-        throw std::runtime_error("word \"" + word + "\" of phrase \"" + p.phrase + "\" is not in " + config.dictionary);
-  }
-  const std::string kws = write_kws_file(kws_file_text(config.phrases));
-  const int rc = ps_set_kws(impl_->decoder, kKeywordSearch, kws.c_str());
-  std::filesystem::remove(kws);
-  if (rc < 0) throw std::runtime_error("pocketsphinx rejected the keyword list");
-  if (config.verify_min_log_ratio) {
-    impl_->verifier_cmdln = cmd_ln_init(nullptr, ps_args(), TRUE, "-hmm", config.model_dir.c_str(), "-dict", config.dictionary.c_str(),
-                                        "-remove_silence", "no", "-allphone_ci", "yes", "-logfn", "/dev/null", nullptr);
-    if (impl_->verifier_cmdln != nullptr) impl_->verifier = ps_init(impl_->verifier_cmdln);
-    if (impl_->verifier == nullptr) throw std::runtime_error("pocketsphinx could not load " + config.model_dir + " for the second pass");
-    for (std::size_t i = 0; i < config.phrases.size(); ++i) {
-      // One grammar per phrase, each of its own name (pocketsphinx keeps grammars by name).
-      const std::string grammar = "#JSGF V1.0;\ngrammar phrase" + std::to_string(i) + ";\npublic <phrase> = " + config.phrases[i].phrase + ";\n";
-      if (ps_set_jsgf_string(impl_->verifier, grammar_search(i).c_str(), grammar.c_str()) < 0)
-        throw std::runtime_error("pocketsphinx rejected the grammar " + grammar);
-    }
-    // The garbage words, then per phrase a finite-state grammar: a free loop of them, the phrase's
-    // words, a free loop again. Built as an FSG rather than JSGF because JSGF gives each of the 39
-    // alternatives probability 1/39, and with the language weight that penalty per phone made the
-    // decoder stretch the phrase over the words around it (or lose the path in the beam) instead of
-    // using the loop. A garbage phone here costs no grammar probability, as a phone costs nothing in
-    // the allphone background loop it is compared with.
-    impl_->garbage_cmdln = cmd_ln_init(nullptr, ps_args(), TRUE, "-hmm", config.model_dir.c_str(), "-dict", config.dictionary.c_str(),
-                                       "-remove_silence", "no", "-beam", "1e-300", "-pbeam", "1e-300", "-wbeam", "1e-300", "-logfn",
-                                       "/dev/null", nullptr);
-    if (impl_->garbage_cmdln != nullptr) impl_->garbage_verifier = ps_init(impl_->garbage_cmdln);
-    if (impl_->garbage_verifier == nullptr) throw std::runtime_error("pocketsphinx could not load " + config.model_dir + " for the garbage model");
-    std::vector<std::string> garbage_words;
-    for (const char* phone : kGarbagePhones) {
-      std::string word = kGarbagePrefix + std::string(phone);
-      std::transform(word.begin(), word.end(), word.begin(), [](unsigned char ch) { return static_cast<char>(std::tolower(ch)); });
-      if (ps_add_word(impl_->garbage_verifier, word.c_str(), phone, FALSE) < 0)
-        throw std::runtime_error(std::string("the acoustic model has no phone ") + phone + " for the garbage model");
-      garbage_words.push_back(std::move(word));
-    }
-    const auto lw = static_cast<float>(cmd_ln_float32_r(impl_->garbage_cmdln, "-lw"));
-    for (std::size_t i = 0; i < config.phrases.size(); ++i) {
-      std::vector<std::string> words;
-      std::istringstream in(config.phrases[i].phrase);
-      for (std::string w; in >> w;) words.push_back(w);
-      const auto n = static_cast<int>(words.size());
-      fsg_model_t* fsg = fsg_model_init(garbage_search(i).c_str(), ps_get_logmath(impl_->garbage_verifier), lw, n + 1);
-      fsg->start_state = 0;
-      fsg->final_state = n;
-      for (int k = 0; k < n; ++k) fsg_model_trans_add(fsg, k, k + 1, 0, fsg_model_word_add(fsg, words[static_cast<std::size_t>(k)].c_str()));
-      for (const auto& g : garbage_words) {
-        const int wid = fsg_model_word_add(fsg, g.c_str());
-        fsg_model_trans_add(fsg, 0, 0, 0, wid);
-        fsg_model_trans_add(fsg, n, n, 0, wid);
-      }
-      const int set = ps_set_fsg(impl_->garbage_verifier, garbage_search(i).c_str(), fsg);
-      fsg_model_free(fsg);  // the search keeps its own reference
-      if (set < 0) throw std::runtime_error("pocketsphinx rejected the garbage grammar of \"" + config.phrases[i].phrase + "\"");
-    }
-    if (ps_set_allphone(impl_->verifier, kPhoneLoopSearch.c_str(), nullptr) < 0) throw std::runtime_error("pocketsphinx could not set up a phone loop");
-  }
-  if (ps_set_search(impl_->decoder, kKeywordSearch) < 0) throw std::runtime_error("pocketsphinx rejected the keyword list");
-  if (ps_start_utt(impl_->decoder) < 0) throw std::runtime_error("pocketsphinx could not start decoding");
+  const std::lock_guard setup{decoder_setup};
+  // One pass reports each keyword hit at once, with nothing to judge the hits of several lanes on one
+  // utterance together: it searches unwarped.
+  if (config.verify_min_log_ratio)
+    for (const double warp : config.warps) impl_->add_lane(warp);
+  else
+    impl_->add_lane(1.0);
 }
 
 KeywordSpotter::~KeywordSpotter() = default;
@@ -387,8 +453,6 @@ double KeywordSpotter::time_s() const noexcept { return static_cast<double>(impl
 std::vector<VoiceDetection> KeywordSpotter::process(std::span<const std::int16_t> samples) {
   std::vector<VoiceDetection> found;
   if (samples.empty()) return found;
-  if (ps_process_raw(impl_->decoder, samples.data(), samples.size(), FALSE, FALSE) < 0)
-    throw std::runtime_error("pocketsphinx failed to process audio");
   impl_->samples += static_cast<long>(samples.size());
   // The utterance's audio (the last kKeepSamples of it), for the replay and the second pass below.
   impl_->audio.insert(impl_->audio.end(), samples.begin(), samples.end());
@@ -397,8 +461,17 @@ std::vector<VoiceDetection> KeywordSpotter::process(std::span<const std::int16_t
     impl_->audio.erase(impl_->audio.begin(), impl_->audio.begin() + static_cast<std::ptrdiff_t>(drop));
     impl_->audio_start += static_cast<long>(drop);
   }
+  for (auto& lane : impl_->lanes) impl_->search(lane, samples, found);
+  // The lanes' hits in the order of the audio, so that hits of several lanes on one utterance meet.
+  std::stable_sort(impl_->pending.begin(), impl_->pending.end(), [](const auto& a, const auto& b) { return a.begin < b.begin; });
+  impl_->verify_pending(impl_->samples - kVerifyAfterSamples, found);
+  return found;
+}
+
+void KeywordSpotter::Impl::search(Lane& lane, std::span<const std::int16_t> block, std::vector<VoiceDetection>& found) {
+  if (ps_process_raw(lane.decoder, block.data(), block.size(), FALSE, FALSE) < 0) throw std::runtime_error("pocketsphinx failed to process audio");
   for (int round = 0; round < 4; ++round) {  // a replay may hold another hit; a few at most
-    const char* hyp = ps_get_hyp(impl_->decoder, nullptr);
+    const char* hyp = ps_get_hyp(lane.decoder, nullptr);
     if (hyp == nullptr || hyp[0] == '\0') break;
     // Restart, or the same hit is reported with every later block; then replay the audio after the
     // hit's end, which the decoder held and a restart alone drops: in "go forward ten meters" the
@@ -408,41 +481,38 @@ std::vector<VoiceDetection> KeywordSpotter::process(std::span<const std::int16_t
       long begin, end;  // samples from stream start
     };
     std::vector<Hit> hits;
-    long last_end = impl_->utterance_start;  // no segment: resume where the utterance began, as before
-    for (ps_seg_t* seg = ps_seg_iter(impl_->decoder); seg != nullptr; seg = ps_seg_next(seg)) {
+    long last_end = lane.utterance_start;  // no segment: resume where the utterance began, as before
+    for (ps_seg_t* seg = ps_seg_iter(lane.decoder); seg != nullptr; seg = ps_seg_next(seg)) {
       int start_frame = 0, end_frame = 0;
       ps_seg_frames(seg, &start_frame, &end_frame);
       // The keyword search numbers frames from the decoder's first utterance on, not from this one's start.
-      hits.push_back({ps_seg_word(seg), impl_->utterance_start + (start_frame - impl_->frames_before_utterance) * kSamplesPerFrame,
-                      impl_->utterance_start + (end_frame + 1 - impl_->frames_before_utterance) * kSamplesPerFrame});
+      hits.push_back({ps_seg_word(seg), lane.utterance_start + (start_frame - lane.frames_before_utterance) * kSamplesPerFrame,
+                      lane.utterance_start + (end_frame + 1 - lane.frames_before_utterance) * kSamplesPerFrame});
       last_end = std::max(last_end, hits.back().end);
     }
-    ps_end_utt(impl_->decoder);
-    impl_->frames_before_utterance += ps_get_n_frames(impl_->decoder);
+    ps_end_utt(lane.decoder);
+    lane.frames_before_utterance += ps_get_n_frames(lane.decoder);
     // The replay can hold the tail of the phrase just reported ("... cutting"), found again ending
     // just after it; a real next phrase ends at least a phrase's length later. Rejected hits count
     // too, so that the second pass's threshold can be swept over one run's scores.
-    if (last_end - impl_->last_hit_end >= kRedetectSamples) {
+    if (last_end - lane.last_hit_end >= kRedetectSamples) {
       for (const auto& h : hits)
-        for (const auto& p : phrases_in_hypothesis(h.words, impl_->config.phrases)) {
-          if (impl_->config.verify_min_log_ratio)
-            impl_->pending.push_back({impl_->phrase_index(p.phrase), h.begin, h.end});
+        for (const auto& p : phrases_in_hypothesis(h.words, config.phrases)) {
+          if (config.verify_min_log_ratio)
+            pending.push_back({phrase_index(p.phrase), h.begin, h.end});
           else
-            found.push_back({time_s(), p.command, p.phrase});
+            found.push_back({static_cast<double>(samples) / kVoiceSampleRate, p.command, p.phrase});
         }
-      impl_->last_hit_end = last_end;
+      lane.last_hit_end = last_end;
     }
-    ps_start_utt(impl_->decoder);
-    const long resume = std::max(last_end, impl_->audio_start);
-    impl_->utterance_start = resume;
-    const long from = resume - impl_->audio_start;
-    if (from >= static_cast<long>(impl_->audio.size())) break;
-    if (ps_process_raw(impl_->decoder, impl_->audio.data() + from, impl_->audio.size() - static_cast<std::size_t>(from), FALSE,
-                       FALSE) < 0)
+    ps_start_utt(lane.decoder);
+    const long resume = std::max(last_end, audio_start);
+    lane.utterance_start = resume;
+    const long from = resume - audio_start;
+    if (from >= static_cast<long>(audio.size())) break;
+    if (ps_process_raw(lane.decoder, audio.data() + from, audio.size() - static_cast<std::size_t>(from), FALSE, FALSE) < 0)
       throw std::runtime_error("pocketsphinx failed to process audio");
   }
-  impl_->verify_pending(impl_->samples - kVerifyAfterSamples, found);
-  return found;
 }
 
 std::vector<VoiceDetection> KeywordSpotter::finish() {
@@ -457,15 +527,21 @@ void KeywordSpotter::Impl::verify_pending(long ended_by, std::vector<VoiceDetect
   while (!pending.empty() && pending.front().end <= ended_by) {
     const PendingHit hit = pending.front();
     pending.erase(pending.begin());
+    // Another lane's hit on an utterance already judged, ending within 0.5 s of it (as kRedetectSamples
+    // within a lane): the same utterance, judged once.
+    if (hit.end - judged_end < kRedetectSamples) continue;
     // Every phrase competes for the hit's audio, not only those the keyword search hit: the search
     // reports the first phrase whose last state scores well enough, and "start cutting" and "stop
     // cutting" share most of their phones, so it named the wrong one for espeak-ng's British voices.
     // Hits overlapping this one are the same utterance, judged once.
+    // With several lanes, the next phrase said straight after ("go forward ten meters") may begin a
+    // frame before this one ends in another lane's search: only hits ending near this one's end merge.
     long end = hit.end;
-    while (!pending.empty() && pending.front().begin < hit.end) {
+    while (!pending.empty() && pending.front().begin < hit.end && pending.front().end - hit.end < kRedetectSamples) {
       end = std::max(end, pending.front().end);
       pending.erase(pending.begin());
     }
+    judged_end = end;
     const Verdict verdict = verify(hit.begin, end, kVerifyBeforeSamples);
     if (!verdict.phrase) continue;
     VoiceDetection d{static_cast<double>(samples) / kVoiceSampleRate, verdict.phrase->command, verdict.phrase->phrase};

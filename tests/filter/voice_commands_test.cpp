@@ -105,6 +105,7 @@ TEST(VoiceCommands, TheShippedConfigFileMatchesTheDefaults) {
   EXPECT_EQ(file.verify_min_garbage_margin, defaults.verify_min_garbage_margin);
   EXPECT_EQ(file.verify_min_garbage_log_ratio, defaults.verify_min_garbage_log_ratio);
   EXPECT_EQ(file.verify_min_phrase_seconds, defaults.verify_min_phrase_seconds);
+  EXPECT_EQ(file.warps, defaults.warps);
   ASSERT_EQ(file.phrases.size(), defaults.phrases.size());
   for (std::size_t i = 0; i < file.phrases.size(); ++i)
     EXPECT_EQ(file.phrases[i].verify_min_garbage_log_ratio, defaults.phrases[i].verify_min_garbage_log_ratio) << file.phrases[i].phrase;
@@ -153,6 +154,14 @@ TEST(VoiceCommands, TheSecondPassMarginIsValidated) {
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("verify_min_margin"), std::string::npos) << e.what();
   }
+}
+
+TEST(VoiceCommands, TheWarpsParseAndAreValidatedByName) {
+  EXPECT_EQ(parse_voice_config("{}").warps, VoiceConfig{}.warps);
+  EXPECT_EQ(parse_voice_config(R"({"warps": [1.0]})").warps, std::vector<double>{1.0});  // no warping, as before session 37
+  EXPECT_EQ(parse_voice_config(R"({"warps": [0.88, 1.0, 1.13]})").warps, (std::vector<double>{0.88, 1.0, 1.13}));
+  for (const char* bad : {R"({"warps": []})", R"({"warps": 1.0})", R"({"warps": ["1"]})", R"({"warps": [0.3]})", R"({"warps": [1.0, 1.0]})"})
+    EXPECT_NE(error_of(bad).find("warps"), std::string::npos) << bad << ": " << error_of(bad);
 }
 
 }  // namespace

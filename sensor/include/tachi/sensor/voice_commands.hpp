@@ -98,6 +98,20 @@ struct VoiceConfig {
   /// commands median 0.40 s); said, it lasts longer (median 0.7 s, three in four above 0.57 s).
   /// Nothing: not checked. 0.5: chosen on the tune set (docs/voice.md).
   std::optional<double> verify_min_phrase_seconds = 0.5;
+  /// Vocal tract length normalisation by frequency warping (Lee & Rose, "A frequency warping approach to
+  /// speaker normalization", IEEE Trans. Speech Audio Proc. 6(1), 1998), through pocketsphinx's front end
+  /// (`-warp_type inverse_linear -warp_params a`: the mel filters move to the frequencies f * a, so a > 1
+  /// fits a shorter vocal tract, higher formants). Per warp, a keyword search and the second pass's
+  /// decoders all hear the audio; the hits of every warp are judged together, each phrase scored at the
+  /// warp where it scores best, the commands competing on those scores (a command that one warp hears as
+  /// start and another as stop is dropped by the margins). [1.0]: no warping, as before. Each warp costs
+  /// one more keyword search and a second pass per hit (docs/voice.md, session 37). One pass (no
+  /// verify_min_log_ratio) searches unwarped: it has no judge for several lanes' hits on one utterance.
+  /// Default [1.0]: [0.84, 1.0, 1.19] found 78 -> 84 of the tune set's 128 pitch-shifted commands at 20 dB
+  /// (no WRONG, no false alarm added), but it lost a command said inside a sentence and a British voice's
+  /// command in the voice tests (the commands compete on their best score over the warps, and another
+  /// phrase's best warp can close the margin), at 4.4x the CPU; docs/voice.md, session 37.
+  std::vector<double> warps{1.0};
 };
 
 /// Lower-cases and collapses whitespace: " Start   Cutting " -> "start cutting".
@@ -107,7 +121,7 @@ std::string normalise_phrase(const std::string& phrase);
 std::optional<std::string> validate(const VoiceConfig& config);
 
 /// Parses JSON ({"model_dir", "dictionary", "phone_loop_probability", "verify_min_log_ratio" (null: one
-/// pass), "phrases": [{"phrase", "command", "threshold"}]}); missing keys keep their defaults. Throws
+/// pass), "warps" (VTLN warp factors), "phrases": [{"phrase", "command", "threshold"}]}); missing keys keep their defaults. Throws
 /// std::invalid_argument naming the key.
 VoiceConfig parse_voice_config(const std::string& json_text);
 VoiceConfig load_voice_config(const std::string& path);

@@ -2,6 +2,8 @@
 // restarts after each detection (otherwise the same hit is reported again and again). By default each
 // hit is verified by a second pass (VoiceConfig::verify_min_log_ratio): the phrase aligned again to
 // the audio around the hit against a phone loop, a likelihood-ratio test (voice_spotter.cpp).
+// With VoiceConfig::warps (vocal tract length normalisation) one keyword search and second pass per warp
+// hear the audio, and each utterance's hits are judged once, each phrase at its best warp.
 #pragma once
 
 #include "tachi/sensor/voice_commands.hpp"

@@ -54,6 +54,19 @@ class VoiceCli : public ::testing::Test {
     seq.noise(100.0);
     write_wav(dir_ / "commands.wav", seq.samples());
   }
+  /// config/voice.json with its text `key` replaced by `replacement`, written to dir_/name: one setting tried
+  /// against the shipped others. Fails the test when the shipped file no longer holds `key`.
+  std::string shipped_config_with(const std::string& key, const std::string& replacement, const std::string& name) {
+    std::ifstream in{tachi::test::source_dir() + "/config/voice.json"};
+    const std::string json{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+    const auto at = json.find(key);
+    if (at == std::string::npos) {
+      ADD_FAILURE() << "config/voice.json no longer holds " << key << ": update this test";
+    } else {
+      std::ofstream{dir_ / name} << json.substr(0, at) << replacement << json.substr(at + key.size());
+    }
+    return (dir_ / name).string();
+  }
   tachi::test::ScratchDir dir_{"voice_cli"};
 };
 
@@ -91,13 +104,9 @@ TEST_F(VoiceCli, OtherPhrasesAreConfigurableFromTheCommandLine) {
 // one sentence for each command, each a file of its own.
 TEST_F(VoiceCli, ACommandInsideASentenceIsFoundOnTheGarbageModelRatio) {
   // The shipped gates with the garbage ratio off: the whole window alone.
-  std::ifstream in{tachi::test::source_dir() + "/config/voice.json"};
-  const std::string json{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-  const std::string key = "\"verify_min_garbage_log_ratio\": -55";
-  const auto at = json.find(key);
-  ASSERT_NE(at, std::string::npos) << "config/voice.json's garbage ratio moved: update this test";
-  std::ofstream{dir_ / "whole_window.json"} << json.substr(0, at) << "\"verify_min_garbage_log_ratio\": null"
-                                            << json.substr(at + key.size());
+  const std::string whole_window_config = shipped_config_with(
+      "\"verify_min_garbage_log_ratio\": -55", "\"verify_min_garbage_log_ratio\": null", "whole_window.json");
+  ASSERT_FALSE(HasFailure());
   struct Case {
     const char* voice;
     const char* sentence;
@@ -121,7 +130,7 @@ TEST_F(VoiceCli, ACommandInsideASentenceIsFoundOnTheGarbageModelRatio) {
     const auto shipped = voice({});
     ASSERT_EQ(shipped.exit_code, 0) << shipped.err;
     EXPECT_NE(shipped.out.find(c.heard), std::string::npos) << c.voice << ": " << c.sentence << "\n" << shipped.out;
-    const auto whole_window = voice({"--config", (dir_ / "whole_window.json").string()});
+    const auto whole_window = voice({"--config", whole_window_config});
     ASSERT_EQ(whole_window.exit_code, 0) << whole_window.err;
     EXPECT_EQ(whole_window.out, "") << c.voice << ": " << c.sentence;
   }
@@ -133,13 +142,9 @@ TEST_F(VoiceCli, APitchShiftedVoiceIsHeardThroughTheWarpsAndBadWarpsAreRefused) 
   // scored at its best warp) hears the command as the shipped [1.0] does, and scores it within a point or
   // better (measured -8.7 against -8.7, and -7.8 against -11.3 in a longer file; synthesis is dithered, so
   // a gain is not asserted); a warp out of range is refused naming the key.
-  std::ifstream in{tachi::test::source_dir() + "/config/voice.json"};
-  const std::string json{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-  const std::string key = "\"warps\": [1.0]";
-  const auto at = json.find(key);
-  ASSERT_NE(at, std::string::npos) << "config/voice.json's warps moved: update this test";
-  std::ofstream{dir_ / "warped.json"} << json.substr(0, at) << "\"warps\": [0.84, 1.0, 1.19]" << json.substr(at + key.size());
-  std::ofstream{dir_ / "bad.json"} << json.substr(0, at) << "\"warps\": [1.0, 2.5]" << json.substr(at + key.size());
+  const std::string warped_config = shipped_config_with("\"warps\": [1.0]", "\"warps\": [0.84, 1.0, 1.19]", "warped.json");
+  const std::string bad_config = shipped_config_with("\"warps\": [1.0]", "\"warps\": [1.0, 2.5]", "bad.json");
+  ASSERT_FALSE(HasFailure());
   const tachi::sensor::testing::Speaker shifted{"espeak-ng", "en-us", 170};
   tachi::sensor::testing::Sequence seq;
   seq.pause(1.0);
@@ -157,10 +162,10 @@ TEST_F(VoiceCli, APitchShiftedVoiceIsHeardThroughTheWarpsAndBadWarpsAreRefused) 
     if (where == std::string::npos) return -1e9;
     return std::stod(r.err.substr(where + std::string("log-likelihood ratio ").size()));
   };
-  const double shipped = ratio({}), warped = ratio({"--config", (dir_ / "warped.json").string()});
+  const double shipped = ratio({}), warped = ratio({"--config", warped_config});
   EXPECT_GT(warped, shipped - 1.0) << "unwarped " << shipped << ", warped " << warped;
   const auto bad = tachi::test::run({tachi::test::executable("tachi-voice"), "--wav", (dir_ / "shifted.wav").string(), "--no-dds", "--config",
-                                     (dir_ / "bad.json").string()},
+                                     bad_config},
                                     60s);
   EXPECT_EQ(bad.exit_code, 2);
   EXPECT_NE(bad.err.find("warps"), std::string::npos) << bad.err;

@@ -198,7 +198,7 @@ std::vector<SpeakerRun> run_speaker(const VoiceConfig& config, const fixture::Sp
     return std::find_if(config.phrases.begin(), config.phrases.end(), [&](const VoicePhrase& p) { return p.command == c; })->phrase;
   };
   const std::string start = phrase_of(VoiceCommand::Start), stop = phrase_of(VoiceCommand::Stop);
-  KeywordSpotter spotter{config};
+  KeywordSpotter spotter{config, true};  // every verdict: the thresholds are applied when scoring
   std::vector<SpeakerRun> runs;
   std::mt19937 rng{seed};
   const std::array<std::string, 2> start_carriers{"okay %s now", "now %s along the line"};
@@ -298,7 +298,7 @@ SpeakerTally score(const SpeakerRun& run, const Gate& gate, const VoiceConfig& c
 /// Returns one run a chunk of ~30 s, context "librivox" or "babble".
 std::vector<SpeakerRun> run_no_commands(const VoiceConfig& config, const std::string& corpus, double seconds, unsigned seed,
                                         const std::vector<std::vector<std::int16_t>>& librivox) {
-  KeywordSpotter spotter{config};
+  KeywordSpotter spotter{config, true};  // every verdict: the thresholds are applied when scoring
   std::vector<SpeakerRun> runs;
   std::mt19937 rng{seed};
   const auto decode = [&](const std::vector<std::int16_t>& s) {
@@ -341,14 +341,10 @@ int speakers_main(VoiceConfig config, const std::string& set, unsigned seed_offs
                   const std::vector<std::string>& only_conditions, const std::vector<std::string>& only_contexts,
                   const std::vector<std::string>& only_variants, const std::string& dump) {
   const Gate gate{config};
-  // Decode with no gate: the thresholds are applied when scoring (a sweep needs one decoding only).
-  if (config.verify_min_log_ratio) config.verify_min_log_ratio = -std::numeric_limits<double>::infinity();
-  config.verify_min_margin = 0.0;
-  config.verify_min_phrase_margin = 0.0;
-  config.verify_min_level_db.reset();
-  config.verify_min_garbage_margin.reset();
-  config.verify_min_garbage_log_ratio.reset();
-  config.verify_min_phrase_seconds.reset();
+  // The spotters report every verdict, refused ones too: the thresholds are applied when scoring (a sweep
+  // needs one decoding only). They decode with the config's thresholds, since with several warps those
+  // decide whether the warped lanes judge an utterance (only where the unwarped lane gives no command):
+  // a sweep's other thresholds are applied to the verdicts the config's chose.
   std::vector<std::vector<std::int16_t>> librivox;
   for (const auto& clip : fixture::librivox_clips()) librivox.push_back(read_wav_file(clip).samples);
   // Jobs: every speaker (base voice, pitch-shifted, tempo-changed) of the set, then the corpora
@@ -431,9 +427,10 @@ int speakers_main(VoiceConfig config, const std::string& set, unsigned seed_offs
                       return p.phrase == run.placed[u].phrase;
                     })->command == d.command;
           }
-        std::fprintf(f, "D\t%zu\t%d\t%d\t%s\t%.3f\t%.3f\t%.3f\t%.3f\t%.3f\t%.3f\t%.3f\t%.3f\t%.2f\t%.2f\n", r, utterance, right ? 1 : 0,
-                     d.phrase.c_str(), d.time_s, d.verification_score, d.command_margin, d.phrase_score, d.phrase_margin, d.level_db,
-                     d.garbage_score, d.garbage_margin, d.phrase_duration_s, d.garbage_duration_s);
+        std::fprintf(f, "D\t%zu\t%d\t%d\t%s\t%.3f\t%.3f\t%.3f\t%.3f\t%.3f\t%.3f\t%.3f\t%.3f\t%.2f\t%.2f\t%d\t%d\n", r, utterance,
+                     right ? 1 : 0, d.phrase.c_str(), d.time_s, d.verification_score, d.command_margin, d.phrase_score, d.phrase_margin,
+                     d.level_db, d.garbage_score, d.garbage_margin, d.phrase_duration_s, d.garbage_duration_s, d.unwarped_hit ? 1 : 0,
+                     d.by_warps ? 1 : 0);
       }
     }
     std::fclose(f);
@@ -471,6 +468,19 @@ int speakers_main(VoiceConfig config, const std::string& set, unsigned seed_offs
               gate.thresholds.verify_min_log_ratio.value_or(-std::numeric_limits<double>::infinity()), gate.thresholds.verify_min_margin);
   std::printf("second pass at the warps (VTLN):");
   for (const double w : config.warps) std::printf(" %g", w);
+  if (config.warps.size() > 1) {
+    // What the warped lanes add (they judge only where the unwarped lane gives no command).
+    int kept = 0, found_by_warps = 0, without_unwarped_hit = 0;
+    for (const auto& r : runs)
+      for (const auto& d : r.found)
+        if (d.by_warps && gate.keeps(d)) {
+          ++kept;
+          without_unwarped_hit += d.unwarped_hit ? 0 : 1;
+          found_by_warps += score(SpeakerRun{r.family, r.variant, r.condition, r.context, r.tune_voice, r.placed, {d}, 0}, gate, config).found;
+        }
+    std::printf("; detections by the warped lanes %d (%d right; %d where the unwarped lane had no keyword hit)", kept, found_by_warps,
+                without_unwarped_hit);
+  }
   std::printf("\n");
   const auto table = [&](const std::string& title, auto&& key) {
     std::printf("\n| %s | commands | found | rate | WRONG | false alarms |\n|---|---|---|---|---|---|\n", title.c_str());
@@ -560,7 +570,7 @@ int main(int argc, char** argv) try {
   app.add_option("--cache", cache, "--speakers: folder for the synthesised audio (default: voice-cache in the build tree)");
   app.add_option("--sweep", sweep_ratio, "--speakers: sweep min log ratio FROM TO (step 2) x margins instead of the table")->expected(2);
   std::string dump;
-  app.add_option("--dump", dump, "--speakers: write every run and detection with its second-pass features (tab-separated) to this file");
+  app.add_option("--dump", dump, "--speakers: write every run and detection with its second-pass features (tab-separated; the last two columns: whether the unwarped lane had a keyword hit on it, whether the warped lanes judged it) to this file");
   app.add_flag("--check", check, "--speakers: exit 1 when the acceptance targets are missed");
   if (const int rc = tachi::common::parse(app, argc, argv); rc >= 0) return rc;
   if (!speakers.empty()) {

@@ -17,10 +17,12 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <map>
 #include <mutex>
 #include <optional>
 #include <sstream>
 #include <stdexcept>
+#include <tuple>
 #include <unistd.h>
 
 namespace tachi::sensor {
@@ -51,7 +53,6 @@ struct KeywordSpotter::Impl {
   long samples = 0;
   std::vector<std::int16_t> audio;  // the latest audio, from sample audio_start on
   long audio_start = 0;
-  long judged_end = -1L << 30;  // where the last hit the second pass judged ended (another lane's hit on it is the same)
 
   std::size_t phrase_index(const std::string& phrase) const {
     return static_cast<std::size_t>(std::find_if(config.phrases.begin(), config.phrases.end(),
@@ -61,10 +62,18 @@ struct KeywordSpotter::Impl {
   struct PendingHit {
     std::size_t phrase;  // index into config.phrases
     long begin, end;     // samples from stream start
+    std::size_t lane;    // the lane whose keyword search hit
   };
   std::vector<PendingHit> pending;  // keyword hits waiting for the audio the second pass needs
-  /// Runs the second pass over the pending hits that ended by sample `ended_by`; appends the accepted.
+  /// Runs the second pass over the pending hits that ended by sample `ended_by`; appends the accepted
+  /// (with report_refused, every judged utterance's verdict, accepted or not).
   void verify_pending(long ended_by, std::vector<VoiceDetection>& accepted);
+  bool report_refused = false;
+  /// The lane of warp 1.0 (lanes.size() when config.warps has none: the warped lanes' judgement alone).
+  std::size_t unwarped = 0;
+  long group_end = -1L << 30;      // where the last judged utterance's hits ended
+  long unwarped_end = -1L << 30;   // ... the last one that held a hit of the unwarped lane
+  long command_end = -1L << 30;    // ... the last one that gave a command
 
   /// The second pass over the audio of one hit: which phrase it was, and its log-likelihood ratio
   /// against a free phone loop per frame (-infinity when no phrase fits the audio).
@@ -87,8 +96,23 @@ struct KeywordSpotter::Impl {
     /// The phrase's frames as the phrase grammar and the garbage grammar align it (10 ms each; 0: none).
     int phrase_frames = 0;
     int garbage_frames = 0;
+    /// The phrase the unwarped lane scores best on the same window (with the warped lanes' judgement).
+    std::optional<VoicePhrase> unwarped_best;
   };
-  Verdict verify(long begin, long end, long before);
+  /// The second pass over samples [begin - before, end + 0.6 s) by the lanes `use` (indices into
+  /// lanes), each phrase scored at the best of their warps.
+  Verdict verify(long begin, long end, const std::vector<std::size_t>& use, long before);
+  /// One lane's second pass over one window: per phrase, as Verdict's fields (kept while one utterance
+  /// is judged, so that the warped lanes' judgement reuses the unwarped lane's decodings).
+  struct LaneScores {
+    double loop_score = 0.0;
+    std::vector<double> log_ratio, phrase_only, garbage_ratio;
+    std::vector<std::pair<int, int>> span;  // the phrase's first and last frame in the window
+    std::vector<int> phrase_frames, garbage_frames;
+    bool garbage_scored = false;
+  };
+  std::map<std::tuple<std::size_t, long, long>, LaneScores> window_scores;  // by lane, window start, end
+  LaneScores& lane_scores(std::size_t lane, long from, long to, bool garbage);
   /// Makes the keyword search (and, with the second pass, its decoders) at one warp factor.
   void add_lane(double warp);
   /// Runs one lane's keyword search over new samples; queues its hits (or, in one pass, reports them).
@@ -178,6 +202,13 @@ double level_above_floor_db(const std::vector<std::int16_t>& audio, long audio_s
   return 10.0 * std::log10((phrase_power / static_cast<double>(phrase_samples) + 1.0) / (*q + 1.0));
 }
 
+/// The second pass's margins over the other commands (verification_accepts()'s first tests).
+bool margins_met(const VoiceConfig& config, const VoiceDetection& d) {
+  return d.command_margin >= config.verify_min_margin &&
+         (config.verify_min_phrase_margin <= 0.0 || d.phrase_margin >= config.verify_min_phrase_margin) &&
+         (!config.verify_min_garbage_margin || d.garbage_margin >= *config.verify_min_garbage_margin);
+}
+
 /// sphinxbase keeps the warp factor of its front ends in static variables, read while a decoder is made
 /// (the mel filters are built then): decoders are made one at a time, and each names its warp
 /// (a decoder made without one would leave the next one with the same warp unwarped).
@@ -202,27 +233,22 @@ std::string write_kws_file(const std::string& text) {
 }
 }  // namespace
 
-// Keyword verification by a likelihood-ratio test against a background model (Rose & Paul, "A hidden
-// Markov model based keyword recognition system", ICASSP 1990; as utterance verification, Sukkar &
-// Lee, IEEE Trans. Speech Audio Proc. 4(6), 1996). The audio around the hit, X (0.3 s before it to
-// 0.6 s after it), is decoded again, once with a grammar that allows only the phrase, with silence and
-// noise fillers around it, and once with a free loop of context-independent phones, the background
-// model. The score is the log-likelihood ratio per frame of the phrase,
-//   LLR = (log p(X | fillers + phrase) - log p(X | phone loop)) / T_phrase,
-// from the acoustic scores of the two best paths over the same frames; dividing by the phrase's
-// T_phrase frames is Sukkar & Lee's duration normalisation, so that one threshold serves all phrases.
-// The window holds the audio around the phrase too, where the grammar has only silence and noise:
-// a phrase inside ongoing speech scores low. That is what rejects the keyword search's false alarms in
-// ordinary reading, and it asks a command to be said on its own ("of clubs" inside "four of clubs
-// seven" scores -64, the same phrase alone -4 to -13; docs/voice.md).
-KeywordSpotter::Impl::Verdict KeywordSpotter::Impl::verify(long begin, long end, long before) {
-  Verdict verdict;
-  const long from = std::max(begin - before, audio_start);
-  const long to = std::min(end + kVerifyAfterSamples, audio_start + static_cast<long>(audio.size()));
-  if (to <= from) return verdict;
+KeywordSpotter::Impl::LaneScores& KeywordSpotter::Impl::lane_scores(std::size_t l, long from, long to, bool garbage) {
+  const auto key = std::make_tuple(l, from, to);
+  auto found = window_scores.find(key);
+  const bool fresh = found == window_scores.end();
+  if (fresh) found = window_scores.emplace(key, LaneScores{}).first;
+  LaneScores& s = found->second;
+  if (!fresh && (s.garbage_scored || !garbage)) return s;
+  Lane& lane = lanes[l];
   // Both decodings normalise the cepstra with the live mean of the keyword search at the same warp: a
   // short window alone would start from the model's initial estimate.
   std::vector<mfcc_t> cepstral_mean;
+  {
+    cmn_t* cmn = ps_get_feat(lane.decoder)->cmn_struct;
+    cepstral_mean.assign(static_cast<std::size_t>(cmn->veclen), 0);
+    cmn_live_get(cmn, cepstral_mean.data());
+  }
   const auto decode = [&](const char* search, ps_decoder_t* ps) {
     if (ps_set_search(ps, search) < 0) throw std::runtime_error(std::string("pocketsphinx has no search ") + search);
     cmn_live_set(ps_get_feat(ps)->cmn_struct, cepstral_mean.data());
@@ -232,30 +258,19 @@ KeywordSpotter::Impl::Verdict KeywordSpotter::Impl::verify(long begin, long end,
     ps_end_utt(ps);
     return best_path(ps);
   };
-  // Each phrase's scores, the best over the warps (VoiceConfig::warps): a phrase is scored at the warp
-  // where the voice's formants fit the model best (Lee & Rose 1998 choose the warp of the highest
-  // likelihood; here the ratio against the phone loop at the same warp, so that the warps compare).
-  // The commands then compete on their best scores, so another command's better fit at any warp
-  // counts against the margin: a command two warps disagree on is dropped, not guessed.
   const std::size_t n = config.phrases.size();
   constexpr double kNone = -std::numeric_limits<double>::infinity();
-  std::vector<double> log_ratio(n, kNone), phrase_only(n, kNone), garbage_ratio(n, kNone);
-  std::vector<std::pair<int, int>> phrase_span(n, {-1, -1});
-  std::vector<int> phrase_frame_count(n, 0), garbage_frame_count(n, 0);
-  std::vector<double> loop_scores(lanes.size(), 0.0);
-  const auto live_mean = [&](const Lane& lane) {
-    cmn_t* cmn = ps_get_feat(lane.decoder)->cmn_struct;
-    cepstral_mean.assign(static_cast<std::size_t>(cmn->veclen), 0);
-    cmn_live_get(cmn, cepstral_mean.data());
-  };
-  for (std::size_t l = 0; l < lanes.size(); ++l) {
-    live_mean(lanes[l]);
-    double loop_score = 0.0;
-    const auto loop_path = decode(kPhoneLoopSearch.c_str(), lanes[l].verifier);
+  if (fresh) {
+    s.log_ratio.assign(n, kNone);
+    s.phrase_only.assign(n, kNone);
+    s.garbage_ratio.assign(n, kNone);
+    s.span.assign(n, {-1, -1});
+    s.phrase_frames.assign(n, 0);
+    s.garbage_frames.assign(n, 0);
+    const auto loop_path = decode(kPhoneLoopSearch.c_str(), lane.verifier);
     // The decoder numbers frames on from earlier utterances: frames relative to the window's start.
     const int loop_base = loop_path.empty() ? 0 : loop_path.front().first_frame;
-    for (const auto& seg : loop_path) loop_score += seg.acoustic;
-    loop_scores[l] = loop_score;
+    for (const auto& seg : loop_path) s.loop_score += seg.acoustic;
     // The phone loop's score over frames [first, last] of the window, each segment pro-rated.
     const auto loop_over = [&](int first, int last) {
       double sum = 0.0;
@@ -269,7 +284,7 @@ KeywordSpotter::Impl::Verdict KeywordSpotter::Impl::verify(long begin, long end,
       double phrase_score = 0.0, words_score = 0.0;
       int phrase_frames = 0;
       std::pair<int, int> span{-1, -1};
-      const auto path = decode(grammar_search(i).c_str(), lanes[l].verifier);
+      const auto path = decode(grammar_search(i).c_str(), lane.verifier);
       const int base = path.empty() ? 0 : path.front().first_frame;
       for (const auto& seg : path) {
         phrase_score += seg.acoustic;
@@ -280,45 +295,93 @@ KeywordSpotter::Impl::Verdict KeywordSpotter::Impl::verify(long begin, long end,
         span.second = seg.last_frame - base;
       }
       if (phrase_frames == 0) continue;  // the phrase cannot be aligned to this audio
-      const double ratio = (phrase_score - loop_score) / phrase_frames;
-      if (!(ratio > log_ratio[i])) continue;
-      log_ratio[i] = ratio;
-      phrase_frame_count[i] = phrase_frames;
-      phrase_span[i] = span;
-      phrase_only[i] = (words_score - loop_over(span.first, span.second)) / phrase_frames;
+      s.log_ratio[i] = (phrase_score - s.loop_score) / phrase_frames;
+      s.phrase_frames[i] = phrase_frames;
+      s.span[i] = span;
+      // The phrase said inside other words: the ratio over the phrase's own frames only, the phone
+      // loop's score pro-rated over the same frames, so that the words around it count for neither.
+      s.phrase_only[i] = (words_score - loop_over(span.first, span.second)) / phrase_frames;
+    }
+  }
+  if (garbage && !s.garbage_scored) {
+    // The same phrases with a garbage model (a free phone loop) before and after them instead of the
+    // silence and noise fillers alone: the filler-model keyword verification of Rose & Paul (ICASSP
+    // 1990), where the fillers explain the non-keyword speech. With silence fillers only, the words
+    // around a phrase must be explained by the phrase itself: in "that is enough, stop cutting" the
+    // grammar of "begin cutting" stretches "begin" over "enough" ("-nough" ends like "-gin") and beats
+    // "stop cutting", whose grammar leaves "that is enough" to the silence model. With the phone loop
+    // around both, each phrase is aligned where it fits best and the commands compete on the phrase.
+    // Score: the ratio of the whole window against the free phone loop, per frame of the phrase, as above.
+    for (std::size_t i = 0; i < n; ++i) {
+      double score = 0.0;
+      int frames = 0;
+      const auto gpath = decode(garbage_search(i).c_str(), lane.garbage_verifier);
+      for (const auto& seg : gpath) {
+        score += seg.acoustic;
+        if (!is_filler(seg.word) && seg.word.rfind(kGarbagePrefix, 0) != 0) frames += seg.last_frame - seg.first_frame + 1;
+      }
+      if (frames == 0) continue;
+      s.garbage_ratio[i] = (score - s.loop_score) / frames;
+      s.garbage_frames[i] = frames;
+    }
+    s.garbage_scored = true;
+  }
+  return s;
+}
+
+// Keyword verification by a likelihood-ratio test against a background model (Rose & Paul, "A hidden
+// Markov model based keyword recognition system", ICASSP 1990; as utterance verification, Sukkar &
+// Lee, IEEE Trans. Speech Audio Proc. 4(6), 1996). The audio around the hit, X (0.3 s before it to
+// 0.6 s after it), is decoded again, once with a grammar that allows only the phrase, with silence and
+// noise fillers around it, and once with a free loop of context-independent phones, the background
+// model. The score is the log-likelihood ratio per frame of the phrase,
+//   LLR = (log p(X | fillers + phrase) - log p(X | phone loop)) / T_phrase,
+// from the acoustic scores of the two best paths over the same frames; dividing by the phrase's
+// T_phrase frames is Sukkar & Lee's duration normalisation, so that one threshold serves all phrases.
+// The window holds the audio around the phrase too, where the grammar has only silence and noise:
+// a phrase inside ongoing speech scores low. That is what rejects the keyword search's false alarms in
+// ordinary reading, and it asks a command to be said on its own ("of clubs" inside "four of clubs
+// seven" scores -64, the same phrase alone -4 to -13; docs/voice.md).
+KeywordSpotter::Impl::Verdict KeywordSpotter::Impl::verify(long begin, long end, const std::vector<std::size_t>& use, long before) {
+  Verdict verdict;
+  const long from = std::max(begin - before, audio_start);
+  const long to = std::min(end + kVerifyAfterSamples, audio_start + static_cast<long>(audio.size()));
+  if (to <= from || use.empty()) return verdict;
+  // Each phrase's scores, the best over the lanes' warps (VoiceConfig::warps): a phrase is scored at the
+  // warp where the voice's formants fit the model best (Lee & Rose 1998 choose the warp of the highest
+  // likelihood; here the ratio against the phone loop at the same warp, so that the warps compare).
+  // The commands then compete on their best scores, so another command's better fit at any warp
+  // counts against the margin: a command two warps disagree on is dropped, not guessed.
+  const std::size_t n = config.phrases.size();
+  constexpr double kNone = -std::numeric_limits<double>::infinity();
+  std::vector<double> log_ratio(n, kNone), phrase_only(n, kNone), garbage_ratio(n, kNone);
+  std::vector<std::pair<int, int>> phrase_span(n, {-1, -1});
+  std::vector<int> phrase_frame_count(n, 0), garbage_frame_count(n, 0);
+  for (const std::size_t l : use) {
+    const LaneScores& s = lane_scores(l, from, to, false);
+    for (std::size_t i = 0; i < n; ++i) {
+      if (!(s.log_ratio[i] > log_ratio[i])) continue;
+      log_ratio[i] = s.log_ratio[i];
+      phrase_frame_count[i] = s.phrase_frames[i];
+      phrase_span[i] = s.span[i];
+      phrase_only[i] = s.phrase_only[i];
     }
   }
   // A phrase that cannot be aligned may be longer than the one the search hit and begin before the
   // window ("stop cutting" hit on flite rms's "begin cutting": "be" lay before it): judged again over
   // a window reaching further back, so that every phrase is scored on the whole utterance.
   if (before == kVerifyBeforeSamples && std::any_of(log_ratio.begin(), log_ratio.end(), [](double r) { return !std::isfinite(r); }))
-    return verify(begin, end, kVerifyWideBeforeSamples);
+    return verify(begin, end, use, kVerifyWideBeforeSamples);
   const auto best = static_cast<std::size_t>(std::max_element(log_ratio.begin(), log_ratio.end()) - log_ratio.begin());
   if (!std::isfinite(log_ratio[best])) return verdict;
-  // The same phrases with a garbage model (a free phone loop) before and after them instead of the
-  // silence and noise fillers alone: the filler-model keyword verification of Rose & Paul (ICASSP
-  // 1990), where the fillers explain the non-keyword speech. With silence fillers only, the words
-  // around a phrase must be explained by the phrase itself: in "that is enough, stop cutting" the
-  // grammar of "begin cutting" stretches "begin" over "enough" ("-nough" ends like "-gin") and beats
-  // "stop cutting", whose grammar leaves "that is enough" to the silence model. With the phone loop
-  // around both, each phrase is aligned where it fits best and the commands compete on the phrase.
-  // Score: the ratio of the whole window against the free phone loop, per frame of the phrase, as above;
-  // the best over the warps, as above.
-  for (std::size_t l = 0; l < lanes.size(); ++l) {
-    live_mean(lanes[l]);
+  // The garbage model's scores (lane_scores()), the best over the warps, as above.
+  for (const std::size_t l : use) {
+    const LaneScores& s = lane_scores(l, from, to, true);
     for (std::size_t i = 0; i < n; ++i) {
-      double score = 0.0;
-      int frames = 0;
-      const auto gpath = decode(garbage_search(i).c_str(), lanes[l].garbage_verifier);
-      for (const auto& seg : gpath) {
-        score += seg.acoustic;
-        if (!is_filler(seg.word) && seg.word.rfind(kGarbagePrefix, 0) != 0) frames += seg.last_frame - seg.first_frame + 1;
-      }
-      if (frames == 0) continue;
-      const double ratio = (score - loop_scores[l]) / frames;
-      if (!(ratio > garbage_ratio[i]) && garbage_frame_count[i] > 0) continue;
-      garbage_ratio[i] = ratio;
-      garbage_frame_count[i] = frames;
+      if (s.garbage_frames[i] == 0) continue;
+      if (!(s.garbage_ratio[i] > garbage_ratio[i]) && garbage_frame_count[i] > 0) continue;
+      garbage_ratio[i] = s.garbage_ratio[i];
+      garbage_frame_count[i] = s.garbage_frames[i];
     }
   }
   verdict.phrase = config.phrases[best];
@@ -328,8 +391,6 @@ KeywordSpotter::Impl::Verdict KeywordSpotter::Impl::verify(long begin, long end,
   for (std::size_t i = 0; i < config.phrases.size(); ++i)
     if (config.phrases[i].command != config.phrases[best].command && std::isfinite(log_ratio[i]))
       verdict.margin = std::min(verdict.margin, log_ratio[best] - log_ratio[i]);
-  // The phrase said inside other words: the ratio over the phrase's own frames only, the phone loop's
-  // score pro-rated over the same frames, so that the words around it count for neither.
   verdict.phrase_log_ratio = phrase_only[best];
   for (std::size_t i = 0; i < config.phrases.size(); ++i)
     if (config.phrases[i].command != config.phrases[best].command && std::isfinite(phrase_only[i]))
@@ -341,6 +402,11 @@ KeywordSpotter::Impl::Verdict KeywordSpotter::Impl::verify(long begin, long end,
   if (phrase_span[best].first >= 0) {
     const long p0 = from + phrase_span[best].first * kSamplesPerFrame, p1 = from + (phrase_span[best].second + 1) * kSamplesPerFrame;
     verdict.level_db = level_above_floor_db(audio, audio_start, p0, p1);
+  }
+  if (unwarped < lanes.size()) {
+    const auto& u = lane_scores(unwarped, from, to, false).log_ratio;
+    const auto ub = static_cast<std::size_t>(std::max_element(u.begin(), u.end()) - u.begin());
+    if (std::isfinite(u[ub])) verdict.unwarped_best = config.phrases[ub];
   }
   return verdict;
 }
@@ -429,7 +495,7 @@ void KeywordSpotter::Impl::add_lane(double warp) {
   if (ps_set_allphone(lane.verifier, kPhoneLoopSearch.c_str(), nullptr) < 0) throw std::runtime_error("pocketsphinx could not set up a phone loop");
 }
 
-KeywordSpotter::KeywordSpotter(const VoiceConfig& config) : impl_(std::make_unique<Impl>()) {
+KeywordSpotter::KeywordSpotter(const VoiceConfig& config, bool report_refused) : impl_(std::make_unique<Impl>()) {
   if (const auto why = validate(config)) throw std::runtime_error("voice config: " + *why);
   namespace fs = std::filesystem;
   if (!fs::is_directory(config.model_dir))
@@ -437,6 +503,7 @@ KeywordSpotter::KeywordSpotter(const VoiceConfig& config) : impl_(std::make_uniq
   if (!fs::is_regular_file(config.dictionary))
     throw std::runtime_error("pronunciation dictionary " + config.dictionary + " not found (install pocketsphinx-en-us)");
   impl_->config = config;
+  impl_->report_refused = report_refused;
   const std::lock_guard setup{decoder_setup};
   // One pass reports each keyword hit at once, with nothing to judge the hits of several lanes on one
   // utterance together: it searches unwarped.
@@ -444,6 +511,8 @@ KeywordSpotter::KeywordSpotter(const VoiceConfig& config) : impl_(std::make_uniq
     for (const double warp : config.warps) impl_->add_lane(warp);
   else
     impl_->add_lane(1.0);
+  const auto& lanes = impl_->lanes;
+  impl_->unwarped = static_cast<std::size_t>(std::find_if(lanes.begin(), lanes.end(), [](const Impl::Lane& l) { return l.warp == 1.0; }) - lanes.begin());
 }
 
 KeywordSpotter::~KeywordSpotter() = default;
@@ -499,7 +568,7 @@ void KeywordSpotter::Impl::search(Lane& lane, std::span<const std::int16_t> bloc
       for (const auto& h : hits)
         for (const auto& p : phrases_in_hypothesis(h.words, config.phrases)) {
           if (config.verify_min_log_ratio)
-            pending.push_back({phrase_index(p.phrase), h.begin, h.end});
+            pending.push_back({phrase_index(p.phrase), h.begin, h.end, static_cast<std::size_t>(&lane - lanes.data())});
           else
             found.push_back({static_cast<double>(samples) / kVoiceSampleRate, p.command, p.phrase});
         }
@@ -528,8 +597,14 @@ void KeywordSpotter::Impl::verify_pending(long ended_by, std::vector<VoiceDetect
     const PendingHit hit = pending.front();
     pending.erase(pending.begin());
     // Another lane's hit on an utterance already judged, ending within 0.5 s of it (as kRedetectSamples
-    // within a lane): the same utterance, judged once.
-    if (hit.end - judged_end < kRedetectSamples) continue;
+    // within a lane): the same utterance, judged once. The unwarped lane's hit is judged unless its
+    // utterance already held one of its hits or gave a command: a warped lane's hit that came first and
+    // gave none must not take the unwarped verdict's place (below).
+    constexpr long kNever = std::numeric_limits<long>::min() / 2;
+    const bool by_unwarped = hit.lane == unwarped;
+    if (by_unwarped ? (hit.end - unwarped_end < kRedetectSamples || hit.end - command_end < kRedetectSamples)
+                    : hit.end - group_end < kRedetectSamples)
+      continue;
     // Every phrase competes for the hit's audio, not only those the keyword search hit: the search
     // reports the first phrase whose last state scores well enough, and "start cutting" and "stop
     // cutting" share most of their phones, so it named the wrong one for espeak-ng's British voices.
@@ -537,24 +612,66 @@ void KeywordSpotter::Impl::verify_pending(long ended_by, std::vector<VoiceDetect
     // With several lanes, the next phrase said straight after ("go forward ten meters") may begin a
     // frame before this one ends in another lane's search: only hits ending near this one's end merge.
     long end = hit.end;
+    long unwarped_begin = by_unwarped ? hit.begin : 0, unwarped_to = by_unwarped ? hit.end : kNever;
     while (!pending.empty() && pending.front().begin < hit.end && pending.front().end - hit.end < kRedetectSamples) {
-      end = std::max(end, pending.front().end);
+      const PendingHit& other = pending.front();
+      end = std::max(end, other.end);
+      if (other.lane == unwarped) {
+        unwarped_begin = unwarped_to == kNever ? other.begin : std::min(unwarped_begin, other.begin);
+        unwarped_to = std::max(unwarped_to, other.end);
+      }
       pending.erase(pending.begin());
     }
-    judged_end = end;
-    const Verdict verdict = verify(hit.begin, end, kVerifyBeforeSamples);
-    if (!verdict.phrase) continue;
-    VoiceDetection d{static_cast<double>(samples) / kVoiceSampleRate, verdict.phrase->command, verdict.phrase->phrase};
-    d.verification_score = verdict.log_ratio;
-    d.command_margin = verdict.margin;
-    d.phrase_score = verdict.phrase_log_ratio;
-    d.phrase_margin = verdict.phrase_margin;
-    d.level_db = verdict.level_db;
-    d.garbage_score = verdict.garbage_log_ratio;
-    d.garbage_margin = verdict.garbage_margin;
-    d.phrase_duration_s = verdict.phrase_frames / 100.0;
-    d.garbage_duration_s = verdict.garbage_frames / 100.0;
-    if (verification_accepts(config, d)) accepted.push_back(d);
+    group_end = end;
+    if (unwarped_to != kNever) unwarped_end = unwarped_to;
+    window_scores.clear();
+    const auto detection = [&](const Verdict& verdict, bool by_warps) {
+      VoiceDetection d{static_cast<double>(samples) / kVoiceSampleRate, verdict.phrase->command, verdict.phrase->phrase};
+      d.verification_score = verdict.log_ratio;
+      d.command_margin = verdict.margin;
+      d.phrase_score = verdict.phrase_log_ratio;
+      d.phrase_margin = verdict.phrase_margin;
+      d.level_db = verdict.level_db;
+      d.garbage_score = verdict.garbage_log_ratio;
+      d.garbage_margin = verdict.garbage_margin;
+      d.phrase_duration_s = verdict.phrase_frames / 100.0;
+      d.garbage_duration_s = verdict.garbage_frames / 100.0;
+      d.unwarped_hit = unwarped_to != kNever;
+      d.by_warps = by_warps;
+      return d;
+    };
+    std::optional<VoiceDetection> command, refused;
+    // The unwarped lane's verdict, over its own hits' window, as a spotter with warps [1.0] judges it: a
+    // voice the model already fits keeps its commands, which the best-over-warps judgement below lost
+    // when another phrase's best warp closed the margin (docs/voice.md, session 38).
+    if (unwarped_to != kNever)
+      if (const Verdict v = verify(unwarped_begin, unwarped_to, {unwarped}, kVerifyBeforeSamples); v.phrase)
+        (verification_accepts(config, detection(v, false)) ? command : refused) = detection(v, false);
+    // Only where it gives no command do the warped lanes judge (Lee & Rose 1998's warps, each phrase at
+    // its best warp, the unwarped lane's scores among them): where it had no hit of its own, aligned no
+    // phrase, or refused one on its scores, level or duration with every margin met: the model may fit
+    // the voice badly. A phrase it refused by a margin stands refused: it heard two commands close
+    // together, and the warps must not pick one (espeak-ng en+m1's "start cutting" is within 2.5 of
+    // "stop cutting" unwarped; the best warp made it a stop, a wrong command). Nor is a command taken
+    // that the unwarped lane's best phrase on the same window does not name: dropped, not guessed.
+    const bool ambiguous_unwarped = refused && !margins_met(config, *refused);
+    if (!command && !ambiguous_unwarped && lanes.size() > 1) {
+      std::vector<std::size_t> all(lanes.size());
+      for (std::size_t l = 0; l < all.size(); ++l) all[l] = l;
+      if (const Verdict v = verify(hit.begin, end, all, kVerifyBeforeSamples); v.phrase) {
+        const bool disagree = v.unwarped_best && v.unwarped_best->command != v.phrase->command;
+        if (!disagree && verification_accepts(config, detection(v, true)))
+          command = detection(v, true);
+        else if (!disagree && !refused)
+          refused = detection(v, true);
+      }
+    }
+    if (command) {
+      command_end = end;
+      accepted.push_back(*command);
+    } else if (report_refused && refused) {
+      accepted.push_back(*refused);
+    }
   }
 }
 

@@ -102,15 +102,18 @@ struct VoiceConfig {
   /// speaker normalization", IEEE Trans. Speech Audio Proc. 6(1), 1998), through pocketsphinx's front end
   /// (`-warp_type inverse_linear -warp_params a`: the mel filters move to the frequencies f * a, so a > 1
   /// fits a shorter vocal tract, higher formants). Per warp, a keyword search and the second pass's
-  /// decoders all hear the audio; the hits of every warp are judged together, each phrase scored at the
-  /// warp where it scores best, the commands competing on those scores (a command that one warp hears as
-  /// start and another as stop is dropped by the margins). [1.0]: no warping, as before. Each warp costs
-  /// one more keyword search and a second pass per hit (docs/voice.md, session 37). One pass (no
+  /// decoders all hear the audio. Each utterance is judged by the unwarped lane (1.0) as one lane would;
+  /// only where it gives no command (no hit of its own, no phrase aligned, or a phrase refused on its
+  /// scores, level or duration with every margin met) do all the lanes judge it, each phrase at the warp
+  /// where it scores best and the commands competing on those scores, and only a command the unwarped
+  /// lane's best phrase names too is taken. A phrase the unwarped lane refused by a margin stays refused
+  /// (the warps made such a British "start cutting" a stop). Without 1.0 among them, all the lanes judge
+  /// every utterance. [1.0]: no warping. Each warp costs one more keyword search and a second pass per hit
+  /// the unwarped lane does not accept (docs/voice.md, sessions 37-38). One pass (no
   /// verify_min_log_ratio) searches unwarped: it has no judge for several lanes' hits on one utterance.
-  /// Default [1.0]: [0.84, 1.0, 1.19] found 78 -> 84 of the tune set's 128 pitch-shifted commands at 20 dB
-  /// (no WRONG, no false alarm added), but it lost a command said inside a sentence and a British voice's
-  /// command in the voice tests (the commands compete on their best score over the warps, and another
-  /// phrase's best warp can close the margin), at 4.4x the CPU; docs/voice.md, session 37.
+  /// Default [1.0]: with [0.84, 1.0, 1.19] and this judgement the tune set found 304 / 384 at 20 dB (282
+  /// with [1.0]) but with 4 WRONG (1) and 3 false alarms (0), all from utterances the unwarped lane had no
+  /// hit on (docs/voice.md, session 38).
   std::vector<double> warps{1.0};
 };
 

@@ -3,7 +3,8 @@
 // hit is verified by a second pass (VoiceConfig::verify_min_log_ratio): the phrase aligned again to
 // the audio around the hit against a phone loop, a likelihood-ratio test (voice_spotter.cpp).
 // With VoiceConfig::warps (vocal tract length normalisation) one keyword search and second pass per warp
-// hear the audio, and each utterance's hits are judged once, each phrase at its best warp.
+// hear the audio, and each utterance's hits are judged once: by the unwarped lane, and only where it
+// gives no command by all the lanes, each phrase at its best warp.
 #pragma once
 
 #include "tachi/sensor/voice_commands.hpp"
@@ -44,6 +45,10 @@ struct VoiceDetection {
   /// grammar align it; NaN without a second pass.
   double phrase_duration_s = std::numeric_limits<double>::quiet_NaN();
   double garbage_duration_s = std::numeric_limits<double>::quiet_NaN();
+  /// With the second pass: whether the unwarped lane's keyword search (warp 1.0) hit this utterance, and
+  /// whether the warped lanes judged it (VoiceConfig::warps: only where the unwarped lane gave no command).
+  bool unwarped_hit = false;
+  bool by_warps = false;
 };
 
 /// The second pass's decision on one scored hit (VoiceConfig's verify_* thresholds): a command when
@@ -57,7 +62,10 @@ class KeywordSpotter {
  public:
   /// Loads the acoustic model and dictionary and sets up the keyword list. Throws std::runtime_error
   /// with context when the model or dictionary is missing or a phrase has a word the dictionary lacks.
-  explicit KeywordSpotter(const VoiceConfig& config);
+  /// `report_refused`: also return each utterance's verdict that the second pass's thresholds refused
+  /// (tachi-voice-eval applies them itself; with several warps the verdict returned is the one the
+  /// thresholds chose between the unwarped and the warped lanes).
+  explicit KeywordSpotter(const VoiceConfig& config, bool report_refused = false);
   ~KeywordSpotter();
   KeywordSpotter(const KeywordSpotter&) = delete;
   KeywordSpotter& operator=(const KeywordSpotter&) = delete;

@@ -1705,7 +1705,7 @@ bool HandFinder::Impl::follow_component(std::span<const std::uint16_t> raw, int 
     const bool jump = !take_over && (jumped(palm) || (continuing && off_course(palm)));
     const bool found =
         palm_accepted(palm) && !jump &&
-        (continuing || (palm.radius_m <= params.max_new_palm_radius_m && palm.ridge_m <= params.max_palm_ridge_m && !is_dome(palm) &&
+        (continuing || (palm.radius_m <= params.max_new_palm_radius_m && palm.ridge_m <= params.max_foreground_new_palm_ridge_m && !is_dome(palm) &&
                         !shoulders_below(palm) && !set_in_static_surface(palm) && ((palm.z <= params.max_acquire_depth_m && !take_over) ||
                          (palm.z <= params.max_track_depth_m && reaches_back(seed, near_raw, at_end))) &&
                         !is_joint(seed, near_raw) && !nearest_at_border(arm_nearest) &&

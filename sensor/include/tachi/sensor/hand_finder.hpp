@@ -119,6 +119,14 @@ struct HandFinderParams {
   /// of constant width: the upper arm (4.5 cm in radius) holds a palm-sized circle all along it,
   /// and an elbow or a shoulder at the hand's depth took the track (chosen on seeds 1-100).
   double max_palm_ridge_m = 0.09;
+  /// A new track from the foreground (follow_component, also the take-over) holds its palm to this
+  /// tighter ridge instead. A near user's upper arm taken against the wall after the hand left the
+  /// image's side (tuning seeds 70, 251: runs of 12 and 15 frames) measured 8.8-8.9 cm, refused and
+  /// taken again as its ridge flickered about max_palm_ridge_m; no good foreground new track of tuning
+  /// seeds 1-300 measured over 8 cm (session 37's log). The search without a background keeps
+  /// max_palm_ridge_m: lowering that too lost a hand it finds within the background (seed 207, 81 of
+  /// 113 tracked frames). Chosen on seeds 1-300, checked on 301-600 (session 38, docs/sensor.md).
+  double max_foreground_new_palm_ridge_m = 0.08;
   /// A palm is flat (or cupped); a head, an elbow or a shoulder's round end seen from the front fills
   /// the depth band's disc as a palm does, but bulges toward the sensor along every direction, its
   /// apex facing the sensor. A new track does not start on a palm circle whose readings bulge so:

@@ -202,7 +202,10 @@ double level_above_floor_db(const std::vector<std::int16_t>& audio, long audio_s
   return 10.0 * std::log10((phrase_power / static_cast<double>(phrase_samples) + 1.0) / (*q + 1.0));
 }
 
-/// The second pass's margins over the other commands (verification_accepts()'s first tests).
+/// The second pass's margins over the other commands, verification_accepts()'s first tests: too close
+/// to another command is a miss, never a wrong command (NaN margins compare false: not met). The garbage
+/// margin is the same margin with the words around the phrase explained by the garbage model: a phrase
+/// that wins only because it stretched over a neighbouring word loses there.
 bool margins_met(const VoiceConfig& config, const VoiceDetection& d) {
   return d.command_margin >= config.verify_min_margin &&
          (config.verify_min_phrase_margin <= 0.0 || d.phrase_margin >= config.verify_min_phrase_margin) &&
@@ -677,13 +680,8 @@ void KeywordSpotter::Impl::verify_pending(long ended_by, std::vector<VoiceDetect
 
 bool verification_accepts(const VoiceConfig& config, const VoiceDetection& d) {
   if (!config.verify_min_log_ratio) return true;
-  // Too close to another command: a miss, never a wrong command (NaN margins compare false: refused).
-  if (!(d.command_margin >= config.verify_min_margin)) return false;
-  if (config.verify_min_phrase_margin > 0.0 && !(d.phrase_margin >= config.verify_min_phrase_margin)) return false;
+  if (!margins_met(config, d)) return false;
   if (config.verify_min_level_db && !(d.level_db >= *config.verify_min_level_db)) return false;
-  // The same margin with the words around the phrase explained by the garbage model: a phrase that wins
-  // only because it stretched over a neighbouring word loses here.
-  if (config.verify_min_garbage_margin && !(d.garbage_margin >= *config.verify_min_garbage_margin)) return false;
   // Where the phrase is not said, the garbage grammar explains the audio with its phone loop and
   // squeezes the phrase into the fewest frames it can: too short a phrase is none.
   if (config.verify_min_phrase_seconds && !(d.garbage_duration_s >= *config.verify_min_phrase_seconds)) return false;

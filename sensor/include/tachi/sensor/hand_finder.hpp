@@ -117,7 +117,9 @@ struct HandFinderParams {
   /// circle (>= 85% of its radius) reaches at most this far from the circle's centre (a whole palm,
   /// fingers beside it included: 1-2 cm, at most ~8 cm seen in the tuning range). A limb is a tube
   /// of constant width: the upper arm (4.5 cm in radius) holds a palm-sized circle all along it,
-  /// and an elbow or a shoulder at the hand's depth took the track (chosen on seeds 1-100).
+  /// and an elbow or a shoulder at the hand's depth took the track (chosen on seeds 1-100). Since
+  /// session 38 this limit is the search without a background's (find_arm_end); a new track from the
+  /// foreground has the tighter max_foreground_new_palm_ridge_m below.
   double max_palm_ridge_m = 0.09;
   /// A new track from the foreground (follow_component, also the take-over) holds its palm to this
   /// tighter ridge instead. A near user's upper arm taken against the wall after the hand left the

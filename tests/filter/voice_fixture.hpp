@@ -81,7 +81,11 @@ inline std::vector<std::int16_t> synthesize(const Speaker& speaker, const std::s
     if (speaker.pitch_cents != 0) shift += " pitch " + std::to_string(speaker.pitch_cents);
     if (speaker.tempo != 1.0) shift += " tempo -s " + std::to_string(speaker.tempo);
     if (reverb) shift += " pad 0 0.5 reverb";
-    const std::string convert = "sox '" + tmp + ".raw.wav' -b 16 '" + tmp + ".wav'" + shift + " rate 16000";
+    // -R: sox dithers when it writes 16 bits after an effect (and when it only resamples), from a fresh
+    // random seed per run; the same phrase was then different audio in every fresh cache, so a verdict
+    // near a threshold came out one way in one build tree and the other way in the next. -R seeds it the
+    // same every run: one synthesis per key, on every machine.
+    const std::string convert = "sox -R '" + tmp + ".raw.wav' -b 16 '" + tmp + ".wav'" + shift + " rate 16000";
     const std::string cmd = "(" + say + ") >/dev/null 2>&1 && " + convert + " >/dev/null 2>&1 && mv '" + tmp + ".wav' '" + cached.string() + "'";
     const int status = std::system(cmd.c_str());
     fs::remove(tmp + ".raw.wav");

@@ -499,8 +499,11 @@ void StrokeCutter::commit(GridCoord g, const Eigen::Vector2d& uv, const Eigen::V
   if (!from) {
     tracks_.emplace_back();
     track_boxes_.emplace_back();  // empty
+    blade_tracks_.emplace_back();
+    blade_boxes_.emplace_back();
     extend_track(to.cast<float>());
     recent_.clear();
+    recent_hands_.clear();
     arrived_on_cut_ = true;
   }
   // Where the segment runs along a cut already made it does not cut again (recut_parts); the samples up to
@@ -520,12 +523,16 @@ void StrokeCutter::commit(GridCoord g, const Eigen::Vector2d& uv, const Eigen::V
     // the slit's end (exact: a particle and a triangle more at the joint), and through the offline driver
     // exact mode differed on more strokes with them (razor re-cut, seeds 1-300: 32 -> 34 of 300).
     const double reach = kRecutCells + options_.tolerance_cells;
-    for (const auto& sample : recent_) {
-      const Eigen::Vector2d s = sample.cast<double>();
-      if (options_.mode != CutMode::Delete || closest_points(s, s, *from, to).distance <= reach) extend_track(sample);
+    for (std::size_t i = 0; i < recent_.size(); ++i) {
+      const Eigen::Vector2d s = recent_[i].cast<double>();
+      if (options_.mode != CutMode::Delete || closest_points(s, s, *from, to).distance <= reach) {
+        extend_track(recent_[i]);
+        extend_blade_track(recent_hands_[i]);
+      }
     }
     extend_track(to.cast<float>());
     recent_.clear();
+    recent_hands_.clear();
   }
   if (follows_path()) {
     if (!from) {
@@ -579,6 +586,60 @@ void StrokeCutter::commit(GridCoord g, const Eigen::Vector2d& uv, const Eigen::V
 void StrokeCutter::extend_track(const Eigen::Vector2f& sample) {
   tracks_.back().push_back(sample);
   track_boxes_.back().extend(sample);
+}
+
+void StrokeCutter::extend_blade_track(const Eigen::Vector3f& hand) {
+  blade_tracks_.back().push_back(hand);
+  blade_boxes_.back().extend(hand);
+}
+
+bool StrokeCutter::near_blade_track(const Eigen::Vector3f& hand, double radius_m, double tail_m) const {
+  for (std::size_t i = 0; i < blade_tracks_.size(); ++i) {
+    if (static_cast<double>(blade_boxes_[i].exteriorDistance(hand)) > radius_m + 1e-6) continue;
+    const auto& track = blade_tracks_[i];
+    // As near_track: the current line's last stretch is the hand going on, not coming back.
+    std::size_t end = track.size();
+    if (i + 1 == blade_tracks_.size() && line_) {
+      double walked = 0.0;
+      while (end > 0 && walked < tail_m) {
+        --end;
+        if (end > 0) walked += static_cast<double>((track[end] - track[end - 1]).norm());
+      }
+    }
+    for (std::size_t k = 0; k < end; ++k) {
+      if (static_cast<double>((track[k] - hand).norm()) <= radius_m) return true;
+      if (k > 0) {
+        const Eigen::Vector3f d = track[k] - track[k - 1];
+        const float len2 = d.squaredNorm();
+        if (len2 > 0.0F) {
+          const float t = std::clamp((hand - track[k - 1]).dot(d) / len2, 0.0F, 1.0F);
+          if (static_cast<double>((track[k - 1] + t * d - hand).norm()) <= radius_m) return true;
+        }
+      }
+    }
+  }
+  return false;
+}
+
+Eigen::Vector2d StrokeCutter::edge_in_slit(const Eigen::Vector2d& at_edge) const {
+  // The sample beyond the edge is located by extrapolating the nearest particle's frame, off a flap that moved
+  // since the cut was made: the crossing between it and a sample in the slit came down 0.4-1.5 cells from where
+  // the cut meets the edge, and the step to it cut a sliver off the lip.
+  if (!near_track(at_edge, kSlitCells, kSlitCells)) return at_edge;
+  return nearest_on_cut(at_edge);
+}
+
+Eigen::Vector2d StrokeCutter::in_slit(const Eigen::Vector2d& uv, const Eigen::Vector3f& hand) const {
+  // A blade that goes back along a cut it made rides in the slit: the lips part around it. Located on the
+  // cloth as it is now, though, the hand's (u, v) lands on whatever material has moved under it since: the
+  // hanging cloth's cut opens and its flaps swing by centimetres, so a pass back along the same hand path came
+  // down 0.4-1.2 cells beside the cut, on fresh cloth, and cut slivers (docs/cutting.md, section 10). The hand
+  // coming back within kRecutCells of where it was while it cut (in metres on the cloth: two passes of a hand
+  // over the same place) onto material within kSlitCells of that cut is in the slit, and its point is the cut's.
+  const double cell_m = std::min(cloth_->spacing_x(), cloth_->spacing_y());
+  if (blade_tracks_.empty() || !near_blade_track(hand, kRecutCells * cell_m, kSlitCells * cell_m)) return uv;
+  if (!near_track(uv, kSlitCells, kSlitCells)) return uv;
+  return nearest_on_cut(uv);
 }
 
 bool StrokeCutter::near_track(const Eigen::Vector2d& p, double radius, double tail_cells) const {
@@ -725,6 +786,8 @@ void StrokeCutter::close_line() {
 void StrokeCutter::forget_line() {
   tracks_.resize(std::min(tracks_.size(), line_start_.tracks));
   track_boxes_.resize(tracks_.size());
+  blade_tracks_.resize(tracks_.size());
+  blade_boxes_.resize(tracks_.size());
   paths_.resize(std::min(paths_.size(), line_start_.paths));
   report_.cut_line.resize(std::min(report_.cut_line.size(), line_start_.report_cells));
   total_.cut_line.resize(std::min(total_.cut_line.size(), line_start_.total_cells));
@@ -733,6 +796,7 @@ void StrokeCutter::forget_line() {
   report_.cut_length_m = line_start_.report_length_m;
   total_.cut_length_m = line_start_.total_length_m;
   recent_.clear();
+  recent_hands_.clear();
 }
 
 void StrokeCutter::add_line_to_report(const std::vector<GridCoord>& line) {
@@ -756,8 +820,11 @@ TopologyChange StrokeCutter::add_sample(const StrokeSample& sample, const ClothP
   if (!open_) change.merge(begin_stroke());
   // Grid mode rounds (u, v) with hysteresis (grid_point); the nearest particle's own grid point flipped
   // between two rows on a stroke between them.
-  const Point point{at.uv, follows_path() ? at.grid : grid_point(at.uv), sample.position, at.inside && touching,
-                    !at.inside};
+  const bool on_cloth = at.inside && touching;
+  const Eigen::Vector2d uv = on_cloth ? in_slit(at.uv, sample.position) : at.uv;
+  const bool slid = (uv - at.uv).norm() > 1e-12;
+  const Point point{uv, follows_path() ? (slid ? boundary_point(uv) : at.grid) : grid_point(uv), sample.position,
+                    on_cloth, !at.inside, slid};
   if (follows_path() && line_ && previous_ && previous_->inside && point.inside) {
     // The nearest particle can be on another layer of a folded or swinging cloth: the point then jumps
     // across the cloth and back on the next sample, and a cut that followed it would cut out a sliver
@@ -781,7 +848,8 @@ TopologyChange StrokeCutter::add_sample(const StrokeSample& sample, const ClothP
       std::optional<std::pair<double, double>> entry;
       if (previous_) entry = clip_to_rectangle(previous_->uv, point.uv, max_u, max_v);
       if (entry && entry->first > 0.0) {
-        const Eigen::Vector2d at_edge = previous_->uv + entry->first * (point.uv - previous_->uv);
+        Eigen::Vector2d at_edge = previous_->uv + entry->first * (point.uv - previous_->uv);
+        if (point.in_slit) at_edge = edge_in_slit(at_edge);
         start_line(boundary_point(at_edge), at_edge, last_direction_, change);
         anchor_ = at_edge;
         pending_.push_back(point);
@@ -789,6 +857,10 @@ TopologyChange StrokeCutter::add_sample(const StrokeSample& sample, const ClothP
         start_line(point.grid, point.uv, last_direction_, change);
         anchor_ = point.uv;
       }
+      // The hand's way in swept the cloth up to here (from beyond the edge, or from where the blade did not
+      // reach it yet): a pass back over a flap that has since swung out finds material where the hand was
+      // before it touched, so that stretch of the hand's path is the cut's too.
+      if (previous_) extend_blade_track(previous_->world);
     } else {
       pending_.push_back(point);
     }
@@ -825,14 +897,17 @@ TopologyChange StrokeCutter::add_sample(const StrokeSample& sample, const ClothP
     if (!pending_.empty()) commit(pending_.back().grid, pending_.back().uv, last_direction_, change);
     if (!point.beyond) {
       // Off the cloth without crossing its edge (the blade left it): the cut ends at the last sample on it.
+      extend_blade_track(point.world);  // the way out, as the way in
       close_line();
       previous_ = point;
       return change;
     }
     const Eigen::Vector2d from = previous_ ? previous_->uv : anchor_;
     const auto inside_part = clip_to_rectangle(from, point.uv, max_u, max_v);
-    const Eigen::Vector2d at_edge = inside_part ? Eigen::Vector2d{from + inside_part->second * (point.uv - from)} : from;
+    Eigen::Vector2d at_edge = inside_part ? Eigen::Vector2d{from + inside_part->second * (point.uv - from)} : from;
+    if (previous_ && previous_->in_slit) at_edge = edge_in_slit(at_edge);
     commit(boundary_point(at_edge), at_edge, last_direction_, change);
+    extend_blade_track(point.world);  // the way out to beyond the edge, as the way in above
     close_line();
   } else if (previous_ && previous_->beyond && point.beyond) {
     // Both samples beyond the edge: a fast swipe may still cross the cloth between them.
@@ -842,7 +917,9 @@ TopologyChange StrokeCutter::add_sample(const StrokeSample& sample, const ClothP
       const Eigen::Vector2d enter = previous_->uv + inside_part->first * d;
       const Eigen::Vector2d leave = previous_->uv + inside_part->second * d;
       start_line(boundary_point(enter), enter, last_direction_, change);
+      extend_blade_track(previous_->world);
       commit(boundary_point(leave), leave, last_direction_, change);
+      extend_blade_track(point.world);
       close_line();
     }
   }
@@ -850,7 +927,10 @@ TopologyChange StrokeCutter::add_sample(const StrokeSample& sample, const ClothP
   // a sample joins the track with the segment it belongs to, not with the one before.
   if (point.inside && line_) {
     const Eigen::Vector2f on = clamp_uv(point.uv).cast<float>();
-    if (recent_.empty() || (recent_.back() - on).norm() >= static_cast<float>(kRecutStepCells)) recent_.push_back(on);
+    if (recent_.empty() || (recent_.back() - on).norm() >= static_cast<float>(kRecutStepCells)) {
+      recent_.push_back(on);
+      recent_hands_.push_back(sample.position);
+    }
   }
   previous_ = point;
   return change;

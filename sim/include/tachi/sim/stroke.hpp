@@ -156,6 +156,11 @@ inline constexpr double kGridHysteresisCells = 0.25;
 inline constexpr double kRecutCells = 0.1;
 inline constexpr double kRecutMinRunCells = 1.0;
 inline constexpr double kRecutStepCells = 0.05;
+/// A blade back in its slit: a sample whose hand is within kRecutCells (in metres on the cloth) of where the
+/// hand already was while it cut, and whose material is within this many cells of that cut, is on the cut
+/// (StrokeCutter::in_slit). Chosen on the razor re-cut of development strokes 1-300 (cut_stability --recut;
+/// docs/cutting.md section 10): 1 cell left 23 exact-mode strokes differing, 1.5 16, 2 and 3 14, 50 without.
+inline constexpr double kSlitCells = 2.0;
 
 /// What a stroke did so far.
 struct StrokeReport {
@@ -207,6 +212,7 @@ class StrokeCutter {
     Eigen::Vector3f world;
     bool inside;  // on the cloth: touching it, and (u, v) within the grid rectangle (+ margin)
     bool beyond;  // (u, v) beyond the grid rectangle (+ margin)
+    bool in_slit = false;  // moved onto a cut already made (in_slit)
   };
   void commit(GridCoord g, const Eigen::Vector2d& uv, const Eigen::Vector3f& direction, TopologyChange& change);
   void start_line(GridCoord g, const Eigen::Vector2d& uv, const Eigen::Vector3f& direction, TopologyChange& change);
@@ -229,6 +235,15 @@ class StrokeCutter {
   [[nodiscard]] bool near_track(const Eigen::Vector2d& p, double radius, double tail_cells) const;
   /// Appends a sample to the current line's track and grows the track's box.
   void extend_track(const Eigen::Vector2f& sample);
+  /// Appends where the hand was for a sample that joined the track (the track's hand path, in the world).
+  void extend_blade_track(const Eigen::Vector3f& hand);
+  /// Whether the hand at `hand` is within `radius_m` of where it was while a cut so far was made (blade_tracks_),
+  /// without the current line's last `tail_m` of hand path.
+  [[nodiscard]] bool near_blade_track(const Eigen::Vector3f& hand, double radius_m, double tail_m) const;
+  /// `uv` moved onto the cut when the blade is back in its slit (kSlitCells), else `uv`.
+  [[nodiscard]] Eigen::Vector2d in_slit(const Eigen::Vector2d& uv, const Eigen::Vector3f& hand) const;
+  /// Where a stroke crosses the cloth's edge next to a sample in the slit: onto the cut too, when within kSlitCells.
+  [[nodiscard]] Eigen::Vector2d edge_in_slit(const Eigen::Vector2d& at_edge) const;
   /// The nearest point of the cut paths so far (paths_, without the segment being cut).
   [[nodiscard]] Eigen::Vector2d nearest_on_cut(const Eigen::Vector2d& p) const;
   /// A length in cells: `cells`, or `metres` on this cloth if that is more.
@@ -250,6 +265,9 @@ class StrokeCutter {
   std::vector<std::vector<Eigen::Vector2f>> tracks_;  // exact/delete: the samples (uv) the cuts so far were made along
   std::vector<Eigen::AlignedBox2f> track_boxes_;       // ... the box of each track's samples
   std::vector<Eigen::Vector2f> recent_;               // ... and those since the last point that joined the cut
+  std::vector<std::vector<Eigen::Vector3f>> blade_tracks_;  // ... where the hand was for each track sample (world)
+  std::vector<Eigen::AlignedBox3f> blade_boxes_;            // ... the box of each
+  std::vector<Eigen::Vector3f> recent_hands_;               // ... and for each of recent_
   // Where the open line's history begins, and whether its cuts changed the cloth. A pass over cuts already made
   // changes nothing, and keeping its samples would let the going-over-a-cut zone creep sideways pass by pass (each
   // pass within kRecutCells of the last) and grow without bound in a long session (the soak: a stroke looped for

@@ -427,10 +427,21 @@ int speakers_main(VoiceConfig config, const std::string& set, unsigned seed_offs
                       return p.phrase == run.placed[u].phrase;
                     })->command == d.command;
           }
-        std::fprintf(f, "D\t%zu\t%d\t%d\t%s\t%.3f\t%.3f\t%.3f\t%.3f\t%.3f\t%.3f\t%.3f\t%.3f\t%.2f\t%.2f\t%d\t%d\n", r, utterance,
+        std::fprintf(f, "D\t%zu\t%d\t%d\t%s\t%.3f\t%.3f\t%.3f\t%.3f\t%.3f\t%.3f\t%.3f\t%.3f\t%.2f\t%.2f\t%d\t%d", r, utterance,
                      right ? 1 : 0, d.phrase.c_str(), d.time_s, d.verification_score, d.command_margin, d.phrase_score, d.phrase_margin,
                      d.level_db, d.garbage_score, d.garbage_margin, d.phrase_duration_s, d.garbage_duration_s, d.unwarped_hit ? 1 : 0,
                      d.by_warps ? 1 : 0);
+        // Where things lie (VoiceDetection::Alignment): the keyword hit's phrase and span, the window's
+        // start, the phrase and its rival as the garbage grammar aligns them, and the utterance's span.
+        // (The hit's phrase as its index in the config's phrases: every column after the phrase stays a number.)
+        const auto hit_phrase = std::find_if(config.phrases.begin(), config.phrases.end(), [&](const VoicePhrase& p) { return p.phrase == d.hit_phrase; });
+        std::fprintf(f, "\t%td\t%.3f\t%.3f\t%.3f", hit_phrase == config.phrases.end() ? -1 : hit_phrase - config.phrases.begin(), d.hit_begin_s,
+                     d.hit_end_s, d.window_begin_s);
+        for (const auto* a : {&d.aligned, &d.rival})
+          std::fprintf(f, "\t%.3f\t%.3f\t%.3f\t%.3f\t%.3f\t%.3f", a->begin_s, a->first_word_end_s, a->end_s, a->first_word_ratio,
+                       a->rest_ratio, a->garbage_score);
+        std::fprintf(f, "\t%.3f\t%.3f\n", utterance >= 0 ? run.placed[static_cast<std::size_t>(utterance)].begin_s : -1.0,
+                     utterance >= 0 ? run.placed[static_cast<std::size_t>(utterance)].end_s : -1.0);
       }
     }
     std::fclose(f);

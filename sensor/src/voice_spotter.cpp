@@ -98,6 +98,15 @@ struct KeywordSpotter::Impl {
     int garbage_frames = 0;
     /// The phrase the unwarped lane scores best on the same window (with the warped lanes' judgement).
     std::optional<VoicePhrase> unwarped_best;
+    /// The window's first sample, and the reported phrase and its best rival as the garbage grammar
+    /// aligns them (VoiceDetection::Alignment; frames from the window's start).
+    long from = 0;
+    struct Words {
+      int first = -1, first_word_last = -1, last = -1;
+      double first_word_ratio = std::numeric_limits<double>::quiet_NaN(), rest_ratio = std::numeric_limits<double>::quiet_NaN();
+      double garbage_ratio = std::numeric_limits<double>::quiet_NaN();
+    };
+    Words aligned, rival;
   };
   /// The second pass over samples [begin - before, end + 0.6 s) by the lanes `use` (indices into
   /// lanes), each phrase scored at the best of their warps.
@@ -109,6 +118,8 @@ struct KeywordSpotter::Impl {
     std::vector<double> log_ratio, phrase_only, garbage_ratio;
     std::vector<std::pair<int, int>> span;  // the phrase's first and last frame in the window
     std::vector<int> phrase_frames, garbage_frames;
+    std::vector<Verdict::Words> garbage_words;  // each phrase's words as the garbage grammar aligns them
+    std::vector<std::tuple<int, int, double>> loop_segments;  // the phone loop's path: first, last frame (window's), score
     bool garbage_scored = false;
   };
   std::map<std::tuple<std::size_t, long, long>, LaneScores> window_scores;  // by lane, window start, end
@@ -274,6 +285,7 @@ KeywordSpotter::Impl::LaneScores& KeywordSpotter::Impl::lane_scores(std::size_t 
     // The decoder numbers frames on from earlier utterances: frames relative to the window's start.
     const int loop_base = loop_path.empty() ? 0 : loop_path.front().first_frame;
     for (const auto& seg : loop_path) s.loop_score += seg.acoustic;
+    for (const auto& seg : loop_path) s.loop_segments.emplace_back(seg.first_frame - loop_base, seg.last_frame - loop_base, seg.acoustic);
     // The phone loop's score over frames [first, last] of the window, each segment pro-rated.
     const auto loop_over = [&](int first, int last) {
       double sum = 0.0;
@@ -307,6 +319,15 @@ KeywordSpotter::Impl::LaneScores& KeywordSpotter::Impl::lane_scores(std::size_t 
     }
   }
   if (garbage && !s.garbage_scored) {
+    s.garbage_words.assign(n, Verdict::Words{});
+    const auto loop_over = [&](int first, int last) {
+      double sum = 0.0;
+      for (const auto& [f0, f1, acoustic] : s.loop_segments) {
+        const int a = std::max(first, f0), b = std::min(last, f1);
+        if (b >= a) sum += acoustic * (b - a + 1) / (f1 - f0 + 1);
+      }
+      return sum;
+    };
     // The same phrases with a garbage model (a free phone loop) before and after them instead of the
     // silence and noise fillers alone: the filler-model keyword verification of Rose & Paul (ICASSP
     // 1990), where the fillers explain the non-keyword speech. With silence fillers only, the words
@@ -319,13 +340,30 @@ KeywordSpotter::Impl::LaneScores& KeywordSpotter::Impl::lane_scores(std::size_t 
       double score = 0.0;
       int frames = 0;
       const auto gpath = decode(garbage_search(i).c_str(), lane.garbage_verifier);
+      const int gbase = gpath.empty() ? 0 : gpath.front().first_frame;
+      Verdict::Words& w = s.garbage_words[i];
+      double first_word = 0.0, rest = 0.0;
       for (const auto& seg : gpath) {
         score += seg.acoustic;
-        if (!is_filler(seg.word) && seg.word.rfind(kGarbagePrefix, 0) != 0) frames += seg.last_frame - seg.first_frame + 1;
+        if (!is_filler(seg.word) && seg.word.rfind(kGarbagePrefix, 0) != 0) {
+          frames += seg.last_frame - seg.first_frame + 1;
+          if (w.first < 0) {
+            w.first = seg.first_frame - gbase;
+            w.first_word_last = seg.last_frame - gbase;
+            first_word = seg.acoustic;
+          } else {
+            rest += seg.acoustic;
+          }
+          w.last = seg.last_frame - gbase;
+        }
       }
       if (frames == 0) continue;
       s.garbage_ratio[i] = (score - s.loop_score) / frames;
       s.garbage_frames[i] = frames;
+      w.garbage_ratio = s.garbage_ratio[i];
+      w.first_word_ratio = (first_word - loop_over(w.first, w.first_word_last)) / (w.first_word_last - w.first + 1);
+      if (w.last > w.first_word_last)
+        w.rest_ratio = (rest - loop_over(w.first_word_last + 1, w.last)) / (w.last - w.first_word_last);
     }
     s.garbage_scored = true;
   }
@@ -360,6 +398,8 @@ KeywordSpotter::Impl::Verdict KeywordSpotter::Impl::verify(long begin, long end,
   std::vector<double> log_ratio(n, kNone), phrase_only(n, kNone), garbage_ratio(n, kNone);
   std::vector<std::pair<int, int>> phrase_span(n, {-1, -1});
   std::vector<int> phrase_frame_count(n, 0), garbage_frame_count(n, 0);
+  std::vector<Verdict::Words> garbage_words(n);
+  verdict.from = from;
   for (const std::size_t l : use) {
     const LaneScores& s = lane_scores(l, from, to, false);
     for (std::size_t i = 0; i < n; ++i) {
@@ -385,7 +425,17 @@ KeywordSpotter::Impl::Verdict KeywordSpotter::Impl::verify(long begin, long end,
       if (!(s.garbage_ratio[i] > garbage_ratio[i]) && garbage_frame_count[i] > 0) continue;
       garbage_ratio[i] = s.garbage_ratio[i];
       garbage_frame_count[i] = s.garbage_frames[i];
+      garbage_words[i] = s.garbage_words[i];
     }
+  }
+  verdict.aligned = garbage_words[best];
+  {
+    double rival_ratio = -std::numeric_limits<double>::infinity();
+    for (std::size_t i = 0; i < n; ++i)
+      if (config.phrases[i].command != config.phrases[best].command && garbage_ratio[i] > rival_ratio) {
+        rival_ratio = garbage_ratio[i];
+        verdict.rival = garbage_words[i];
+      }
   }
   verdict.phrase = config.phrases[best];
   verdict.log_ratio = log_ratio[best];
@@ -641,6 +691,24 @@ void KeywordSpotter::Impl::verify_pending(long ended_by, std::vector<VoiceDetect
       d.garbage_duration_s = verdict.garbage_frames / 100.0;
       d.unwarped_hit = unwarped_to != kNever;
       d.by_warps = by_warps;
+      d.hit_phrase = config.phrases[hit.phrase].phrase;
+      d.hit_begin_s = static_cast<double>(by_warps || unwarped_to == kNever ? hit.begin : unwarped_begin) / kVoiceSampleRate;
+      d.hit_end_s = static_cast<double>(by_warps || unwarped_to == kNever ? end : unwarped_to) / kVoiceSampleRate;
+      d.window_begin_s = static_cast<double>(verdict.from) / kVoiceSampleRate;
+      const auto alignment = [&](const Verdict::Words& w) {
+        VoiceDetection::Alignment a;
+        if (w.first < 0) return a;
+        const auto at = [&](int frame) { return static_cast<double>(verdict.from + frame * kSamplesPerFrame) / kVoiceSampleRate; };
+        a.begin_s = at(w.first);
+        a.first_word_end_s = at(w.first_word_last + 1);
+        a.end_s = at(w.last + 1);
+        a.first_word_ratio = w.first_word_ratio;
+        a.rest_ratio = w.rest_ratio;
+        a.garbage_score = w.garbage_ratio;
+        return a;
+      };
+      d.aligned = alignment(verdict.aligned);
+      d.rival = alignment(verdict.rival);
       return d;
     };
     std::optional<VoiceDetection> command, refused;

@@ -49,6 +49,24 @@ struct VoiceDetection {
   /// whether the warped lanes judged it (VoiceConfig::warps: only where the unwarped lane gave no command).
   bool unwarped_hit = false;
   bool by_warps = false;
+  /// Where things lie in the stream (s), for the analysis of wrong commands (tachi-voice-eval --dump):
+  /// the keyword hit that opened the utterance (its phrase), the second pass's window start, and the
+  /// phrase and the best phrase of another command (the rival) as the garbage grammar aligns them:
+  /// first frame, end of the first word, end; and the ratio against the phone loop per frame of the
+  /// first word and of the rest (the phone loop's score pro-rated over the same frames). NaN: none.
+  struct Alignment {
+    double begin_s = std::numeric_limits<double>::quiet_NaN();
+    double first_word_end_s = std::numeric_limits<double>::quiet_NaN();
+    double end_s = std::numeric_limits<double>::quiet_NaN();
+    double first_word_ratio = std::numeric_limits<double>::quiet_NaN();
+    double rest_ratio = std::numeric_limits<double>::quiet_NaN();
+    double garbage_score = std::numeric_limits<double>::quiet_NaN();
+  };
+  std::string hit_phrase{};
+  double hit_begin_s = std::numeric_limits<double>::quiet_NaN();
+  double hit_end_s = std::numeric_limits<double>::quiet_NaN();
+  double window_begin_s = std::numeric_limits<double>::quiet_NaN();
+  Alignment aligned{}, rival{};
 };
 
 /// The second pass's decision on one scored hit (VoiceConfig's verify_* thresholds): a command when

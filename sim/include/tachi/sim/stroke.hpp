@@ -160,6 +160,8 @@ inline constexpr double kRecutStepCells = 0.05;
 /// hand already was while it cut, and whose material is within this many cells of that cut, is on the cut
 /// (StrokeCutter::in_slit). Chosen on the razor re-cut of development strokes 1-300 (cut_stability --recut;
 /// docs/cutting.md section 10): 1 cell left 23 exact-mode strokes differing, 1.5 16, 2 and 3 14, 50 without.
+/// It stays below StrokeOptions::exact_max_jump_cells' default (3): a sample moved onto the cut is not to be taken
+/// for the locator's jump to another layer, which drops the sample.
 inline constexpr double kSlitCells = 2.0;
 
 /// What a stroke did so far.

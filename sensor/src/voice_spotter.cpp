@@ -148,6 +148,17 @@ namespace {
 constexpr long kSamplesPerFrame = kVoiceSampleRate / 100;     // pocketsphinx's 10 ms frames
 constexpr std::size_t kKeepSamples = 4 * kVoiceSampleRate;   // replayable audio: longer than a phrase
 constexpr long kRedetectSamples = kVoiceSampleRate / 2;      // a hit ending < 0.5 s after the last one is it again
+
+/// The phone loop's score over frames [first, last] of a window, each of its path's segments (first frame,
+/// last frame, acoustic score) pro-rated by the frames it shares with them.
+double loop_score_over(const std::vector<std::tuple<int, int, double>>& segments, int first, int last) {
+  double sum = 0.0;
+  for (const auto& [f0, f1, acoustic] : segments) {
+    const int a = std::max(first, f0), b = std::min(last, f1);
+    if (b >= a) sum += acoustic * (b - a + 1) / (f1 - f0 + 1);
+  }
+  return sum;
+}
 // The audio the second pass sees around a keyword hit. The keyword search reports a phrase as soon as
 // its last state scores well enough, up to 0.5 s before the phrase ends (flite "stop cutting": hit at
 // 3.98 s, the word's end at 4.49 s); a grammar cannot be aligned to a phrase cut short.
@@ -286,15 +297,7 @@ KeywordSpotter::Impl::LaneScores& KeywordSpotter::Impl::lane_scores(std::size_t 
     const int loop_base = loop_path.empty() ? 0 : loop_path.front().first_frame;
     for (const auto& seg : loop_path) s.loop_score += seg.acoustic;
     for (const auto& seg : loop_path) s.loop_segments.emplace_back(seg.first_frame - loop_base, seg.last_frame - loop_base, seg.acoustic);
-    // The phone loop's score over frames [first, last] of the window, each segment pro-rated.
-    const auto loop_over = [&](int first, int last) {
-      double sum = 0.0;
-      for (const auto& seg : loop_path) {
-        const int a = std::max(first, seg.first_frame - loop_base), b = std::min(last, seg.last_frame - loop_base);
-        if (b >= a) sum += seg.acoustic * (b - a + 1) / (seg.last_frame - seg.first_frame + 1);
-      }
-      return sum;
-    };
+    const auto loop_over = [&](int first, int last) { return loop_score_over(s.loop_segments, first, last); };
     for (std::size_t i = 0; i < n; ++i) {
       double phrase_score = 0.0, words_score = 0.0;
       int phrase_frames = 0;
@@ -320,14 +323,7 @@ KeywordSpotter::Impl::LaneScores& KeywordSpotter::Impl::lane_scores(std::size_t 
   }
   if (garbage && !s.garbage_scored) {
     s.garbage_words.assign(n, Verdict::Words{});
-    const auto loop_over = [&](int first, int last) {
-      double sum = 0.0;
-      for (const auto& [f0, f1, acoustic] : s.loop_segments) {
-        const int a = std::max(first, f0), b = std::min(last, f1);
-        if (b >= a) sum += acoustic * (b - a + 1) / (f1 - f0 + 1);
-      }
-      return sum;
-    };
+    const auto loop_over = [&](int first, int last) { return loop_score_over(s.loop_segments, first, last); };
     // The same phrases with a garbage model (a free phone loop) before and after them instead of the
     // silence and noise fillers alone: the filler-model keyword verification of Rose & Paul (ICASSP
     // 1990), where the fillers explain the non-keyword speech. With silence fillers only, the words

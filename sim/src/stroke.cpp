@@ -139,6 +139,19 @@ GridOffset grid_offset(const Cloth& cloth, std::uint32_t p, const Eigen::Vector3
 }
 
 /// The particle nearest to `point`, by looking at every one.
+// The index a track ends at without its last `tail` of length (walked back from its end, in the track's units):
+// the current line's last stretch, which a sample going straight on would otherwise be "along".
+template <typename Point>
+std::size_t end_before_tail(const std::vector<Point>& track, double tail) {
+  std::size_t end = track.size();
+  double walked = 0.0;
+  while (end > 0 && walked < tail) {
+    --end;
+    if (end > 0) walked += (track[end].template cast<double>() - track[end - 1].template cast<double>()).norm();
+  }
+  return end;
+}
+
 std::uint32_t scan_nearest(const Cloth& cloth, const Eigen::Vector3f& point) {
   static_assert(sizeof(Eigen::Vector3f) == 3 * sizeof(float), "positions must be packed x, y, z");
   // A plain float loop over the interleaved coordinates, which the compiler vectorises.
@@ -598,14 +611,7 @@ bool StrokeCutter::near_blade_track(const Eigen::Vector3f& hand, double radius_m
     if (static_cast<double>(blade_boxes_[i].exteriorDistance(hand)) > radius_m + 1e-6) continue;
     const auto& track = blade_tracks_[i];
     // As near_track: the current line's last stretch is the hand going on, not coming back.
-    std::size_t end = track.size();
-    if (i + 1 == blade_tracks_.size() && line_) {
-      double walked = 0.0;
-      while (end > 0 && walked < tail_m) {
-        --end;
-        if (end > 0) walked += static_cast<double>((track[end] - track[end - 1]).norm());
-      }
-    }
+    const std::size_t end = i + 1 == blade_tracks_.size() && line_ ? end_before_tail(track, tail_m) : track.size();
     for (std::size_t k = 0; k < end; ++k) {
       if (static_cast<double>((track[k] - hand).norm()) <= radius_m) return true;
       if (k > 0) {
@@ -650,14 +656,7 @@ bool StrokeCutter::near_track(const Eigen::Vector2d& p, double radius, double ta
     const auto& track = tracks_[i];
     // The current line's track ends where the segment being cut starts; its last `tail_cells` are left out,
     // or a segment going straight on would be "along" the track it continues.
-    std::size_t end = track.size();
-    if (i + 1 == tracks_.size()) {
-      double walked = 0.0;
-      while (end > 0 && walked < tail_cells) {
-        --end;
-        if (end > 0) walked += (track[end].cast<double>() - track[end - 1].cast<double>()).norm();
-      }
-    }
+    const std::size_t end = i + 1 == tracks_.size() ? end_before_tail(track, tail_cells) : track.size();
     if (end == 1 && (track[0].cast<double>() - p).norm() <= radius) return true;
     for (std::size_t k = 1; k < end; ++k) {
       if (closest_points(p, p, track[k - 1].cast<double>(), track[k].cast<double>()).distance <= radius) return true;

@@ -94,6 +94,8 @@ const std::vector<GridCoord>& CutLineBuilder::finish() {
   return line_;
 }
 
+void CutLineBuilder::drop_last(std::size_t count) { line_.resize(line_.size() - std::min(count, line_.size())); }
+
 std::vector<GridCoord> build_cut_line(std::span<const GridCoord> points, int columns, int rows) {
   CutLineBuilder builder{columns, rows};
   for (const GridCoord g : points) builder.append(g);

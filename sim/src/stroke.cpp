@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -588,12 +589,105 @@ void StrokeCutter::commit(GridCoord g, const Eigen::Vector2d& uv, const Eigen::V
   }
   const auto added = line_->append(g);
   if (added.size() < 2) return;
-  const TopologyChange cut = cutter_.cut(added);
-  apply_blade_drag(*cloth_, cutter_, added, direction, options_.blade, options_.drag, drag_scratch_);
-  report_.particles_duplicated += cut.duplicated_from.size();
-  total_.particles_duplicated += cut.duplicated_from.size();
-  line_changed_ = line_changed_ || !cut.empty();
-  change.merge(cut);
+  // The line's last particles before this run may begin a stretch along a cut too (the run before cut a step
+  // off the cut; this one would close the ring).
+  const auto& whole = line_->line();
+  const std::size_t back = std::min(kGridLookBack, whole.size() - added.size());
+  std::vector<GridCoord> rest(whole.end() - static_cast<std::ptrdiff_t>(added.size() + back), whole.end());
+  std::size_t first = back;  // rest[first] is where the uncut part begins
+  while (rest.size() >= 2) {
+    const auto along = along_cut_made(rest, first);
+    const std::size_t end = along ? std::max(along->first, first) : rest.size() - 1;
+    if (end > first) {
+      const std::span<const GridCoord> piece{rest.data() + first, end - first + 1};
+      const TopologyChange cut = cutter_.cut(piece);
+      apply_blade_drag(*cloth_, cutter_, piece, direction, options_.blade, options_.drag, drag_scratch_);
+      report_.particles_duplicated += cut.duplicated_from.size();
+      total_.particles_duplicated += cut.duplicated_from.size();
+      line_changed_ = line_changed_ || !cut.empty();
+      change.merge(cut);
+    }
+    if (!along) break;
+    // Along a cut already made from rest[end] to rest[j]: the line ends at rest[end] and a new one goes on from
+    // rest[j] over the same particles (appended one by one, so not rasterised again).
+    const std::size_t j = along->second;
+    line_->drop_last(rest.size() - 1 - end);
+    add_line_to_report(line_->finish());
+    line_.emplace(cloth_->columns, cloth_->rows);
+    for (std::size_t k = j; k < rest.size(); ++k) static_cast<void>(line_->append(rest[k]));
+    rest = line_->line();  // as the builder keeps it (its rules at the cloth's edge)
+    first = 0;
+  }
+}
+
+std::optional<std::pair<std::size_t, std::size_t>> StrokeCutter::along_cut_made(std::span<const GridCoord> run,
+                                                                                std::size_t first) const {
+  // Two staircases of the same line, rasterised from different grid points (a pass back over a cut starts its
+  // line where the hand came back onto the cloth, and seed 000's eqs. (1)-(4) step column first from there),
+  // take opposite sides of the cells the line crosses diagonally: together they ring those cells, and each
+  // ringed cell fell as a piece (the razor re-cut in grid mode: 3 of the 7 development strokes of 1-300 that
+  // differed, each by one cell). A pass back along a cut whose flap swung since lands a cell beside it and cuts
+  // off a strip one cell wide (2 more of the 7). Where the new staircase goes from a particle on a cut to
+  // another that the cuts already join by a path lying within one cell of it (and it within one cell of that
+  // path: only slivers narrower than the grid's resolution between them), it is the same line at the grid's
+  // resolution: the line follows the cut already made there, which changes nothing.
+  // The cloth's edge parts it as a cut does: a staircase a cell inside the edge, joined to a cut, rings cells too.
+  const auto on_cut = [&](GridCoord g) {
+    return on_boundary(g, cloth_->columns, cloth_->rows) || cutter_.edge_cut(g, {g.u + 1, g.v}) ||
+           cutter_.edge_cut(g, {g.u - 1, g.v}) || cutter_.edge_cut(g, {g.u, g.v + 1}) ||
+           cutter_.edge_cut(g, {g.u, g.v - 1});
+  };
+  for (std::size_t i = 0; i + 2 < run.size(); ++i) {
+    if (!on_cut(run[i])) continue;
+    for (std::size_t j = run.size() - 1; j >= std::max(i + 2, first + 1); --j) {
+      if (on_cut(run[j]) && cut_path_beside(run.subspan(i, j - i + 1))) return std::pair{i, j};
+    }
+  }
+  return std::nullopt;
+}
+
+std::optional<std::vector<GridCoord>> StrokeCutter::cut_path_beside(std::span<const GridCoord> run) const {
+  // Breadth first along cut edges and the cloth's edge, through the particles within one cell of `run` (a box around it).
+  const GridCoord from = run.front();
+  const GridCoord to = run.back();
+  int u0 = from.u, u1 = from.u, v0 = from.v, v1 = from.v;
+  for (const GridCoord g : run) {
+    u0 = std::min(u0, g.u - 1), u1 = std::max(u1, g.u + 1), v0 = std::min(v0, g.v - 1), v1 = std::max(v1, g.v + 1);
+  }
+  const int width = u1 - u0 + 1;
+  const auto index = [&](GridCoord g) { return static_cast<std::size_t>((g.v - v0) * width + (g.u - u0)); };
+  const auto within_one = [](std::span<const GridCoord> of, GridCoord g) {
+    return std::any_of(of.begin(), of.end(),
+                       [&](GridCoord r) { return std::abs(r.u - g.u) <= 1 && std::abs(r.v - g.v) <= 1; });
+  };
+  constexpr std::size_t kUnseen = std::numeric_limits<std::size_t>::max();
+  std::vector<std::size_t> came_from(static_cast<std::size_t>(width * (v1 - v0 + 1)), kUnseen);
+  std::vector<GridCoord> queue{from};
+  came_from[index(from)] = index(from);
+  for (std::size_t head = 0; head < queue.size() && came_from[index(to)] == kUnseen; ++head) {
+    const GridCoord g = queue[head];
+    for (const GridCoord h : {GridCoord{g.u + 1, g.v}, GridCoord{g.u - 1, g.v}, GridCoord{g.u, g.v + 1},
+                              GridCoord{g.u, g.v - 1}}) {
+      if (h.u < u0 || h.u > u1 || h.v < v0 || h.v > v1 || came_from[index(h)] != kUnseen) continue;
+      if (!within_one(run, h)) continue;
+      if (!cutter_.edge_cut(g, h) && !boundary_edge(g, h, cloth_->columns, cloth_->rows)) continue;
+      came_from[index(h)] = index(g);
+      queue.push_back(h);
+    }
+  }
+  if (came_from[index(to)] == kUnseen) return std::nullopt;
+  std::vector<GridCoord> path{to};
+  while (!(path.back() == from)) {
+    const std::size_t k = came_from[index(path.back())];
+    path.push_back({u0 + static_cast<int>(k % static_cast<std::size_t>(width)),
+                    v0 + static_cast<int>(k / static_cast<std::size_t>(width))});
+  }
+  std::reverse(path.begin(), path.end());
+  // Both ways: every particle of the run within one cell of the path too (only slivers lie between them).
+  for (const GridCoord g : run) {
+    if (!within_one(path, g)) return std::nullopt;
+  }
+  return path;
 }
 
 void StrokeCutter::extend_track(const Eigen::Vector2f& sample) {

@@ -12,6 +12,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <initializer_list>
 #include <sstream>
 #include <string>
 #include <unistd.h>
@@ -70,6 +71,21 @@ TEST(CutStability, TheBendAlongAStraightCutDoesNotFlipWithAHair) {
   EXPECT_LE(std::abs(a.cut_length_m - b.cut_length_m), 0.01 * std::max(a.cut_length_m, b.cut_length_m));
 }
 
+// Development strokes that cut one piece, razor, 32 x 32, through the offline driver: gone there, back and there
+// again, still one piece.
+void expect_one_piece_gone_over_again(std::initializer_list<std::uint64_t> seeds, CutMode mode, const char* name) {
+  const auto file = scratch(name);
+  for (const std::uint64_t seed : seeds) {
+    SCOPED_TRACE("development stroke " + std::to_string(seed));
+    const auto stroke = random_stroke(seed);
+    const CutOutcome once = cut_outcome(stroke, Blade::Razor, mode, kGrid, file);
+    const CutOutcome again = cut_outcome(there_back_and_there(stroke), Blade::Razor, mode, kGrid, file);
+    EXPECT_EQ(once.pieces, 1U);
+    EXPECT_EQ(again.pieces, once.pieces);
+  }
+  std::filesystem::remove(file);
+}
+
 // A blade back in its slit (docs/cutting.md section 10, StrokeCutter::in_slit): going back along a cut, the hand
 // comes down on material the hanging cloth has moved under it since (the cut opens, its flaps swing), up to a
 // cell or more beside the cut. Development strokes 168 and 281 (razor, exact, 32 x 32) went there, back and
@@ -77,22 +93,21 @@ TEST(CutStability, TheBendAlongAStraightCutDoesNotFlipWithAHair) {
 // the stroke had come in across the edge. With the hand's own path deciding that it is back in its slit, the
 // same piece as once.
 TEST(CutStability, ABladeBackInItsSlitCutsNoSliverOffAMovedLip) {
-  const auto file = scratch("cut_stability_slit");
-  for (const std::uint64_t seed : {168U, 281U}) {
-    SCOPED_TRACE("development stroke " + std::to_string(seed));
-    const auto stroke = random_stroke(seed);
-    const CutOutcome once = cut_outcome(stroke, Blade::Razor, CutMode::Exact, kGrid, file);
-    const CutOutcome again = cut_outcome(there_back_and_there(stroke), Blade::Razor, CutMode::Exact, kGrid, file);
-    EXPECT_EQ(once.pieces, 1U);
-    EXPECT_EQ(again.pieces, once.pieces);
-  }
-  std::filesystem::remove(file);
+  expect_one_piece_gone_over_again({168U, 281U}, CutMode::Exact, "cut_stability_slit");
 }
 
-// DISABLED: still missed (docs/cutting.md, "Cuts that do not flip": the cut opens and pieces fall between
-// the passes, so the second pass lands elsewhere on the cloth; on a still cloth the re-cut rule holds,
-// StrokeCutter.GoingOverACutAgainChangesNothing).
-TEST(CutStability, DISABLED_GoingOverACutAgainChangesNothing) {
+// Grid mode cuts along staircases of grid edges (seed 000 eqs. (1)-(4)), rasterised from the grid point the
+// line starts at. A pass back over a cut starts its line elsewhere and takes the other side of the cells the
+// first staircase crossed diagonally, or lands a cell beside a cut whose flap swung: together the two ring
+// cells, which fell. Development strokes 112, 180 and 196 (a ring of one cell), 224 (a strip one cell wide) and
+// 251 (a cell between the cut and the cloth's edge), razor, grid, 32 x 32, gave 2 pieces where once gave 1.
+TEST(CutStability, AGridCutGoneOverAgainRingsNoCell) {
+  expect_one_piece_gone_over_again({112U, 180U, 196U, 224U, 251U}, CutMode::Grid, "cut_stability_grid_ring");
+}
+
+// Random strokes 5000-5009 cut there, back and there again give the pieces cutting once gives, in every mode
+// (the report seeds' figures, which still miss, are in docs/cutting.md section 10).
+TEST(CutStability, GoingOverACutAgainChangesNothing) {
   const auto file = scratch("cut_stability_recut");
   for (int k = 0; k < kStrokes; ++k) {
     const std::uint64_t seed = kFirstSeed + static_cast<std::uint64_t>(k);

@@ -61,6 +61,9 @@ class CutLineBuilder {
   /// the run began). Returns the final line.
   const std::vector<GridCoord>& finish();
 
+  /// Drops the line's last `count` particles (the caller ends the line earlier than its last append went).
+  void drop_last(std::size_t count);
+
   [[nodiscard]] const std::vector<GridCoord>& line() const { return line_; }
   [[nodiscard]] bool empty() const { return line_.empty(); }
 

@@ -27,6 +27,7 @@
 #include <cstdint>
 #include <istream>
 #include <optional>
+#include <span>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -163,6 +164,9 @@ inline constexpr double kRecutStepCells = 0.05;
 /// It stays below StrokeOptions::exact_max_jump_cells' default (3): a sample moved onto the cut is not to be taken
 /// for the locator's jump to another layer, which drops the sample.
 inline constexpr double kSlitCells = 2.0;
+/// Grid mode: how many of the line's particles before a new staircase may begin a stretch along a cut made
+/// already (StrokeCutter::along_cut_made): a ring of one cell closes within a step or two.
+inline constexpr std::size_t kGridLookBack = 3;
 
 /// What a stroke did so far.
 struct StrokeReport {
@@ -235,6 +239,13 @@ class StrokeCutter {
   /// segment near enough: a session's cut history grows with every pass (an hour of the same stroke looped
   /// is ~800 tracks), and this runs for every sample.
   [[nodiscard]] bool near_track(const Eigen::Vector2d& p, double radius, double tail_cells) const;
+  /// Grid mode: the first stretch run[i..j] (j after `first`, where the part not yet cut begins) between two
+  /// particles on cuts, or on the cloth's edge, that those already join within one cell of it (cut_path_beside).
+  [[nodiscard]] std::optional<std::pair<std::size_t, std::size_t>> along_cut_made(std::span<const GridCoord> run,
+                                                                                std::size_t first) const;
+  /// The shortest path of cut edges (or the cloth's edge) from run's first particle to its last through particles within one cell of
+  /// `run`, with every particle of `run` within one cell of it; nothing when there is none.
+  [[nodiscard]] std::optional<std::vector<GridCoord>> cut_path_beside(std::span<const GridCoord> run) const;
   /// Appends a sample to the current line's track and grows the track's box.
   void extend_track(const Eigen::Vector2f& sample);
   /// Appends where the hand was for a sample that joined the track (the track's hand path, in the world).

@@ -700,25 +700,32 @@ void StrokeCutter::extend_blade_track(const Eigen::Vector3f& hand) {
   blade_boxes_.back().extend(hand);
 }
 
-bool StrokeCutter::near_blade_track(const Eigen::Vector3f& hand, double radius_m, double tail_m) const {
+StrokeCutter::BladeTrackMatch StrokeCutter::near_blade_track(const Eigen::Vector3f& hand,
+                                                             const Eigen::Vector3f& motion, double radius_m,
+                                                             double tail_m) const {
+  const auto near_segment = [&](const Eigen::Vector3f& a, const Eigen::Vector3f& b) {
+    const Eigen::Vector3f d = b - a;
+    const float len2 = d.squaredNorm();
+    if (len2 <= 0.0F) return false;
+    const float t = std::clamp((hand - a).dot(d) / len2, 0.0F, 1.0F);
+    return static_cast<double>((a + t * d - hand).norm()) <= radius_m;
+  };
+  bool in_tail = false;
   for (std::size_t i = 0; i < blade_tracks_.size(); ++i) {
     if (static_cast<double>(blade_boxes_[i].exteriorDistance(hand)) > radius_m + 1e-6) continue;
     const auto& track = blade_tracks_[i];
-    // As near_track: the current line's last stretch is the hand going on, not coming back.
+    // As near_track: the current line's last stretch is the hand going on, not coming back; unless the hand
+    // moves against it (a stroke that turns back along itself).
     const std::size_t end = i + 1 == blade_tracks_.size() && line_ ? end_before_tail(track, tail_m) : track.size();
     for (std::size_t k = 0; k < end; ++k) {
-      if (static_cast<double>((track[k] - hand).norm()) <= radius_m) return true;
-      if (k > 0) {
-        const Eigen::Vector3f d = track[k] - track[k - 1];
-        const float len2 = d.squaredNorm();
-        if (len2 > 0.0F) {
-          const float t = std::clamp((hand - track[k - 1]).dot(d) / len2, 0.0F, 1.0F);
-          if (static_cast<double>((track[k - 1] + t * d - hand).norm()) <= radius_m) return true;
-        }
-      }
+      if (static_cast<double>((track[k] - hand).norm()) <= radius_m) return BladeTrackMatch::Earlier;
+      if (k > 0 && near_segment(track[k - 1], track[k])) return BladeTrackMatch::Earlier;
+    }
+    for (std::size_t k = std::max<std::size_t>(end, 1); k < track.size() && !in_tail; ++k) {
+      in_tail = motion.dot(track[k] - track[k - 1]) < 0.0F && near_segment(track[k - 1], track[k]);
     }
   }
-  return false;
+  return in_tail ? BladeTrackMatch::TurnedBack : BladeTrackMatch::None;
 }
 
 Eigen::Vector2d StrokeCutter::edge_in_slit(const Eigen::Vector2d& at_edge) const {
@@ -729,16 +736,21 @@ Eigen::Vector2d StrokeCutter::edge_in_slit(const Eigen::Vector2d& at_edge) const
   return nearest_on_cut(at_edge);
 }
 
-Eigen::Vector2d StrokeCutter::in_slit(const Eigen::Vector2d& uv, const Eigen::Vector3f& hand) const {
+Eigen::Vector2d StrokeCutter::in_slit(const Eigen::Vector2d& uv, const Eigen::Vector3f& hand,
+                                      const Eigen::Vector3f& motion) const {
   // A blade that goes back along a cut it made rides in the slit: the lips part around it. Located on the
   // cloth as it is now, though, the hand's (u, v) lands on whatever material has moved under it since: the
   // hanging cloth's cut opens and its flaps swing by centimetres, so a pass back along the same hand path came
   // down 0.4-1.2 cells beside the cut, on fresh cloth, and cut slivers (docs/cutting.md, section 10). The hand
   // coming back within kRecutCells of where it was while it cut (in metres on the cloth: two passes of a hand
   // over the same place) onto material within kSlitCells of that cut is in the slit, and its point is the cut's.
+  // A hand that turns back along the line it is cutting is back in its slit from the turn on (the current line's
+  // last stretch counts then, for the hand and for the material).
   const double cell_m = std::min(cloth_->spacing_x(), cloth_->spacing_y());
-  if (blade_tracks_.empty() || !near_blade_track(hand, kRecutCells * cell_m, kSlitCells * cell_m)) return uv;
-  if (!near_track(uv, kSlitCells, kSlitCells)) return uv;
+  if (blade_tracks_.empty()) return uv;
+  const BladeTrackMatch match = near_blade_track(hand, motion, kRecutCells * cell_m, kSlitCells * cell_m);
+  if (match == BladeTrackMatch::None) return uv;
+  if (!near_track(uv, kSlitCells, match == BladeTrackMatch::TurnedBack ? 0.0 : kSlitCells)) return uv;
   return nearest_on_cut(uv);
 }
 
@@ -914,7 +926,8 @@ TopologyChange StrokeCutter::add_sample(const StrokeSample& sample, const ClothP
   // Grid mode rounds (u, v) with hysteresis (grid_point); the nearest particle's own grid point flipped
   // between two rows on a stroke between them.
   const bool on_cloth = at.inside && touching;
-  const Eigen::Vector2d uv = on_cloth ? in_slit(at.uv, sample.position) : at.uv;
+  const Eigen::Vector3f motion = previous_ ? Eigen::Vector3f{sample.position - previous_->world} : Eigen::Vector3f::Zero();
+  const Eigen::Vector2d uv = on_cloth ? in_slit(at.uv, sample.position, motion) : at.uv;
   const bool slid = (uv - at.uv).norm() > 1e-12;
   const Point point{uv, follows_path() ? (slid ? boundary_point(uv) : at.grid) : grid_point(uv), sample.position,
                     on_cloth, !at.inside, slid};

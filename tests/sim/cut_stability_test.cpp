@@ -105,6 +105,15 @@ TEST(CutStability, AGridCutGoneOverAgainRingsNoCell) {
   expect_one_piece_gone_over_again({112U, 180U, 196U, 224U, 251U}, CutMode::Grid, "cut_stability_grid_ring");
 }
 
+// A stroke that turns back along the line it is cutting: at the turn the hand stands while the cut opens and
+// its flaps swing, so the material under it moves by up to a few cells; the way back counted the current line's
+// last 2 cells of hand path as "going on" and cut beside the cut there. Development strokes 51, 232 and 247
+// (exact) and 279 (grid), razor, 32 x 32: 2 pieces gone there, back and there again where once cut 1.
+TEST(CutStability, AStrokeTurningBackAlongItsCutCutsNoSliverAtTheTurn) {
+  expect_one_piece_gone_over_again({51U, 232U, 247U}, CutMode::Exact, "cut_stability_turn_exact");
+  expect_one_piece_gone_over_again({279U}, CutMode::Grid, "cut_stability_turn_grid");
+}
+
 // Random strokes 5000-5009 cut there, back and there again give the pieces cutting once gives, in every mode
 // (the report seeds' figures, which still miss, are in docs/cutting.md section 10).
 TEST(CutStability, GoingOverACutAgainChangesNothing) {

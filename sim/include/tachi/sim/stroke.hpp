@@ -250,11 +250,15 @@ class StrokeCutter {
   void extend_track(const Eigen::Vector2f& sample);
   /// Appends where the hand was for a sample that joined the track (the track's hand path, in the world).
   void extend_blade_track(const Eigen::Vector3f& hand);
-  /// Whether the hand at `hand` is within `radius_m` of where it was while a cut so far was made (blade_tracks_),
-  /// without the current line's last `tail_m` of hand path.
-  [[nodiscard]] bool near_blade_track(const Eigen::Vector3f& hand, double radius_m, double tail_m) const;
+  /// A hand moving by `motion` at `hand`: Earlier when within `radius_m` of where it was while a cut so far was
+  /// made (blade_tracks_) without the current line's last `tail_m` of hand path; TurnedBack when only near that
+  /// last stretch while moving against it.
+  enum class BladeTrackMatch { None, Earlier, TurnedBack };
+  [[nodiscard]] BladeTrackMatch near_blade_track(const Eigen::Vector3f& hand, const Eigen::Vector3f& motion,
+                                                 double radius_m, double tail_m) const;
   /// `uv` moved onto the cut when the blade is back in its slit (kSlitCells), else `uv`.
-  [[nodiscard]] Eigen::Vector2d in_slit(const Eigen::Vector2d& uv, const Eigen::Vector3f& hand) const;
+  [[nodiscard]] Eigen::Vector2d in_slit(const Eigen::Vector2d& uv, const Eigen::Vector3f& hand,
+                                        const Eigen::Vector3f& motion) const;
   /// Where a stroke crosses the cloth's edge next to a sample in the slit: onto the cut too, when within kSlitCells.
   [[nodiscard]] Eigen::Vector2d edge_in_slit(const Eigen::Vector2d& at_edge) const;
   /// The nearest point of the cut paths so far (paths_, without the segment being cut).

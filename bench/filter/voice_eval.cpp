@@ -339,7 +339,8 @@ std::vector<SpeakerRun> run_no_commands(const VoiceConfig& config, const std::st
 int speakers_main(VoiceConfig config, const std::string& set, unsigned seed_offset, int threads, double no_command_s,
                   const std::string& cache, std::optional<std::pair<double, double>> sweep_ratio, bool check,
                   const std::vector<std::string>& only_conditions, const std::vector<std::string>& only_contexts,
-                  const std::vector<std::string>& only_variants, const std::string& dump) {
+                  const std::vector<std::string>& only_variants, const std::vector<std::string>& only_voices, const std::string& dump,
+                  bool first_word_sweep) {
   const Gate gate{config};
   // The spotters report every verdict, refused ones too: the thresholds are applied when scoring (a sweep
   // needs one decoding only). They decode with the config's thresholds, since with several warps those
@@ -389,6 +390,10 @@ int speakers_main(VoiceConfig config, const std::string& set, unsigned seed_offs
   if (!only_contexts.empty()) contexts = only_contexts;
   if (!only_variants.empty())
     std::erase_if(jobs, [&](const Job& j) { return std::find(only_variants.begin(), only_variants.end(), j.variant) == only_variants.end(); });
+  // One voice's jobs keep the seeds they have in the whole set: the same audio (each voice's conditions and
+  // contexts draw from one generator, so --conditions and --contexts change the audio; --voices does not).
+  if (!only_voices.empty())
+    std::erase_if(jobs, [&](const Job& j) { return std::find(only_voices.begin(), only_voices.end(), j.speaker.voice) == only_voices.end(); });
   std::vector<std::vector<SpeakerRun>> results(jobs.size() + 2);
   std::atomic<std::size_t> next{0};
   std::mutex log_mutex;
@@ -517,6 +522,32 @@ int speakers_main(VoiceConfig config, const std::string& set, unsigned seed_offs
     fa_ok = fa_ok && per_hour <= 1.0;
     std::printf("| %s | %.0f s | %d | %.2f |\n", corpus == "librivox" ? "LibriVox reading" : "LibriVox babble (4 talkers)", t.audio_s, t.false_alarms, per_hour);
   }
+  if (first_word_sweep) {
+    // The first-word margin (VoiceConfig::verify_min_first_word_margin) at several thresholds on this one
+    // decoding (the spotter reports refused verdicts too), the rest of the gates as the config's.
+    std::printf("\n| first-word margin | found at 20 dB | found, all conditions | WRONG | false alarms amid the sequences | LibriVox | babble |\n"
+                "|---|---|---|---|---|---|---|\n");
+    std::vector<std::optional<double>> thresholds{std::nullopt};
+    for (const double t : {-10.0, -6.0, -4.0, -3.0, -2.0, -1.0, 0.0, 1.0, 2.0, 3.0, 4.0, 6.0}) thresholds.emplace_back(t);
+    for (const auto& t : thresholds) {
+      Gate g = gate;
+      g.thresholds.verify_min_first_word_margin = t;
+      SpeakerTally at20, all, reading, babble;
+      for (const auto& r : runs) {
+        const auto s = score(r, g, config);
+        if (commanded(r)) {
+          all += s;
+          if (at_20(r)) at20 += s;
+        } else {
+          (r.context == "librivox" ? reading : babble) += s;
+        }
+      }
+      char name[32] = "off";
+      if (t) std::snprintf(name, sizeof name, "%g", *t);
+      std::printf("| %s | %d/%d | %d/%d | %d | %d | %d | %d |\n", name, at20.found, at20.commands, all.found,
+                  all.commands, all.wrong, all.false_alarms, reading.false_alarms, babble.false_alarms);
+    }
+  }
   const auto t20 = get("20 dB");
   const double rate20 = 100.0 * t20.found / std::max(1, t20.commands);
   std::printf("\nacceptance: found at 20 dB %d/%d = %.1f%% (>= 90%%); WRONG commands %d over all conditions (0); false alarms amid the "
@@ -567,6 +598,10 @@ int main(int argc, char** argv) try {
   app.add_option("--contexts", only_contexts, "--speakers: only these contexts")->check(CLI::IsMember({"alone", "sentence"}));
   app.add_option("--variants", only_variants, "--speakers: only these variants of the voices (the pitch-shifted ones are found least)")
       ->check(CLI::IsMember({"as synthesised", "pitch-shifted", "tempo-changed"}));
+  std::vector<std::string> only_voices;
+  app.add_option("--voices", only_voices,
+                 "--speakers: only these voices of the set (espeak-ng en-us+m6, flite slt, festival voice_kal_diphone: the voice's name, "
+                 "e.g. en-us+m6 or slt), with the audio they have in the whole set");
   app.add_option("--speakers", speakers,
                  "evaluate across speakers (docs/voice.md): every voice and condition of the set: tune (the thresholds were "
                  "chosen on it), heldout (the other voices, other seeds), all, ci (4 voices, 4 conditions: the ctest)")
@@ -582,6 +617,9 @@ int main(int argc, char** argv) try {
   app.add_option("--sweep", sweep_ratio, "--speakers: sweep min log ratio FROM TO (step 2) x margins instead of the table")->expected(2);
   std::string dump;
   app.add_option("--dump", dump, "--speakers: write every run and detection with its second-pass features (tab-separated; the last two columns: whether the unwarped lane had a keyword hit on it, whether the warped lanes judged it) to this file");
+  bool first_word_sweep = false;
+  app.add_flag("--first-word-sweep", first_word_sweep,
+               "--speakers: also score the first-word margin (verify_min_first_word_margin) at several thresholds, off to 6");
   app.add_flag("--check", check, "--speakers: exit 1 when the acceptance targets are missed");
   if (const int rc = tachi::common::parse(app, argc, argv); rc >= 0) return rc;
   if (!speakers.empty()) {
@@ -593,7 +631,8 @@ int main(int argc, char** argv) try {
     if (phone_loop) c.phone_loop_probability = *phone_loop;
     std::optional<std::pair<double, double>> sweep_range;
     if (sweep_ratio.size() == 2) sweep_range = std::pair{sweep_ratio[0], sweep_ratio[1]};
-    return speakers_main(c, speakers, seed_offset, threads, no_command_s, cache, sweep_range, check, only_conditions, only_contexts, only_variants, dump);
+    return speakers_main(c, speakers, seed_offset, threads, no_command_s, cache, sweep_range, check, only_conditions, only_contexts, only_variants, only_voices, dump,
+                         first_word_sweep);
   }
   if (threshold) for (auto& p : commands.phrases) p.threshold = *threshold;
   if (phone_loop) commands.phone_loop_probability = *phone_loop;

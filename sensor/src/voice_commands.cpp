@@ -78,6 +78,8 @@ std::optional<std::string> validate(const VoiceConfig& config) {
     return "verify_min_garbage_log_ratio must be a number (or null)";
   if (config.verify_min_phrase_seconds && !(*config.verify_min_phrase_seconds >= 0.0))
     return "verify_min_phrase_seconds must be a number >= 0 (or null)";
+  if (config.verify_min_first_word_margin && !std::isfinite(*config.verify_min_first_word_margin))
+    return "verify_min_first_word_margin must be a number (or null)";
   // A warp far from 1 moves the mel filters past what any adult vocal tract needs (adults span about
   // 0.8-1.2; Lee & Rose 1998 search 0.88-1.12); the first filter must stay above 0 Hz and the last below
   // the Nyquist frequency.
@@ -109,7 +111,7 @@ VoiceConfig parse_voice_config(const std::string& json_text) {
         item.key() != "verify_min_log_ratio" && item.key() != "verify_min_margin" && item.key() != "verify_min_phrase_log_ratio" &&
         item.key() != "verify_min_phrase_margin" && item.key() != "verify_min_level_db" &&
         item.key() != "verify_min_garbage_margin" && item.key() != "verify_min_garbage_log_ratio" &&
-        item.key() != "verify_min_phrase_seconds" && item.key() != "warps")
+        item.key() != "verify_min_phrase_seconds" && item.key() != "verify_min_first_word_margin" && item.key() != "warps")
       fail("unknown key " + item.key());
   try {
     if (root.contains("model_dir")) c.model_dir = root.at("model_dir").get<std::string>();
@@ -129,7 +131,8 @@ VoiceConfig parse_voice_config(const std::string& json_text) {
                                       std::pair{"verify_min_level_db", &c.verify_min_level_db},
                                       std::pair{"verify_min_garbage_margin", &c.verify_min_garbage_margin},
                                       std::pair{"verify_min_garbage_log_ratio", &c.verify_min_garbage_log_ratio},
-                                      std::pair{"verify_min_phrase_seconds", &c.verify_min_phrase_seconds}}) {
+                                      std::pair{"verify_min_phrase_seconds", &c.verify_min_phrase_seconds},
+                                      std::pair{"verify_min_first_word_margin", &c.verify_min_first_word_margin}}) {
       if (!root.contains(key)) continue;
       const auto& v = root.at(key);
       if (v.is_null())

@@ -228,10 +228,22 @@ double level_above_floor_db(const std::vector<std::int16_t>& audio, long audio_s
 /// to another command is a miss, never a wrong command (NaN margins compare false: not met). The garbage
 /// margin is the same margin with the words around the phrase explained by the garbage model: a phrase
 /// that wins only because it stretched over a neighbouring word loses there.
+/// The first words' margin (VoiceConfig::verify_min_first_word_margin): the reported phrase's first word,
+/// as the garbage grammar aligns it, against the first word of the best phrase of another command (the
+/// rival), each a ratio against the phone loop per frame. The commands share "cutting": where the first
+/// word is blurred, the whole phrase's margins rest on the words around it, and the first words decide.
+/// Not checked when either first word is not aligned (NaN: no rival, nothing to confuse it with).
+bool first_word_margin_met(const VoiceConfig& config, const VoiceDetection& d) {
+  if (!config.verify_min_first_word_margin) return true;
+  const double margin = d.aligned.first_word_ratio - d.rival.first_word_ratio;
+  return std::isnan(margin) || margin >= *config.verify_min_first_word_margin;
+}
+
 bool margins_met(const VoiceConfig& config, const VoiceDetection& d) {
   return d.command_margin >= config.verify_min_margin &&
          (config.verify_min_phrase_margin <= 0.0 || d.phrase_margin >= config.verify_min_phrase_margin) &&
-         (!config.verify_min_garbage_margin || d.garbage_margin >= *config.verify_min_garbage_margin);
+         (!config.verify_min_garbage_margin || d.garbage_margin >= *config.verify_min_garbage_margin) &&
+         first_word_margin_met(config, d);
 }
 
 /// sphinxbase keeps the warp factor of its front ends in static variables, read while a decoder is made

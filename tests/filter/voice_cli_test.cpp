@@ -233,6 +233,28 @@ TEST_F(VoiceCli, TheWarpedLanesKeepTheUnwarpedRefusalOfABritishStart) {
     EXPECT_TRUE(line.find(",stop,") == std::string::npos || std::stod(line) > 3.0) << line;
 }
 
+// The first-word margin (verify_min_first_word_margin, docs/voice.md session 40), through tachi-voice-eval on one
+// voice of the tune set with the audio it has there: espeak-ng en-us+m6 pitch-shifted, seeds +20000. In 20 dB
+// babble it says "that is enough, stop cutting", and the whole window's ratio (-13.6, margin 14.1 over "begin
+// cutting") accepts "begin cutting" fitted to the words after the command: a wrong command. Its first word scores
+// 10.1 per frame below "stop"'s as the garbage grammar aligns them, and the first-word margin refuses it. One
+// decoding: the shipped gates' line, and the same verdicts with the margin off (--first-word-sweep).
+TEST_F(VoiceCli, AStopTakenForBeginInBabbleIsRefusedByTheFirstWordMargin) {
+  const auto r = tachi::test::run({tachi::test::executable("tachi-voice-eval"), "--speakers", "tune", "--seed-offset", "20000", "--voices",
+                                   "en-us+m6", "--variants", "pitch-shifted", "--no-command-seconds", "0", "--first-word-sweep"},
+                                  280s);  // ~20 s of CPU; 80-90 s beside other jobs (load 8 on 2 cores)
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("WRONG commands 0 over all conditions"), std::string::npos) << r.out;
+  // The margin off: the wrong command is back (if not, the case no longer shows the rule's work: find another).
+  const auto off = r.out.find("\n| off | ");
+  ASSERT_NE(off, std::string::npos) << r.out;
+  std::istringstream row(r.out.substr(off + 1, r.out.find('\n', off + 1) - off - 1));
+  std::vector<std::string> cells;
+  for (std::string cell; std::getline(row, cell, '|');) cells.push_back(cell);
+  ASSERT_GE(cells.size(), 5U) << r.out;
+  EXPECT_EQ(std::stoi(cells[4]), 1) << "WRONG with the first-word margin off:\n" << r.out;
+}
+
 TEST_F(VoiceCli, MissingDevicesExitWithTheNoDeviceCode) {
   auto r = tachi::test::run({tachi::test::executable("tachi-voice"), "--device", "tachi_no_such_device", "--no-dds"}, 30s);
   EXPECT_EQ(r.exit_code, 3);

@@ -105,6 +105,7 @@ TEST(VoiceCommands, TheShippedConfigFileMatchesTheDefaults) {
   EXPECT_EQ(file.verify_min_garbage_margin, defaults.verify_min_garbage_margin);
   EXPECT_EQ(file.verify_min_garbage_log_ratio, defaults.verify_min_garbage_log_ratio);
   EXPECT_EQ(file.verify_min_phrase_seconds, defaults.verify_min_phrase_seconds);
+  EXPECT_EQ(file.verify_min_first_word_margin, defaults.verify_min_first_word_margin);
   EXPECT_EQ(file.warps, defaults.warps);
   ASSERT_EQ(file.phrases.size(), defaults.phrases.size());
   for (std::size_t i = 0; i < file.phrases.size(); ++i)
@@ -144,6 +145,9 @@ TEST(VoiceCommands, ThePhraseRatioMarginAndLevelKeysParseAndAreValidated) {
   EXPECT_EQ(parse_voice_config(R"({"verify_min_phrase_seconds": 0.4})").verify_min_phrase_seconds, 0.4);
   EXPECT_FALSE(parse_voice_config(R"({"verify_min_phrase_seconds": null})").verify_min_phrase_seconds.has_value());
   EXPECT_NE(error_of(R"({"verify_min_phrase_seconds": -1})").find("verify_min_phrase_seconds"), std::string::npos);
+  EXPECT_EQ(parse_voice_config(R"({"verify_min_first_word_margin": -2})").verify_min_first_word_margin, -2.0);
+  EXPECT_FALSE(parse_voice_config(R"({"verify_min_first_word_margin": null})").verify_min_first_word_margin.has_value());
+  EXPECT_NE(error_of(R"({"verify_min_first_word_margin": "x"})").find("verify_min_first_word_margin"), std::string::npos);
 }
 
 TEST(VoiceCommands, TheSecondPassMarginIsValidated) {

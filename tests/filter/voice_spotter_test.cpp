@@ -350,6 +350,29 @@ TEST(VoiceSpotter, BeginCuttingInsideWordsIsAcceptedAtItsOwnLowerGarbageRatioAnd
   EXPECT_FALSE(verification_accepts(c, squeezed));
 }
 
+TEST(VoiceSpotter, ACommandWhoseFirstWordScoresBelowTheRivalsFirstWordIsRefused) {
+  const VoiceConfig c;  // the shipped gates, the first-word margin among them (docs/voice.md, session 40)
+  VoiceDetection d;     // the second tune set's babble case: "stop cutting" said inside a sentence, "begin cutting" reported
+  d.phrase = "begin cutting";
+  d.verification_score = -13.6;  // the whole window accepts it, beating "stop cutting" by 14.1
+  d.command_margin = 14.1;
+  d.phrase_margin = 5.0;
+  d.level_db = 20.0;
+  d.garbage_score = -65.8;
+  d.garbage_margin = 29.3;
+  d.garbage_duration_s = 0.71;
+  d.aligned.first_word_ratio = -63.5;  // but "begin" fits its frames worse than "stop" fits its own
+  d.rival.first_word_ratio = -53.4;
+  EXPECT_FALSE(verification_accepts(c, d));
+  VoiceConfig off = c;  // the margin off: the shared "cutting" and the words around it decide
+  off.verify_min_first_word_margin.reset();
+  EXPECT_TRUE(verification_accepts(off, d));
+  d.rival.first_word_ratio = -70.0;  // the reported phrase's first word the better: a command
+  EXPECT_TRUE(verification_accepts(c, d));
+  d.rival.first_word_ratio = std::nan("");  // no rival aligned: nothing to confuse it with, not checked
+  EXPECT_TRUE(verification_accepts(c, d));
+}
+
 TEST(VoiceSpotter, UnknownWordsAndMissingModelsAreClearErrors) {
   VoiceConfig c;
   set_phrase(c, VoiceCommand::Start, "start qzxqzx");

@@ -369,6 +369,7 @@ struct HandFinder::Impl {
 
   cv::Mat roi_hand_buffer = cv::Mat(kDepthHeight + 2, kDepthWidth + 2, CV_8U);
   bool follow_component(std::span<const std::uint16_t> raw, int component, bool continuing, bool take_over, Palm& palm);
+  bool came_to_rest(int component) const;
   bool find_arm_end(std::span<const std::uint16_t> raw, Palm& palm, cv::Point& seed);
   bool arm_end_candidate(std::span<const std::uint16_t> raw, cv::Point seed, std::uint16_t near_raw, const cv::Rect& box,
                          bool two_sided, Palm& palm);
@@ -1711,10 +1712,35 @@ bool HandFinder::Impl::follow_component(std::span<const std::uint16_t> raw, int 
                         !is_joint(seed, near_raw) && !nearest_at_border(arm_nearest) &&
                         !front_crosses_border_beyond_hand(seed, near_raw, at_end, palm)));
     if (jump || (!found && !continuing)) tracking = false;
+    if (!found && !continuing && came_to_rest(component)) excluded = false;
     return found;
   }
   tracking = false;
+  if (!continuing && came_to_rest(component)) excluded = false;
   return false;
+}
+
+/// Whether at least rest_share of a component's grid cells have read steady for rest_frames frames:
+/// a thing that came to rest, which the background may learn although it was measured.
+bool HandFinder::Impl::came_to_rest(int component) const {
+  if (params.rest_frames <= 0) return false;
+  // The user's body and arm lie behind the hand, or an elbow's few cm before it: a thing nearer than
+  // where the hand was last seen by rest_nearer_than_hand_m is not the arm that holds it, paused.
+  // No hand seen yet: nothing tells the two apart, and nothing is learned.
+  if (frames_since_seen >= (1 << 20) ||
+      model.metres(nearest[static_cast<std::size_t>(component)]) + params.rest_nearer_than_hand_m > last_seen.z())
+    return false;
+  int cells = 0, steady = 0;
+  for (int gy = 0; gy < kGridH; ++gy) {
+    const int* l = labels.ptr<int>(gy);
+    const std::size_t base = static_cast<std::size_t>(gy) * kGridW;
+    for (int gx = 0; gx < kGridW; ++gx) {
+      if (l[gx] != component) continue;
+      ++cells;
+      steady += run_length[base + gx] >= params.rest_frames ? 1 : 0;
+    }
+  }
+  return cells > 0 && steady >= params.rest_share * cells;
 }
 
 HandObservation HandFinder::Impl::find(std::span<const std::uint16_t> raw) {

@@ -215,6 +215,21 @@ struct HandFinderParams {
   double body_ring_inner_m = 0.08;
   double body_ring_outer_m = 0.12;
   double body_depth_m = 0.04;
+  /// A thing that came to rest becomes background although it was measured: a component refused as
+  /// a new track (follow_component, not followed) at least rest_share of whose grid cells have read
+  /// steady for rest_frames frames is not kept from the background's learning, as a followed arm or a
+  /// hand found is. Without it a thing that slid in and stopped nearer than the hand (a box at the
+  /// border, tuning seeds 15 and 160) was measured and refused every frame, never learned, and the
+  /// hand behind it never measured. rest_frames <= 0: no such rule (every measured component kept).
+  int rest_frames = 15;
+  double rest_share = 0.8;
+  /// ... and only where its nearest reading lies nearer than where the hand was last seen by this
+  /// much (arm_protrusion_m's 15 cm: the user's own elbow is a few cm nearer than the hand at most;
+  /// the body and arm are behind it). A hand that pauses is at rest too, and so is the user who
+  /// stepped after a hand reaching out of the image (tuning seed 133: the whole user, at the hand's
+  /// depth, learned while the hand paused beyond the image's side; stepping back, the arm moved out
+  /// of the learned background and was taken 29 cm from the hand). No hand seen yet: nothing learned.
+  double rest_nearer_than_hand_m = 0.15;
 };
 
 struct HandObservation {

@@ -139,7 +139,6 @@ GridOffset grid_offset(const Cloth& cloth, std::uint32_t p, const Eigen::Vector3
   return {cells, (frame * cells).norm()};
 }
 
-/// The particle nearest to `point`, by looking at every one.
 // The index a track ends at without its last `tail` of length (walked back from its end, in the track's units):
 // the current line's last stretch, which a sample going straight on would otherwise be "along".
 template <typename Point>
@@ -153,6 +152,7 @@ std::size_t end_before_tail(const std::vector<Point>& track, double tail) {
   return end;
 }
 
+/// The particle nearest to `point`, by looking at every one.
 std::uint32_t scan_nearest(const Cloth& cloth, const Eigen::Vector3f& point) {
   static_assert(sizeof(Eigen::Vector3f) == 3 * sizeof(float), "positions must be packed x, y, z");
   // A plain float loop over the interleaved coordinates, which the compiler vectorises.
@@ -627,11 +627,12 @@ std::optional<std::pair<std::size_t, std::size_t>> StrokeCutter::along_cut_made(
   // take opposite sides of the cells the line crosses diagonally: together they ring those cells, and each
   // ringed cell fell as a piece (the razor re-cut in grid mode: 3 of the 7 development strokes of 1-300 that
   // differed, each by one cell). A pass back along a cut whose flap swung since lands a cell beside it and cuts
-  // off a strip one cell wide (2 more of the 7). Where the new staircase goes from a particle on a cut to
+  // off a strip one cell wide (one more of the 7). Where the new staircase goes from a particle on a cut to
   // another that the cuts already join by a path lying within one cell of it (and it within one cell of that
   // path: only slivers narrower than the grid's resolution between them), it is the same line at the grid's
   // resolution: the line follows the cut already made there, which changes nothing.
-  // The cloth's edge parts it as a cut does: a staircase a cell inside the edge, joined to a cut, rings cells too.
+  // The cloth's edge parts it as a cut does: a staircase a cell inside the edge, joined to a cut, rings cells too
+  // (one more of the 7).
   const auto on_cut = [&](GridCoord g) {
     return on_boundary(g, cloth_->columns, cloth_->rows) || cutter_.edge_cut(g, {g.u + 1, g.v}) ||
            cutter_.edge_cut(g, {g.u - 1, g.v}) || cutter_.edge_cut(g, {g.u, g.v + 1}) ||
@@ -647,7 +648,8 @@ std::optional<std::pair<std::size_t, std::size_t>> StrokeCutter::along_cut_made(
 }
 
 std::optional<std::vector<GridCoord>> StrokeCutter::cut_path_beside(std::span<const GridCoord> run) const {
-  // Breadth first along cut edges and the cloth's edge, through the particles within one cell of `run` (a box around it).
+  // Breadth first along cut edges and the cloth's edge, through the particles within one cell of `run` (in a box
+  // around it).
   const GridCoord from = run.front();
   const GridCoord to = run.back();
   int u0 = from.u, u1 = from.u, v0 = from.v, v1 = from.v;
@@ -926,7 +928,8 @@ TopologyChange StrokeCutter::add_sample(const StrokeSample& sample, const ClothP
   // Grid mode rounds (u, v) with hysteresis (grid_point); the nearest particle's own grid point flipped
   // between two rows on a stroke between them.
   const bool on_cloth = at.inside && touching;
-  const Eigen::Vector3f motion = previous_ ? Eigen::Vector3f{sample.position - previous_->world} : Eigen::Vector3f::Zero();
+  const Eigen::Vector3f motion =
+      previous_ ? Eigen::Vector3f{sample.position - previous_->world} : Eigen::Vector3f::Zero();
   const Eigen::Vector2d uv = on_cloth ? in_slit(at.uv, sample.position, motion) : at.uv;
   const bool slid = (uv - at.uv).norm() > 1e-12;
   const Point point{uv, follows_path() ? (slid ? boundary_point(uv) : at.grid) : grid_point(uv), sample.position,

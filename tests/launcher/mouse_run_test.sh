@@ -22,7 +22,9 @@ mouse_run() {
   # A display number no other X server (or the other mode's) holds: Xvfb takes the lock or fails.
   for n in $(seq $((600 + ($$ + domain) % 300)) 999); do
     [ -e "/tmp/.X$n-lock" ] && continue
-    Xvfb ":$n" -screen 0 1024x900x24 -nolisten tcp >/dev/null 2>&1 & xvfb=$!
+    # -noreset: an X server resets when its last client leaves (an xdotool search before the viewer is up) and
+    # refuses connections meanwhile (viewer_window_test.cpp).
+    Xvfb ":$n" -screen 0 1024x900x24 -nolisten tcp -noreset >/dev/null 2>&1 & xvfb=$!
     for _ in $(seq 100); do [ -S "/tmp/.X11-unix/X$n" ] && break; kill -0 $xvfb 2>/dev/null || break; sleep 0.05; done
     kill -0 $xvfb 2>/dev/null && break
   done

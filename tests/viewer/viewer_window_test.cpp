@@ -49,8 +49,11 @@ class VirtualDisplay {
       name_ = ":" + number;
       char screen[32];
       std::snprintf(screen, sizeof screen, "%dx%dx24", width, height);
+      // -noreset: an X server resets when its last client leaves, and refuses connections while it does. Our
+      // probe below is a client: the viewer started right after it found no display (CI, 2026-12-07: "could
+      // not connect to display", the server up; in full ctest runs only).
       server_ = std::make_unique<ChildProcess>(
-          std::vector<std::string>{kXvfb, name_, "-screen", "0", screen, "-nolisten", "tcp"});
+          std::vector<std::string>{kXvfb, name_, "-screen", "0", screen, "-nolisten", "tcp", "-noreset"});
       // Ours once the lock names our server and a client connects. The socket's existence said less: a
       // socket left by a killed server, or another test's server that took the number between the lock
       // check and Xvfb's start (ours then exits, "server already active"), let the viewer start before

@@ -486,7 +486,7 @@ void StrokeCutter::commit(GridCoord g, const Eigen::Vector2d& uv, const Eigen::V
   // runs along its own path, and its way back "closed" a loop with the cut just made at every commit, so the
   // cut's end stayed at the turn and a later pass never cut the stretch the first pass left uncut there.
   if (follows_path() && path_end_ && closes_small_loop(*path_end_, to) &&
-      (options_.mode != CutMode::Delete || (to - *path_end_).norm() <= 1e-9 || !recut_parts(*path_end_, to).empty())) {
+      (options_.mode != CutMode::Delete || (to - *path_end_).norm() <= 1e-9 || !recut_parts(*path_end_, to, direction).empty())) {
     return;
   }
   // For the same reason a step shorter than the wobble does not join the cut either, unless it reaches the
@@ -514,6 +514,7 @@ void StrokeCutter::commit(GridCoord g, const Eigen::Vector2d& uv, const Eigen::V
     tracks_.emplace_back();
     track_boxes_.emplace_back();  // empty
     blade_tracks_.emplace_back();
+    blade_uvs_.emplace_back();
     blade_boxes_.emplace_back();
     extend_track(to.cast<float>());
     recent_.clear();
@@ -522,7 +523,7 @@ void StrokeCutter::commit(GridCoord g, const Eigen::Vector2d& uv, const Eigen::V
   }
   // Where the segment runs along a cut already made it does not cut again (recut_parts); the samples up to
   // here then join the cut's track.
-  const auto parts = from && moved ? recut_parts(*from, to) : std::vector<std::pair<Eigen::Vector2d, Eigen::Vector2d>>{};
+  const auto parts = from && moved ? recut_parts(*from, to, direction) : std::vector<std::pair<Eigen::Vector2d, Eigen::Vector2d>>{};
   if (from && moved) {
     // Whether this segment ends along a cut (the next one then goes on along it).
     arrived_on_cut_ = parts.empty() || (parts.back().second - to).norm() > 1e-9;
@@ -541,7 +542,7 @@ void StrokeCutter::commit(GridCoord g, const Eigen::Vector2d& uv, const Eigen::V
       const Eigen::Vector2d s = recent_[i].cast<double>();
       if (options_.mode != CutMode::Delete || closest_points(s, s, *from, to).distance <= reach) {
         extend_track(recent_[i]);
-        extend_blade_track(recent_hands_[i]);
+        extend_blade_track(recent_hands_[i], recent_[i].cast<double>());
       }
     }
     extend_track(to.cast<float>());
@@ -632,15 +633,16 @@ std::optional<std::pair<std::size_t, std::size_t>> StrokeCutter::along_cut_made(
   // path: only slivers narrower than the grid's resolution between them), it is the same line at the grid's
   // resolution: the line follows the cut already made there, which changes nothing.
   // The cloth's edge parts it as a cut does: a staircase a cell inside the edge, joined to a cut, rings cells too
-  // (one more of the 7).
+  // (one more of the 7). A single step from one cut particle to another a cell beside the cut rings the cell between
+  // as well (a line starting on a cut, where a blade came back to it).
   const auto on_cut = [&](GridCoord g) {
     return on_boundary(g, cloth_->columns, cloth_->rows) || cutter_.edge_cut(g, {g.u + 1, g.v}) ||
            cutter_.edge_cut(g, {g.u - 1, g.v}) || cutter_.edge_cut(g, {g.u, g.v + 1}) ||
            cutter_.edge_cut(g, {g.u, g.v - 1});
   };
-  for (std::size_t i = 0; i + 2 < run.size(); ++i) {
+  for (std::size_t i = 0; i + 1 < run.size(); ++i) {
     if (!on_cut(run[i])) continue;
-    for (std::size_t j = run.size() - 1; j >= std::max(i + 2, first + 1); --j) {
+    for (std::size_t j = run.size() - 1; j >= std::max(i + 1, first + 1); --j) {
       if (on_cut(run[j]) && cut_path_beside(run.subspan(i, j - i + 1))) return std::pair{i, j};
     }
   }
@@ -697,44 +699,64 @@ void StrokeCutter::extend_track(const Eigen::Vector2f& sample) {
   track_boxes_.back().extend(sample);
 }
 
-void StrokeCutter::extend_blade_track(const Eigen::Vector3f& hand) {
+void StrokeCutter::extend_blade_track(const Eigen::Vector3f& hand, const Eigen::Vector2d& uv) {
   blade_tracks_.back().push_back(hand);
+  blade_uvs_.back().push_back(clamp_uv(uv).cast<float>());
   blade_boxes_.back().extend(hand);
 }
 
-StrokeCutter::BladeTrackMatch StrokeCutter::near_blade_track(const Eigen::Vector3f& hand,
-                                                             const Eigen::Vector3f& motion, double radius_m,
-                                                             double tail_m) const {
-  const auto near_segment = [&](const Eigen::Vector3f& a, const Eigen::Vector3f& b) {
-    const Eigen::Vector3f d = b - a;
-    const float len2 = d.squaredNorm();
-    if (len2 <= 0.0F) return false;
-    const float t = std::clamp((hand - a).dot(d) / len2, 0.0F, 1.0F);
-    return static_cast<double>((a + t * d - hand).norm()) <= radius_m;
-  };
-  bool in_tail = false;
+StrokeCutter::BladeTrackHit StrokeCutter::near_blade_track(const Eigen::Vector3f& hand, const Eigen::Vector3f& motion,
+                                                           double radius_m, double tail_m) const {
+  // The nearest point of the hand paths within the radius, and where the blade was on the cloth then: the segment's
+  // two samples' uv, interpolated as the hand's point is between them.
+  double best_earlier = std::numeric_limits<double>::infinity();
+  double best_turn = std::numeric_limits<double>::infinity();
+  Eigen::Vector2d uv_earlier = Eigen::Vector2d::Zero();
+  Eigen::Vector2d uv_turn = Eigen::Vector2d::Zero();
   for (std::size_t i = 0; i < blade_tracks_.size(); ++i) {
     if (static_cast<double>(blade_boxes_[i].exteriorDistance(hand)) > radius_m + 1e-6) continue;
     const auto& track = blade_tracks_[i];
+    const auto& uvs = blade_uvs_[i];
     // As near_track: the current line's last stretch is the hand going on, not coming back; unless the hand
     // moves against it (a stroke that turns back along itself).
     const std::size_t end = i + 1 == blade_tracks_.size() && line_ ? end_before_tail(track, tail_m) : track.size();
-    for (std::size_t k = 0; k < end; ++k) {
-      if (static_cast<double>((track[k] - hand).norm()) <= radius_m) return BladeTrackMatch::Earlier;
-      if (k > 0 && near_segment(track[k - 1], track[k])) return BladeTrackMatch::Earlier;
-    }
-    for (std::size_t k = std::max<std::size_t>(end, 1); k < track.size() && !in_tail; ++k) {
-      in_tail = motion.dot(track[k] - track[k - 1]) < 0.0F && near_segment(track[k - 1], track[k]);
+    for (std::size_t k = 0; k < track.size(); ++k) {
+      const bool tail = k >= end;
+      double distance = static_cast<double>((track[k] - hand).norm());
+      Eigen::Vector2d at = uvs[k].cast<double>();
+      if (k > 0) {
+        const Eigen::Vector3f d = track[k] - track[k - 1];
+        const float len2 = d.squaredNorm();
+        if (tail && !(motion.dot(d) < 0.0F)) continue;
+        if (len2 > 0.0F) {
+          const float t = std::clamp((hand - track[k - 1]).dot(d) / len2, 0.0F, 1.0F);
+          const double along = static_cast<double>((track[k - 1] + t * d - hand).norm());
+          if (along < distance) {
+            distance = along;
+            at = ((1.0F - t) * uvs[k - 1] + t * uvs[k]).cast<double>();
+          }
+        }
+      } else if (tail) {
+        continue;
+      }
+      if (distance > radius_m) continue;
+      double& best = tail ? best_turn : best_earlier;
+      if (distance < best) {
+        best = distance;
+        (tail ? uv_turn : uv_earlier) = at;
+      }
     }
   }
-  return in_tail ? BladeTrackMatch::TurnedBack : BladeTrackMatch::None;
+  if (best_earlier <= radius_m) return {BladeTrackMatch::Earlier, uv_earlier};
+  if (best_turn <= radius_m) return {BladeTrackMatch::TurnedBack, uv_turn};
+  return {};
 }
 
 Eigen::Vector2d StrokeCutter::edge_in_slit(const Eigen::Vector2d& at_edge) const {
   // The sample beyond the edge is located by extrapolating the nearest particle's frame, off a flap that moved
   // since the cut was made: the crossing between it and a sample in the slit came down 0.4-1.5 cells from where
   // the cut meets the edge, and the step to it cut a sliver off the lip.
-  if (!near_track(at_edge, kSlitCells, kSlitCells)) return at_edge;
+  if (!near_track(at_edge, kSlitCells, kSlitTailCells)) return at_edge;
   return nearest_on_cut(at_edge);
 }
 
@@ -745,29 +767,40 @@ Eigen::Vector2d StrokeCutter::in_slit(const Eigen::Vector2d& uv, const Eigen::Ve
   // hanging cloth's cut opens and its flaps swing by centimetres, so a pass back along the same hand path came
   // down 0.4-1.2 cells beside the cut, on fresh cloth, and cut slivers (docs/cutting.md, section 10). The hand
   // coming back within kRecutCells of where it was while it cut (in metres on the cloth: two passes of a hand
-  // over the same place) onto material within kSlitCells of that cut is in the slit, and its point is the cut's.
+  // over the same place) onto material within kSlitCells of that cut is in the slit, and its point is the cut's:
+  // where the blade cut when the hand was at the nearest point of its earlier path (near_blade_track). The cut's
+  // point nearest the material under it instead slid along the cut with the swinging flap (or to the cut's end,
+  // where the flap had swung beyond the cloth's edge), and the chords between such points cut corners off the lip.
   // A hand that turns back along the line it is cutting is back in its slit from the turn on (the current line's
   // last stretch counts then, for the hand and for the material).
   const double cell_m = std::min(cloth_->spacing_x(), cloth_->spacing_y());
   if (blade_tracks_.empty()) return uv;
-  const BladeTrackMatch match = near_blade_track(hand, motion, kRecutCells * cell_m, kSlitCells * cell_m);
-  if (match == BladeTrackMatch::None) return uv;
-  if (!near_track(uv, kSlitCells, match == BladeTrackMatch::TurnedBack ? 0.0 : kSlitCells)) return uv;
-  return nearest_on_cut(uv);
+  const BladeTrackHit hit = near_blade_track(hand, motion, kRecutCells * cell_m, kSlitTailCells * cell_m);
+  if (hit.match == BladeTrackMatch::None) return uv;
+  if (!near_track(uv, kSlitCells, hit.match == BladeTrackMatch::TurnedBack ? 0.0 : kSlitTailCells)) return uv;
+  return nearest_on_cut(hit.uv);
 }
 
-bool StrokeCutter::near_track(const Eigen::Vector2d& p, double radius, double tail_cells) const {
+bool StrokeCutter::near_track(const Eigen::Vector2d& p, double radius, double tail_cells,
+                              const Eigen::Vector2d& against) const {
   const Eigen::Vector2f pf = p.cast<float>();
   for (std::size_t i = 0; i < tracks_.size(); ++i) {
     // A track whose box is farther than the radius has no sample near enough (the box holds every segment).
     if (static_cast<double>(track_boxes_[i].exteriorDistance(pf)) > radius + 1e-4) continue;
     const auto& track = tracks_[i];
     // The current line's track ends where the segment being cut starts; its last `tail_cells` are left out,
-    // or a segment going straight on would be "along" the track it continues.
-    const std::size_t end = i + 1 == tracks_.size() ? end_before_tail(track, tail_cells) : track.size();
+    // or a segment going straight on would be "along" the track it continues. Between lines the last track
+    // is a finished cut like any other: a hand back on the cloth where it left it is back in its slit.
+    const std::size_t end = i + 1 == tracks_.size() && line_ ? end_before_tail(track, tail_cells) : track.size();
     if (end == 1 && (track[0].cast<double>() - p).norm() <= radius) return true;
     for (std::size_t k = 1; k < end; ++k) {
       if (closest_points(p, p, track[k - 1].cast<double>(), track[k].cast<double>()).distance <= radius) return true;
+    }
+    // That last stretch, where the path runs back against it (near_blade_track's turn, in rest coordinates).
+    for (std::size_t k = std::max<std::size_t>(end, 1); k < track.size(); ++k) {
+      const Eigen::Vector2d a = track[k - 1].cast<double>();
+      const Eigen::Vector2d b = track[k].cast<double>();
+      if (against.dot(b - a) < 0.0 && closest_points(p, p, a, b).distance <= radius) return true;
     }
   }
   return false;
@@ -778,8 +811,10 @@ Eigen::Vector2d StrokeCutter::nearest_on_cut(const Eigen::Vector2d& p) const {
   Eigen::Vector2d at = p;
   for (std::size_t i = 0; i < paths_.size(); ++i) {
     const auto& path = paths_[i];
-    // The current path's last point is the end of the segment being cut (just recorded): leave it out.
-    const std::size_t end = i + 1 == paths_.size() ? path.size() - 1 : path.size();
+    // The current path's last point is the end of the segment being cut (just recorded): leave it out. Between
+    // lines the last path is a finished cut, its last segment as much as the others (a hand back on the cloth
+    // where it left it lands on that segment).
+    const std::size_t end = i + 1 == paths_.size() && line_ ? path.size() - 1 : path.size();
     for (std::size_t k = 1; k < end; ++k) {
       const auto meet = closest_points(p, p, path[k - 1].cast<double>(), path[k].cast<double>());
       if (meet.distance < best) {
@@ -792,7 +827,8 @@ Eigen::Vector2d StrokeCutter::nearest_on_cut(const Eigen::Vector2d& p) const {
 }
 
 std::vector<std::pair<Eigen::Vector2d, Eigen::Vector2d>> StrokeCutter::recut_parts(const Eigen::Vector2d& from,
-                                                                                   const Eigen::Vector2d& to) const {
+                                                                                   const Eigen::Vector2d& to,
+                                                                                   const Eigen::Vector3f& direction) const {
   // Going over a cut again must change nothing: cutting a second time a few tenths of a cell beside the
   // first cut out slivers (exact) or deleted a second row of triangles (delete). Two passes of the hand over
   // the same place give samples within kRecutCells of each other, but the simplified paths cut along them
@@ -807,8 +843,16 @@ std::vector<std::pair<Eigen::Vector2d, Eigen::Vector2d>> StrokeCutter::recut_par
   const int n = std::max(1, static_cast<int>(std::ceil(length / kRecutStepCells)));
   const double near = kRecutCells + options_.tolerance_cells;
   const auto at = [&](int i) -> Eigen::Vector2d { return from + (static_cast<double>(i) / n) * d; };
+  // A hand that turned back along the line it is cutting runs along that line's last stretch too: left out, the
+  // way back from the turn cut again beside the cut for as long as that stretch (exact: a sliver at the turn). The
+  // hand decides that it turned (its motion against its last stretch of path, as near_blade_track), not the
+  // points on the cloth: a worn blade drags the cloth where it enters, and the points located on it step back
+  // along the line it is beginning while the hand goes on.
+  const auto& hands = blade_tracks_.empty() ? std::vector<Eigen::Vector3f>{} : blade_tracks_.back();
+  const bool hand_turned = line_ && hands.size() >= 2 && direction.dot(hands.back() - hands[hands.size() - 2]) < 0.0F;
+  const Eigen::Vector2d against = hand_turned ? d : Eigen::Vector2d::Zero();
   std::vector<char> on_cut(static_cast<std::size_t>(n) + 1);
-  for (int i = 0; i <= n; ++i) on_cut[static_cast<std::size_t>(i)] = near_track(at(i), near, near);
+  for (int i = 0; i <= n; ++i) on_cut[static_cast<std::size_t>(i)] = near_track(at(i), near, near, against);
   std::vector<char> skip(on_cut.size(), 0);
   for (int i = 0; i <= n;) {
     if (!on_cut[static_cast<std::size_t>(i)]) {
@@ -894,6 +938,7 @@ void StrokeCutter::forget_line() {
   tracks_.resize(std::min(tracks_.size(), line_start_.tracks));
   track_boxes_.resize(tracks_.size());
   blade_tracks_.resize(tracks_.size());
+  blade_uvs_.resize(tracks_.size());
   blade_boxes_.resize(tracks_.size());
   paths_.resize(std::min(paths_.size(), line_start_.paths));
   report_.cut_line.resize(std::min(report_.cut_line.size(), line_start_.report_cells));
@@ -968,8 +1013,8 @@ TopologyChange StrokeCutter::add_sample(const StrokeSample& sample, const ClothP
       }
       // The hand's way in swept the cloth up to here (from beyond the edge, or from where the blade did not
       // reach it yet): a pass back over a flap that has since swung out finds material where the hand was
-      // before it touched, so that stretch of the hand's path is the cut's too.
-      if (previous_) extend_blade_track(previous_->world);
+      // before it touched, so that stretch of the hand's path is the cut's too, and leads to where it begins.
+      if (previous_) extend_blade_track(previous_->world, anchor_);
     } else {
       pending_.push_back(point);
     }
@@ -1006,7 +1051,7 @@ TopologyChange StrokeCutter::add_sample(const StrokeSample& sample, const ClothP
     if (!pending_.empty()) commit(pending_.back().grid, pending_.back().uv, last_direction_, change);
     if (!point.beyond) {
       // Off the cloth without crossing its edge (the blade left it): the cut ends at the last sample on it.
-      extend_blade_track(point.world);  // the way out, as the way in
+      extend_blade_track(point.world, path_end_ ? *path_end_ : anchor_);  // the way out, as the way in
       close_line();
       previous_ = point;
       return change;
@@ -1016,7 +1061,7 @@ TopologyChange StrokeCutter::add_sample(const StrokeSample& sample, const ClothP
     Eigen::Vector2d at_edge = inside_part ? Eigen::Vector2d{from + inside_part->second * (point.uv - from)} : from;
     if (previous_ && previous_->in_slit) at_edge = edge_in_slit(at_edge);
     commit(boundary_point(at_edge), at_edge, last_direction_, change);
-    extend_blade_track(point.world);  // the way out to beyond the edge, as the way in above
+    extend_blade_track(point.world, at_edge);  // the way out to beyond the edge, as the way in above
     close_line();
   } else if (previous_ && previous_->beyond && point.beyond) {
     // Both samples beyond the edge: a fast swipe may still cross the cloth between them.
@@ -1026,9 +1071,9 @@ TopologyChange StrokeCutter::add_sample(const StrokeSample& sample, const ClothP
       const Eigen::Vector2d enter = previous_->uv + inside_part->first * d;
       const Eigen::Vector2d leave = previous_->uv + inside_part->second * d;
       start_line(boundary_point(enter), enter, last_direction_, change);
-      extend_blade_track(previous_->world);
+      extend_blade_track(previous_->world, enter);
       commit(boundary_point(leave), leave, last_direction_, change);
-      extend_blade_track(point.world);
+      extend_blade_track(point.world, leave);
       close_line();
     }
   }

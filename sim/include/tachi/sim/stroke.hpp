@@ -158,12 +158,16 @@ inline constexpr double kRecutCells = 0.1;
 inline constexpr double kRecutMinRunCells = 1.0;
 inline constexpr double kRecutStepCells = 0.05;
 /// A blade back in its slit: a sample whose hand is within kRecutCells (in metres on the cloth) of where the
-/// hand already was while it cut, and whose material is within this many cells of that cut, is on the cut
-/// (StrokeCutter::in_slit). Chosen on the razor re-cut of development strokes 1-300 (cut_stability --recut;
-/// docs/cutting.md section 10): 1 cell left 23 exact-mode strokes differing, 1.5 16, 2 and 3 14, 50 without.
-/// It stays below StrokeOptions::exact_max_jump_cells' default (3): a sample moved onto the cut is not to be taken
-/// for the locator's jump to another layer, which drops the sample.
-inline constexpr double kSlitCells = 2.0;
+/// hand already was while it cut, and whose material is within this many cells of that cut, is on the cut, where
+/// the hand cut then (StrokeCutter::in_slit). Chosen on the razor re-cut of development strokes 1-300
+/// (cut_stability --recut; docs/cutting.md section 10): session 39 (the cut's point nearest the material) 1 cell
+/// left 23 exact-mode strokes differing, 1.5 16, 2 and 3 14, 50 without; session 41 (where the hand cut), all
+/// modes: 2 cells 8, 3 5, 4 3, 6 3, unbounded 3. A flap swings by a few cells; a piece that fell or a cloth
+/// that moved as a whole lies farther. Beyond StrokeOptions::exact_max_jump_cells (3) the first sample moved onto
+/// the cut from material that far is taken for the locator's jump and dropped, as such a jump is.
+inline constexpr double kSlitCells = 4.0;
+/// The current line's last stretch that in_slit leaves out (a hand going on is not coming back), in cells.
+inline constexpr double kSlitTailCells = 2.0;
 /// Grid mode: how many of the line's particles before a new staircase may begin a stretch along a cut made
 /// already (StrokeCutter::along_cut_made): a ring of one cell closes within a step or two.
 inline constexpr std::size_t kGridLookBack = 3;
@@ -231,14 +235,16 @@ class StrokeCutter {
   [[nodiscard]] bool closes_small_loop(const Eigen::Vector2d& from, const Eigen::Vector2d& to) const;
   /// Exact and delete modes: the parts of the segment from `from` to `to` (rest cells) that do not run along
   /// a cut already made (within kRecutCells for at least kRecutMinRunCells): going over a cut again
-  /// changes nothing.
-  [[nodiscard]] std::vector<std::pair<Eigen::Vector2d, Eigen::Vector2d>> recut_parts(const Eigen::Vector2d& from,
-                                                                                   const Eigen::Vector2d& to) const;
+  /// changes nothing. `direction`: the hand's motion (whether it turned back along the line it is cutting).
+  [[nodiscard]] std::vector<std::pair<Eigen::Vector2d, Eigen::Vector2d>> recut_parts(
+      const Eigen::Vector2d& from, const Eigen::Vector2d& to, const Eigen::Vector3f& direction) const;
   /// Whether `p` lies within `radius` cells of the samples of the cut so far (tracks_), without the current
-  /// line's last `tail_cells`. Tracks whose box is farther are skipped and the search stops at the first
+  /// line's last `tail_cells`, unless a segment of that last stretch runs against `against` (a path moving that
+  /// way has turned back along it). Tracks whose box is farther are skipped and the search stops at the first
   /// segment near enough: a session's cut history grows with every pass (an hour of the same stroke looped
   /// is ~800 tracks), and this runs for every sample.
-  [[nodiscard]] bool near_track(const Eigen::Vector2d& p, double radius, double tail_cells) const;
+  [[nodiscard]] bool near_track(const Eigen::Vector2d& p, double radius, double tail_cells,
+                                const Eigen::Vector2d& against = Eigen::Vector2d::Zero()) const;
   /// Grid mode: the first stretch run[i..j] (j after `first`, where the part not yet cut begins) between two
   /// particles on cuts, or on the cloth's edge, that those already join within one cell of it (cut_path_beside).
   [[nodiscard]] std::optional<std::pair<std::size_t, std::size_t>> along_cut_made(std::span<const GridCoord> run,
@@ -249,20 +255,26 @@ class StrokeCutter {
   [[nodiscard]] std::optional<std::vector<GridCoord>> cut_path_beside(std::span<const GridCoord> run) const;
   /// Appends a sample to the current line's track and grows the track's box.
   void extend_track(const Eigen::Vector2f& sample);
-  /// Appends where the hand was for a sample that joined the track (the track's hand path, in the world).
-  void extend_blade_track(const Eigen::Vector3f& hand);
+  /// Appends where the hand was for a sample that joined the track (the track's hand path, in the world), and
+  /// the point of the cloth it cut there (`uv`, rest cells).
+  void extend_blade_track(const Eigen::Vector3f& hand, const Eigen::Vector2d& uv);
   /// A hand moving by `motion` at `hand`: Earlier when within `radius_m` of where it was while a cut so far was
   /// made (blade_tracks_) without the current line's last `tail_m` of hand path; TurnedBack when only near that
-  /// last stretch while moving against it.
+  /// last stretch while moving against it. `uv`: where the blade cut when the hand was at the nearest point of
+  /// that hand path.
   enum class BladeTrackMatch { None, Earlier, TurnedBack };
-  [[nodiscard]] BladeTrackMatch near_blade_track(const Eigen::Vector3f& hand, const Eigen::Vector3f& motion,
-                                                 double radius_m, double tail_m) const;
+  struct BladeTrackHit {
+    BladeTrackMatch match = BladeTrackMatch::None;
+    Eigen::Vector2d uv = Eigen::Vector2d::Zero();
+  };
+  [[nodiscard]] BladeTrackHit near_blade_track(const Eigen::Vector3f& hand, const Eigen::Vector3f& motion,
+                                               double radius_m, double tail_m) const;
   /// `uv` moved onto the cut when the blade is back in its slit (kSlitCells), else `uv`.
   [[nodiscard]] Eigen::Vector2d in_slit(const Eigen::Vector2d& uv, const Eigen::Vector3f& hand,
                                         const Eigen::Vector3f& motion) const;
   /// Where a stroke crosses the cloth's edge next to a sample in the slit: onto the cut too, when within kSlitCells.
   [[nodiscard]] Eigen::Vector2d edge_in_slit(const Eigen::Vector2d& at_edge) const;
-  /// The nearest point of the cut paths so far (paths_, without the segment being cut).
+  /// The nearest point of the cut paths so far (paths_, without the segment being cut while a line is open).
   [[nodiscard]] Eigen::Vector2d nearest_on_cut(const Eigen::Vector2d& p) const;
   /// A length in cells: `cells`, or `metres` on this cloth if that is more.
   [[nodiscard]] double at_least(double cells, double metres) const;
@@ -284,6 +296,7 @@ class StrokeCutter {
   std::vector<Eigen::AlignedBox2f> track_boxes_;       // ... the box of each track's samples
   std::vector<Eigen::Vector2f> recent_;               // ... and those since the last point that joined the cut
   std::vector<std::vector<Eigen::Vector3f>> blade_tracks_;  // ... where the hand was for each track sample (world)
+  std::vector<std::vector<Eigen::Vector2f>> blade_uvs_;     // ... and where on the cloth it cut then (uv)
   std::vector<Eigen::AlignedBox3f> blade_boxes_;            // ... the box of each
   std::vector<Eigen::Vector3f> recent_hands_;               // ... and for each of recent_
   // Where the open line's history begins, and whether its cuts changed the cloth. A pass over cuts already made

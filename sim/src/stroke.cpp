@@ -806,15 +806,15 @@ bool StrokeCutter::near_track(const Eigen::Vector2d& p, double radius, double ta
   return false;
 }
 
-Eigen::Vector2d StrokeCutter::nearest_on_cut(const Eigen::Vector2d& p) const {
+Eigen::Vector2d StrokeCutter::nearest_on_cut(const Eigen::Vector2d& p, bool cutting) const {
   double best = std::numeric_limits<double>::infinity();
   Eigen::Vector2d at = p;
   for (std::size_t i = 0; i < paths_.size(); ++i) {
     const auto& path = paths_[i];
-    // The current path's last point is the end of the segment being cut (just recorded): leave it out. Between
-    // lines the last path is a finished cut, its last segment as much as the others (a hand back on the cloth
-    // where it left it lands on that segment).
-    const std::size_t end = i + 1 == paths_.size() && line_ ? path.size() - 1 : path.size();
+    // While a segment is being cut (recut_parts), the current path's last point is its end (just recorded):
+    // leave it out. Otherwise the last segment is cut already, as much as the others: a hand back on the cloth
+    // where it left it lands on it, and so does one turning back along the line it is cutting.
+    const std::size_t end = i + 1 == paths_.size() && cutting && line_ ? path.size() - 1 : path.size();
     for (std::size_t k = 1; k < end; ++k) {
       const auto meet = closest_points(p, p, path[k - 1].cast<double>(), path[k].cast<double>());
       if (meet.distance < best) {
@@ -876,8 +876,8 @@ std::vector<std::pair<Eigen::Vector2d, Eigen::Vector2d>> StrokeCutter::recut_par
     }
     int j = i;
     while (j + 1 <= n && !skip[static_cast<std::size_t>(j + 1)]) ++j;
-    const Eigen::Vector2d a = i > 0 ? nearest_on_cut(at(i - 1)) : from;
-    const Eigen::Vector2d b = j < n ? nearest_on_cut(at(j + 1)) : to;
+    const Eigen::Vector2d a = i > 0 ? nearest_on_cut(at(i - 1), true) : from;
+    const Eigen::Vector2d b = j < n ? nearest_on_cut(at(j + 1), true) : to;
     if ((b - a).norm() > 1e-9) parts.emplace_back(a, b);
     i = j + 1;
   }

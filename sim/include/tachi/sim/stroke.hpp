@@ -274,8 +274,8 @@ class StrokeCutter {
                                         const Eigen::Vector3f& motion) const;
   /// Where a stroke crosses the cloth's edge next to a sample in the slit: onto the cut too, when within kSlitCells.
   [[nodiscard]] Eigen::Vector2d edge_in_slit(const Eigen::Vector2d& at_edge) const;
-  /// The nearest point of the cut paths so far (paths_, without the segment being cut while a line is open).
-  [[nodiscard]] Eigen::Vector2d nearest_on_cut(const Eigen::Vector2d& p) const;
+  /// The nearest point of the cut paths so far (paths_; without the segment being cut when `cutting`).
+  [[nodiscard]] Eigen::Vector2d nearest_on_cut(const Eigen::Vector2d& p, bool cutting = false) const;
   /// A length in cells: `cells`, or `metres` on this cloth if that is more.
   [[nodiscard]] double at_least(double cells, double metres) const;
   void add_line_to_report(const std::vector<GridCoord>& line);

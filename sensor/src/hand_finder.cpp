@@ -442,6 +442,11 @@ struct HandFinder::Impl {
     }
     return readings > 0 && static_near > params.body_surround_share * readings;
   }
+  /// A new track's palm beyond the hand's depth band of its candidate's nearest reading `near_raw`
+  /// (max_new_palm_behind_nearest_m): measured on an arm running back from it, not on its hand.
+  bool behind_band(const Palm& palm, std::uint16_t near_raw) const {
+    return params.max_new_palm_behind_nearest_m > 0 && palm.z - model.metres(near_raw) > params.max_new_palm_behind_nearest_m;
+  }
   bool palm_sized(const Palm& palm) const {
     return palm.radius_m >= params.min_palm_radius_m && palm.radius_m <= params.max_palm_radius_m;
   }
@@ -1574,7 +1579,7 @@ bool HandFinder::Impl::arm_end_candidate(std::span<const std::uint16_t> raw, cv:
     return false;
   const auto new_palm = [&](const Palm& p) {
     return palm_accepted(p) && p.radius_m <= params.max_new_palm_radius_m && p.ridge_m <= params.max_palm_ridge_m && !is_dome(p) &&
-           !shoulders_below(p);
+           !shoulders_below(p) && !behind_band(p, near_raw);
   };
   if (!new_palm(palm)) {
     if (!params.second_look_near_nearest || params.palm_from_nearest_m <= 0) return false;
@@ -1709,7 +1714,7 @@ bool HandFinder::Impl::follow_component(std::span<const std::uint16_t> raw, int 
         (continuing || (palm.radius_m <= params.max_new_palm_radius_m && palm.ridge_m <= params.max_foreground_new_palm_ridge_m && !is_dome(palm) &&
                         !shoulders_below(palm) && !set_in_static_surface(palm) && ((palm.z <= params.max_acquire_depth_m && !take_over) ||
                          (palm.z <= params.max_track_depth_m && reaches_back(seed, near_raw, at_end))) &&
-                        !is_joint(seed, near_raw) && !nearest_at_border(arm_nearest) &&
+                        !is_joint(seed, near_raw) && !nearest_at_border(arm_nearest) && !behind_band(palm, near_raw) &&
                         !front_crosses_border_beyond_hand(seed, near_raw, at_end, palm)));
     if (jump || (!found && !continuing)) tracking = false;
     if (!found && !continuing && came_to_rest(component)) excluded = false;

@@ -187,6 +187,23 @@ TEST(RandomScene, AHeadOrAnElbowFacingTheSensorDoesNotStartATrack) {
   }
 }
 
+// Each seed's clip with nothing captured and within 1 cm, and a captured run of at least `run_without`
+// with the rule under test switched off in `without`; `same_tracked`: the rule refuses no hand frame
+// (as many visible frames tracked either way).
+void expect_nothing_captured_but_a_run_without(std::initializer_list<std::uint64_t> seeds, const HandFinderParams& without,
+                                               std::size_t run_without, bool same_tracked) {
+  for (const std::uint64_t seed : seeds) {
+    const auto with_rule = score_clip(random_scenario(seed));
+    const auto without_rule = score_clip(random_scenario(seed), without);
+    EXPECT_EQ(with_rule.captured, 0u) << "seed " << seed;
+    if (same_tracked) {
+      EXPECT_EQ(with_rule.tracked_visible, without_rule.tracked_visible) << "seed " << seed;
+    }
+    EXPECT_LE(with_rule.rms_m, 0.01) << "seed " << seed;
+    EXPECT_GE(without_rule.longest_captured_run, run_without) << "seed " << seed;
+  }
+}
+
 // A near user's upper arm or shoulder at the torso's depth is no hand. Tuning seeds 204 and 228 (session
 // 37, the hanging world): users 0.77 and 0.95 m away lower the hand to hang; the upper arm, moving beside a
 // torso that stood still, is foreground at the torso's depth and holds a palm-sized circle: it was taken
@@ -196,14 +213,7 @@ TEST(RandomScene, AHeadOrAnElbowFacingTheSensorDoesNotStartATrack) {
 TEST(RandomScene, AnUpperArmSetInTheTorsoDoesNotStartATrack) {
   HandFinderParams no_body_test;
   no_body_test.body_surround_share = 0;
-  for (const std::uint64_t seed : {204u, 228u}) {
-    const auto with_test = score_clip(random_scenario(seed));
-    const auto without = score_clip(random_scenario(seed), no_body_test);
-    EXPECT_EQ(with_test.captured, 0u) << "seed " << seed;
-    EXPECT_EQ(with_test.tracked_visible, without.tracked_visible) << "seed " << seed;  // the hand is not refused
-    EXPECT_LE(with_test.rms_m, 0.01) << "seed " << seed;
-    EXPECT_GE(without.longest_captured_run, 8u) << "seed " << seed;
-  }
+  expect_nothing_captured_but_a_run_without({204u, 228u}, no_body_test, 8, true);
 }
 
 // Tuning seed 251 (session 38): a near user moves the hand out of the image's side; the upper
@@ -389,15 +399,20 @@ TEST(RandomScene, AHeadWithShouldersBeneathItIsNotTakenForAHand) {
 // a user 1 m away, the same on its rise (the arm 21 cm off at frame 35): 28 of 44 without the test, 42
 // with it. (On the floating world seeds 4 and 139 showed it, 14 and 15 frames; in the hanging world their
 // clips track the same frames without the test, 50 of 53 and 47 of 47.) Measured from the last palm
-// whatever it was (jump_from_kept_course false), the frames are lost again, so this can fail.
+// whatever it was (jump_from_kept_course false), the frames are lost again, so this can fail. Session 41's
+// max_new_palm_behind_nearest_m refuses seed 80's glimpse itself (its one captured frame gone, 41 -> 42
+// tracked): for 80 the rule-off half lets the glimpse in too (that test at 0), as it was when this was written.
 TEST(RandomScene, AGlimpseOfTheHandDoesNotHoldItAwayAfterwards) {
   HandFinderParams from_last_palm;
   from_last_palm.jump_from_kept_course = false;
+  HandFinderParams glimpse_let_in = from_last_palm;
+  glimpse_let_in.max_new_palm_behind_nearest_m = 0;
   for (const std::uint64_t seed : {80u, 181u}) {
     const auto score = score_clip(random_scenario(seed));
     EXPECT_GE(score.tracked_ratio(), 0.9) << "seed " << seed;
     EXPECT_LE(score.longest_captured_run, 1u) << "seed " << seed;
-    EXPECT_LT(score_clip(random_scenario(seed), from_last_palm).tracked_ratio(), 0.75) << "seed " << seed;
+    const auto& without = seed == 80u ? glimpse_let_in : from_last_palm;
+    EXPECT_LT(score_clip(random_scenario(seed), without).tracked_ratio(), 0.75) << "seed " << seed;
   }
 }
 
@@ -472,6 +487,20 @@ TEST(RandomScene, AUserWhoPausedAtTheHandsDepthIsNotLearnedIntoTheBackground) {
   const auto without = score_clip(random_scenario(133), any_depth);
   EXPECT_EQ(with_rule.captured, 0u);
   EXPECT_GE(without.captured, 1u);
+}
+
+// Seeds 73 (tuning) and 497 (check), session 41: the search without a background refuses the hand (too
+// near the image's bottom, 73) or has lost it (swung down fast, 497) and tries the nearest readings behind
+// it, on its forearm; that candidate's palm, measured in its own plane, follows the plane of the arm running
+// back and lands on the forearm or upper arm 10-19 cm behind the candidate's nearest reading, 16-31 cm from
+// the hand (runs of 5 and 4 captured frames). A new track's palm lies no more than
+// max_new_palm_behind_nearest_m (0.10) behind its nearest reading; with that test off (0) the runs come
+// back, so this can fail. (307's palm, 7.9 cm behind, is under 0.10; 407 keeps one captured frame.)
+TEST(RandomScene, APalmMeasuredOnTheArmBehindTheCandidateDoesNotStartATrack) {
+  HandFinderParams any_depth;
+  any_depth.max_new_palm_behind_nearest_m = 0;
+  // The captured frames were counted as tracked: fewer tracked frames with the rule, not the same.
+  expect_nothing_captured_but_a_run_without({73u, 497u}, any_depth, 4, false);
 }
 
 TEST(ClipScore, CapturedIsFarFromTheHandOrAnyPointWhenNoHandIsRaised) {

@@ -104,10 +104,17 @@ int main(int argc, char** argv) {
               "tracked", "phant", "blob ms", "RMS mm", "tracked", "phant", "speedup");
   std::vector<double> all_ours, all_base;
   // Every rendered scenario (a folder with a ground truth), in name order.
+  std::error_code error;
   std::vector<std::string> names;
-  for (const auto& entry : std::filesystem::directory_iterator(dir))
+  for (const auto& entry : std::filesystem::directory_iterator(dir, error))
     if (std::filesystem::exists(entry.path() / "ground_truth.csv")) names.push_back(entry.path().filename().string());
   std::sort(names.begin(), names.end());
+  if (error || names.empty()) {
+    // Nothing to time (a tree whose recordings are another tree's, TACHI_RECORDINGS_FROM): no figures to print.
+    std::fprintf(stderr, "tachi-sensor-bench: %s: no recordings in it (folders with a ground_truth.csv)%s%s\n",
+                 dir.c_str(), error ? ": " : "", error ? error.message().c_str() : "");
+    return 1;
+  }
   for (const auto& name : names) {
     try {
       RecordingSource source(dir / name, Playback{0.0, false});

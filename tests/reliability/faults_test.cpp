@@ -102,6 +102,18 @@ TEST(BadFlags, TheBenchmarksAnswerHelp) {
   }
 }
 
+// tachi-sensor-bench on a folder without recordings (a tree that takes its recordings from another's,
+// TACHI_RECORDINGS_FROM, has an empty build/recordings) printed its header and crashed on the summary of no frames.
+TEST(BadFlags, TheSensorBenchNamesAFolderWithoutRecordings) {
+  tachi::test::ScratchDir dir{"bench_empty"};
+  const auto empty = tachi::test::run({kBin + "/tachi-sensor-bench", dir.path().string(), "1"}, 20s);
+  EXPECT_EQ(empty.exit_code, 1) << empty.out << empty.err;
+  EXPECT_NE(empty.err.find(dir.path().string() + ": no recordings in it"), std::string::npos) << empty.err;
+  const auto missing = tachi::test::run({kBin + "/tachi-sensor-bench", (dir.path() / "nope").string(), "1"}, 20s);
+  EXPECT_EQ(missing.exit_code, 2) << missing.out << missing.err;
+  EXPECT_NE(missing.err.find("recordings: Directory does not exist"), std::string::npos) << missing.err;
+}
+
 // Sends `signo` to a running child and returns how long it took to exit; the exit code must be 0.
 std::chrono::milliseconds signal_and_time_exit(ChildProcess& child, int signo) {
   const auto t0 = std::chrono::steady_clock::now();

@@ -848,8 +848,10 @@ std::vector<std::pair<Eigen::Vector2d, Eigen::Vector2d>> StrokeCutter::recut_par
   // hand decides that it turned (its motion against its last stretch of path, as near_blade_track), not the
   // points on the cloth: a worn blade drags the cloth where it enters, and the points located on it step back
   // along the line it is beginning while the hand goes on.
-  const auto& hands = blade_tracks_.empty() ? std::vector<Eigen::Vector3f>{} : blade_tracks_.back();
-  const bool hand_turned = line_ && hands.size() >= 2 && direction.dot(hands.back() - hands[hands.size() - 2]) < 0.0F;
+  // (No copy of the hand path: a conditional between it and an empty vector would be one.)
+  const std::vector<Eigen::Vector3f>* hands = blade_tracks_.empty() ? nullptr : &blade_tracks_.back();
+  const bool hand_turned = line_ && hands != nullptr && hands->size() >= 2 &&
+                           direction.dot(hands->back() - (*hands)[hands->size() - 2]) < 0.0F;
   const Eigen::Vector2d against = hand_turned ? d : Eigen::Vector2d::Zero();
   std::vector<char> on_cut(static_cast<std::size_t>(n) + 1);
   for (int i = 0; i <= n; ++i) on_cut[static_cast<std::size_t>(i)] = near_track(at(i), near, near, against);

@@ -649,7 +649,7 @@ std::optional<std::pair<std::size_t, std::size_t>> StrokeCutter::along_cut_made(
   return std::nullopt;
 }
 
-std::optional<std::vector<GridCoord>> StrokeCutter::cut_path_beside(std::span<const GridCoord> run) const {
+bool StrokeCutter::cut_path_beside(std::span<const GridCoord> run) const {
   // Breadth first along cut edges and the cloth's edge, through the particles within one cell of `run` (in a box
   // around it).
   const GridCoord from = run.front();
@@ -679,19 +679,16 @@ std::optional<std::vector<GridCoord>> StrokeCutter::cut_path_beside(std::span<co
       queue.push_back(h);
     }
   }
-  if (came_from[index(to)] == kUnseen) return std::nullopt;
+  if (came_from[index(to)] == kUnseen) return false;
+  // The path, walked back from `to` (its order does not matter here).
   std::vector<GridCoord> path{to};
   while (!(path.back() == from)) {
     const std::size_t k = came_from[index(path.back())];
     path.push_back({u0 + static_cast<int>(k % static_cast<std::size_t>(width)),
                     v0 + static_cast<int>(k / static_cast<std::size_t>(width))});
   }
-  std::reverse(path.begin(), path.end());
   // Both ways: every particle of the run within one cell of the path too (only slivers lie between them).
-  for (const GridCoord g : run) {
-    if (!within_one(path, g)) return std::nullopt;
-  }
-  return path;
+  return std::all_of(run.begin(), run.end(), [&](GridCoord g) { return within_one(path, g); });
 }
 
 void StrokeCutter::extend_track(const Eigen::Vector2f& sample) {

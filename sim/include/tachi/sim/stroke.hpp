@@ -249,10 +249,9 @@ class StrokeCutter {
   /// particles on cuts, or on the cloth's edge, that those already join within one cell of it (cut_path_beside).
   [[nodiscard]] std::optional<std::pair<std::size_t, std::size_t>> along_cut_made(std::span<const GridCoord> run,
                                                                                 std::size_t first) const;
-  /// The shortest path of cut edges (or the cloth's edge) from run's first particle to its last, through
-  /// particles within one cell of `run`, with every particle of `run` within one cell of it; nothing when there
-  /// is none.
-  [[nodiscard]] std::optional<std::vector<GridCoord>> cut_path_beside(std::span<const GridCoord> run) const;
+  /// Whether cut edges (or the cloth's edge) join run's first particle to its last by a shortest path through
+  /// particles within one cell of `run`, with every particle of `run` within one cell of that path.
+  [[nodiscard]] bool cut_path_beside(std::span<const GridCoord> run) const;
   /// Appends a sample to the current line's track and grows the track's box.
   void extend_track(const Eigen::Vector2f& sample);
   /// Appends where the hand was for a sample that joined the track (the track's hand path, in the world), and

@@ -484,9 +484,11 @@ void StrokeCutter::commit(GridCoord g, const Eigen::Vector2d& uv, const Eigen::V
   // of one slit). Such a point does not join the cut; the next one goes on from where the cut ends.
   // A segment wholly along cuts already made cuts nothing and closes no loop: the hand going back over its cut
   // runs along its own path, and its way back "closed" a loop with the cut just made at every commit, so the
-  // cut's end stayed at the turn and a later pass never cut the stretch the first pass left uncut there.
+  // cut's end stayed at the turn and a later pass never cut the stretch the first pass left uncut there. In exact
+  // mode too (since session 42): the end stayed at the turn until a point lay far enough off to close no small
+  // loop, and the chord from the turn to it cut a corner off the bends between (development stroke 565).
   if (follows_path() && path_end_ && closes_small_loop(*path_end_, to) &&
-      (options_.mode != CutMode::Delete || (to - *path_end_).norm() <= 1e-9 || !recut_parts(*path_end_, to, direction).empty())) {
+      ((to - *path_end_).norm() <= 1e-9 || !recut_parts(*path_end_, to, direction).empty())) {
     return;
   }
   // For the same reason a step shorter than the wobble does not join the cut either, unless it reaches the
@@ -907,6 +909,11 @@ bool StrokeCutter::closes_small_loop(const Eigen::Vector2d& from, const Eigen::V
     if (options_.mode == CutMode::Delete && k - 1 < path_cuts_.size() && path_cuts_[k - 1] == 0) continue;
     const auto meet = closest_points(from, to, a, b);
     if (meet.distance > kMeet) continue;
+    // Meeting only where it starts: the path came back onto itself there (a way back along the cut, joined in
+    // commit), which the step that got there was judged for; the new segment going on from it encloses nothing.
+    // Counted, every later segment "closed a loop" there and the cut stopped (a worn blade's knot, development
+    // stroke 246 moved by 1e-6 m: 0.25 m cut of the 0.65 m cutting it unmoved cuts).
+    if ((meet.on_first - from).norm() <= kMeet) continue;
     const double perimeter = walked + (b - meet.on_second).norm() + (meet.on_first - from).norm();
     if (perimeter < min_perimeter) return true;
   }

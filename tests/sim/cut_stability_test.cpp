@@ -139,6 +139,16 @@ TEST(CutStability, ABladeInItsSlitIsWhereItsHandCut) {
   expect_one_piece_gone_over_again({57U, 116U, 206U}, CutMode::Delete, "cut_stability_hand_delete");
 }
 
+// A way back along the cut joins the path whether or not it meets the path within the small-loop perimeter
+// (StrokeCutter::commit): it cuts nothing, so it bounds no island. Exact mode used to leave such a segment out, so
+// the path's end stayed at the turn until a later point lay far enough off to close no small loop, and the chord
+// from the turn to it cut across the bends between (development stroke 565: a corner off the first pass's bend
+// 1 cell from the turn). Development strokes 565 and 764, razor, exact, 32 x 32: 2 pieces gone there, back and
+// there again before session 42, 1 as once.
+TEST(CutStability, AWayBackAlongTheCutFollowsItFromTheTurn) {
+  expect_one_piece_gone_over_again({565U, 764U}, CutMode::Exact, "cut_stability_way_back");
+}
+
 // Random strokes 5000-5009 cut there, back and there again give the pieces cutting once gives, in every mode
 // (the report seeds' figures, which still miss, are in docs/cutting.md section 10).
 TEST(CutStability, GoingOverACutAgainChangesNothing) {

@@ -1041,7 +1041,36 @@ TopologyChange StrokeCutter::add_sample(const StrokeSample& sample, const ClothP
       }
       return true;
     };
-    if (pending_.size() >= 2 && !fits(point.uv)) {
+    // A hand that turns back: the pass ends at the sample farthest from the anchor, where a stroke ending there
+    // ends its cut (end_stroke). The fit does not see a turn: the samples on the way back lie along the chord,
+    // beyond its end, so they fit and the chord only shortens; the turn was never committed and the pass stopped
+    // up to max_lag_cells short of it (development stroke 826: a cut across the cloth ended 0.9 cell before the
+    // edge gone there, back and there, and the piece that cutting once separates did not fall). Once the hand has
+    // come back from the farthest pending sample by more than the backtrack the fit allows, and more than two
+    // samples within the tolerance on either side of the path can differ by (a trembling hand goes back and forth
+    // that much without turning: grid mode's 0.75-cell tolerance), that sample joins the cut and the way back goes
+    // on from it.
+    const auto turn = [&]() -> std::optional<std::size_t> {
+      std::optional<std::size_t> apex;
+      double farthest = 0.0;
+      for (std::size_t i = 0; i + 1 < pending_.size(); ++i) {
+        const double reach = (pending_[i].uv - anchor_).norm();
+        if (reach > farthest) {
+          farthest = reach;
+          apex = i;
+        }
+      }
+      if (!apex) return std::nullopt;
+      const Eigen::Vector2d out = (pending_[*apex].uv - anchor_) / farthest;
+      const double back = -(point.uv - pending_[*apex].uv).dot(out);
+      return back > std::max(backtrack_cells_, 2.0 * options_.tolerance_cells) ? apex : std::nullopt;
+    };
+    if (const auto apex = pending_.size() >= 2 ? turn() : std::nullopt) {
+      const Point keep = pending_[*apex];
+      commit(keep.grid, keep.uv, last_direction_, change);
+      anchor_ = keep.uv;
+      pending_.erase(pending_.begin(), pending_.begin() + static_cast<std::ptrdiff_t>(*apex) + 1);
+    } else if (pending_.size() >= 2 && !fits(point.uv)) {
       const Point keep = pending_[pending_.size() - 2];
       commit(keep.grid, keep.uv, last_direction_, change);
       anchor_ = keep.uv;

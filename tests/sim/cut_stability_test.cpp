@@ -16,6 +16,7 @@
 #include <sstream>
 #include <string>
 #include <unistd.h>
+#include <utility>
 
 namespace {
 
@@ -147,6 +148,24 @@ TEST(CutStability, ABladeInItsSlitIsWhereItsHandCut) {
 // there again before session 42, 1 as once.
 TEST(CutStability, AWayBackAlongTheCutFollowsItFromTheTurn) {
   expect_one_piece_gone_over_again({565U, 764U}, CutMode::Exact, "cut_stability_way_back");
+}
+
+// A pass ends where the hand turned back, as a stroke ending there does (StrokeCutter::add_sample's turn): the
+// chord fit never committed the turn, so the pass stopped up to 2 cells short of it. Development strokes 166 and
+// 826 cut across the cloth once and separate a piece (3 pieces); gone there, back and there the cut ended short
+// of the edge it reached (2 pieces). 530: a sliver where a later pass cut the stretch the first left uncut (2
+// pieces, 1 once). Razor, exact, 32 x 32, through the offline driver.
+TEST(CutStability, APassEndsWhereTheHandTurnedBack) {
+  const auto file = scratch("cut_stability_turn_apex");
+  for (const auto& [seed, pieces] : {std::pair{166U, 3U}, std::pair{826U, 3U}, std::pair{530U, 1U}}) {
+    SCOPED_TRACE("development stroke " + std::to_string(seed));
+    const auto stroke = random_stroke(seed);
+    const CutOutcome once = cut_outcome(stroke, Blade::Razor, CutMode::Exact, kGrid, file);
+    const CutOutcome again = cut_outcome(there_back_and_there(stroke), Blade::Razor, CutMode::Exact, kGrid, file);
+    EXPECT_EQ(once.pieces, pieces);
+    EXPECT_EQ(again.pieces, once.pieces);
+  }
+  std::filesystem::remove(file);
 }
 
 // Random strokes 5000-5009 cut there, back and there again give the pieces cutting once gives, in every mode

@@ -209,6 +209,7 @@ struct HandFinder::Impl {
   std::vector<std::uint16_t> nearest;  // per component: nearest reading, and where
   std::vector<cv::Point> nearest_at;
   std::vector<int> area;  // per component: cells
+  std::vector<cv::Rect> component_box;  // per component: its cells' bounding box on the grid (came_to_rest)
   std::vector<std::uint32_t> visited = std::vector<std::uint32_t>(kGridCells, 0);  // reaches_back's BFS
   std::uint32_t visit_generation = 0;
   std::vector<cv::Point> queue;
@@ -1735,11 +1736,14 @@ bool HandFinder::Impl::came_to_rest(int component) const {
   if (frames_since_seen >= (1 << 20) ||
       model.metres(nearest[static_cast<std::size_t>(component)]) + params.rest_nearer_than_hand_m > last_seen.z())
     return false;
+  // Only the component's bounding box: the whole grid was scanned for each refused component (19,200
+  // cells, where a refused thing holds a few hundred).
+  const cv::Rect& b = component_box[static_cast<std::size_t>(component)];
   int cells = 0, steady = 0;
-  for (int gy = 0; gy < kGridH; ++gy) {
+  for (int gy = b.y; gy < b.y + b.height; ++gy) {
     const int* l = labels.ptr<int>(gy);
     const std::size_t base = static_cast<std::size_t>(gy) * kGridW;
-    for (int gx = 0; gx < kGridW; ++gx) {
+    for (int gx = b.x; gx < b.x + b.width; ++gx) {
       if (l[gx] != component) continue;
       ++cells;
       steady += run_length[base + gx] >= params.rest_frames ? 1 : 0;
@@ -1776,6 +1780,8 @@ HandObservation HandFinder::Impl::find(std::span<const std::uint16_t> raw) {
   nearest.assign(static_cast<std::size_t>(n), kNoReading);
   nearest_at.assign(static_cast<std::size_t>(n), cv::Point());
   area.assign(static_cast<std::size_t>(n), 0);
+  // Corners (x0, y0) and (x1, y1), inclusive, held in a Rect's fields until made one below.
+  component_box.assign(static_cast<std::size_t>(n), cv::Rect(kGridW, kGridH, -1, -1));
   for (int gy = 0; gy < kGridH; ++gy) {
     const int* l = labels.ptr<int>(gy);
     const auto* g = grid.ptr<std::uint16_t>(gy);
@@ -1783,11 +1789,20 @@ HandObservation HandFinder::Impl::find(std::span<const std::uint16_t> raw) {
       if (l[gx] == 0) continue;
       const auto c = static_cast<std::size_t>(l[gx]);
       ++area[c];
+      cv::Rect& b = component_box[c];
+      b.x = std::min(b.x, gx);
+      b.width = std::max(b.width, gx);
+      b.y = std::min(b.y, gy);
+      b.height = std::max(b.height, gy);
       if (g[gx] < nearest[c]) {
         nearest[c] = g[gx];
         nearest_at[c] = {gx, gy};
       }
     }
+  }
+  for (cv::Rect& b : component_box) {
+    b.width = b.width - b.x + 1;
+    b.height = b.height - b.y + 1;
   }
   int chosen = 0;
   const bool continuing = tracking;

@@ -206,7 +206,6 @@ struct HandFinder::Impl {
   cv::Mat fg = cv::Mat(kGridH, kGridW, CV_8U);
   cv::Mat fg_open, labels, arm;
   cv::Mat candidate_mask, band_cells, band_region, front_cells;  // find_arm_end's candidates
-  cv::Mat refused_palms;  // find_arm_end: band regions of palms refused as no arm's end this frame (refused_palm)
   std::vector<std::uint16_t> nearest;  // per component: nearest reading, and where
   std::vector<cv::Point> nearest_at;
   std::vector<int> area;  // per component: cells
@@ -274,7 +273,6 @@ struct HandFinder::Impl {
     double bulge_min_per_m = 0;     ///< ... and how much along the flattest direction (1 / (2 R) for a sphere's cap)
     double bulge_view_cos = 0;      ///< ... and how squarely it faces the sensor (cosine to the line of sight)
   };
-  std::vector<Palm> refused_palm;  // find_arm_end: the palms of refused_palms
 
   HandObservation find(std::span<const std::uint16_t> raw);
   void update_background(const cv::Mat* exclude);
@@ -385,14 +383,6 @@ struct HandFinder::Impl {
   /// running back like an arm), and a hand is reported only whole in view anyway.
   /// The first grid column with readings: Kinect's invalid band at the left is no image.
   int left_border_cell() const { return (params.invalid_left_columns + kStep - 1) / kStep; }
-  /// Whether two grid masks (CV_8U, kGridH x kGridW, continuous) share a cell.
-  static bool overlaps(const cv::Mat& a, const cv::Mat& b) {
-    const std::uint8_t* pa = a.ptr<std::uint8_t>();
-    const std::uint8_t* pb = b.ptr<std::uint8_t>();
-    for (int i = 0; i < kGridCells; ++i)
-      if ((pa[i] & pb[i]) != 0) return true;
-    return false;
-  }
   bool touches_border(const cv::Rect& cells) const {
     const int left = left_border_cell();
     return cells.x <= left || cells.y <= 0 || cells.x + cells.width >= kGridW || cells.y + cells.height >= kGridH;
@@ -1488,24 +1478,10 @@ void HandFinder::Impl::band_cells_at(cv::Point seed, std::uint16_t near_raw, boo
 bool HandFinder::Impl::find_arm_end(std::span<const std::uint16_t> raw, Palm& palm, cv::Point& seed_out) {
   candidate_mask.create(kGridH, kGridW, CV_8U);
   candidate_mask.setTo(0);
-  refused_palms.create(kGridH, kGridW, CV_8U);
-  refused_palms.setTo(0);
-  refused_palm.clear();
   // One candidate: the grid cells within the depth band connected to the seed (masked as tried).
   const auto try_seed = [&](cv::Point seed, std::uint16_t near_raw) {
     cv::Rect box;
     band_cells_at(seed, near_raw, false, box);
-    // Its band holds a palm refused nearer as no arm's end (refuse_arm_of_refused_palm): a palm measured
-    // here is that palm, found again from its arm (which reaches back where the palm alone did not), or
-    // lies on that arm.
-    const bool holds_refused_palm = !refused_palm.empty() && overlaps(band_region, refused_palms);
-    const auto on_its_arm = [&] {
-      if (!holds_refused_palm) return false;
-      const Eigen::Vector3d at = model.back_project(palm.u, palm.v, palm.z);
-      for (const Palm& r : refused_palm)
-        if ((model.back_project(r.u, r.v, r.z) - at).norm() <= r.radius_m) return false;
-      return true;
-    };
     candidate_mask.setTo(255, band_region);
     // The nearest reading is a joint (an elbow pointing at the camera) and the arm's geodesic end
     // lies elsewhere: the candidate is the hand there, in a band around its own nearest reading
@@ -1517,11 +1493,11 @@ bool HandFinder::Impl::find_arm_end(std::span<const std::uint16_t> raw, Palm& pa
       cv::Rect end_box;
       band_cells_at(end.seed, end.near_raw, true, end_box);
       candidate_mask.setTo(255, band_region);
-      if (!arm_end_candidate(raw, end.seed, end.near_raw, end_box, true, palm) || on_its_arm()) return false;
+      if (!arm_end_candidate(raw, end.seed, end.near_raw, end_box, true, palm)) return false;
       seed_out = end.seed;
       return true;
     }
-    if (!arm_end_candidate(raw, seed, near_raw, box, false, palm) || on_its_arm()) return false;
+    if (!arm_end_candidate(raw, seed, near_raw, box, false, palm)) return false;
     seed_out = seed;
     return true;
   };
@@ -1560,8 +1536,6 @@ bool HandFinder::Impl::find_arm_end(std::span<const std::uint16_t> raw, Palm& pa
       }
     }
     candidate_mask.setTo(0);  // not there: the search below as if it had not been tried
-    if (!refused_palm.empty()) refused_palms.setTo(0);
-    refused_palm.clear();
   }
   // Otherwise the nearest readings first; before any hand was seen (a hand held up and still from the
   // first frame is part of the background), more of them.
@@ -1597,27 +1571,17 @@ bool HandFinder::Impl::arm_end_candidate(std::span<const std::uint16_t> raw, cv:
   const double w_m = box.width * kStep * z / k.fx, h_m = box.height * kStep * z / k.fy;
   if (std::max(w_m, h_m) < 0.05 || std::min(w_m, h_m) > 0.35) return false;
   if (z > params.max_track_depth_m) return false;  // nor here: beyond the room a user stands in
-  const auto new_palm = [&](const Palm& p) {
-    return palm_accepted(p) && p.radius_m <= params.max_new_palm_radius_m && p.ridge_m <= params.max_palm_ridge_m && !is_dome(p) &&
-           !shoulders_below(p) && !behind_band(p, near_raw);
-  };
   // What the border cuts is not taken: the candidate's front surface (within kFrontSurfaceM of
   // its nearest reading: a palm and its fingers, or the face of a box) must be whole in view. A
   // hand held against the chest keeps the torso out of it (4-8 cm behind).
   // The grid test first: it is cheap, the full-resolution measure is not.
-  if (front_touches_border(seed, near_raw, two_sided)) return false;
-  if (!reaches_back(seed, near_raw, two_sided)) {
-    // A palm, whole in view, that is no arm's end (held still before the chest): what lies behind it
-    // on the same region is its arm (refuse_arm_of_refused_palm).
-    // Measured into its own Palm: `palm` carries fields a measure does not set (as on main).
-    Palm refused;
-    if (params.refuse_arm_of_refused_palm && measure(raw, box, near_raw, seed, refused, two_sided, Candidate::kNewTrack) && new_palm(refused)) {
-      refused_palms.setTo(255, band_region);
-      refused_palm.push_back(refused);
-    }
+  if (front_touches_border(seed, near_raw, two_sided) || !reaches_back(seed, near_raw, two_sided) ||
+      !measure(raw, box, near_raw, seed, palm, two_sided, Candidate::kNewTrack))
     return false;
-  }
-  if (!measure(raw, box, near_raw, seed, palm, two_sided, Candidate::kNewTrack)) return false;
+  const auto new_palm = [&](const Palm& p) {
+    return palm_accepted(p) && p.radius_m <= params.max_new_palm_radius_m && p.ridge_m <= params.max_palm_ridge_m && !is_dome(p) &&
+           !shoulders_below(p) && !behind_band(p, near_raw);
+  };
   if (!new_palm(palm)) {
     if (!params.second_look_near_nearest || params.palm_from_nearest_m <= 0) return false;
     // The band's widest place was a limb (a tube: its ridge runs on) or round: a hand held up beside

@@ -273,6 +273,22 @@ struct HandFinder::Impl {
     double bulge_min_per_m = 0;     ///< ... and how much along the flattest direction (1 / (2 R) for a sphere's cap)
     double bulge_view_cos = 0;      ///< ... and how squarely it faces the sensor (cosine to the line of sight)
   };
+  /// find_arm_end: a candidate refused this frame as no arm's end (refuse_arm_of_refused_palm), its
+  /// palm measured only when a later candidate that holds its band region has passed.
+  struct RefusedArmEnd {
+    cv::Rect box;           // its band's cells' box (grid cells)
+    std::uint16_t near_raw = 0;
+    cv::Point seed;
+    bool two_sided = false;
+    cv::Mat region;         // its band region (CV_8U grid mask); kept allocated across frames
+    bool measured = false;  // palm and is_palm hold the measure
+    Palm palm;
+    bool is_palm = false;   // measured, and it passes a new track's palm tests
+    bool overlapped = false;  // scratch: the candidate being tried holds its region
+  };
+  std::vector<RefusedArmEnd> refused;  // the first refused_count are this frame's
+  std::size_t refused_count = 0;
+  cv::Mat refused_regions;  // the union of their regions
 
   HandObservation find(std::span<const std::uint16_t> raw);
   void update_background(const cv::Mat* exclude);
@@ -383,6 +399,25 @@ struct HandFinder::Impl {
   /// running back like an arm), and a hand is reported only whole in view anyway.
   /// The first grid column with readings: Kinect's invalid band at the left is no image.
   int left_border_cell() const { return (params.invalid_left_columns + kStep - 1) / kStep; }
+  /// Whether two grid masks (CV_8U, kGridH x kGridW) share a cell inside `cells`.
+  static bool overlaps(const cv::Mat& a, const cv::Mat& b, const cv::Rect& cells) {
+    for (int gy = cells.y; gy < cells.y + cells.height; ++gy) {
+      const std::uint8_t* pa = a.ptr<std::uint8_t>(gy);
+      const std::uint8_t* pb = b.ptr<std::uint8_t>(gy);
+      for (int gx = cells.x; gx < cells.x + cells.width; ++gx)
+        if ((pa[gx] & pb[gx]) != 0) return true;
+    }
+    return false;
+  }
+  /// A new track's palm tests, as arm_end_candidate asks them of a candidate with nearest reading near_raw.
+  bool new_track_palm(const Palm& p, std::uint16_t near_raw) const {
+    return palm_accepted(p) && p.radius_m <= params.max_new_palm_radius_m && p.ridge_m <= params.max_palm_ridge_m && !is_dome(p) &&
+           !shoulders_below(p) && !behind_band(p, near_raw);
+  }
+  /// refuse_arm_of_refused_palm: a candidate whose band held one of this frame's refused arm ends
+  /// (their `overlapped`, set when it was tried) and whose palm passed lies on the arm of such a palm
+  /// that passes a new track's tests, unless it is measured at one of those palms.
+  bool on_arm_of_refused_palm(std::span<const std::uint16_t> raw, const Palm& palm);
   bool touches_border(const cv::Rect& cells) const {
     const int left = left_border_cell();
     return cells.x <= left || cells.y <= 0 || cells.x + cells.width >= kGridW || cells.y + cells.height >= kGridH;
@@ -1478,10 +1513,21 @@ void HandFinder::Impl::band_cells_at(cv::Point seed, std::uint16_t near_raw, boo
 bool HandFinder::Impl::find_arm_end(std::span<const std::uint16_t> raw, Palm& palm, cv::Point& seed_out) {
   candidate_mask.create(kGridH, kGridW, CV_8U);
   candidate_mask.setTo(0);
+  refused_regions.create(kGridH, kGridW, CV_8U);
+  refused_regions.setTo(0);
+  refused_count = 0;
   // One candidate: the grid cells within the depth band connected to the seed (masked as tried).
   const auto try_seed = [&](cv::Point seed, std::uint16_t near_raw) {
     cv::Rect box;
     band_cells_at(seed, near_raw, false, box);
+    // Which arm ends refused nearer its band holds (refuse_arm_of_refused_palm): a palm that passes
+    // here is one of them found again from its arm, or lies on that arm. Their palms are measured
+    // only if it passes (on_arm_of_refused_palm).
+    bool holds_refused = false;
+    if (refused_count > 0 && overlaps(band_region, refused_regions, box))
+      for (std::size_t i = 0; i < refused_count; ++i)
+        holds_refused |= refused[i].overlapped = overlaps(band_region, refused[i].region, box);
+    const auto on_its_arm = [&] { return holds_refused && on_arm_of_refused_palm(raw, palm); };
     candidate_mask.setTo(255, band_region);
     // The nearest reading is a joint (an elbow pointing at the camera) and the arm's geodesic end
     // lies elsewhere: the candidate is the hand there, in a band around its own nearest reading
@@ -1493,11 +1539,11 @@ bool HandFinder::Impl::find_arm_end(std::span<const std::uint16_t> raw, Palm& pa
       cv::Rect end_box;
       band_cells_at(end.seed, end.near_raw, true, end_box);
       candidate_mask.setTo(255, band_region);
-      if (!arm_end_candidate(raw, end.seed, end.near_raw, end_box, true, palm)) return false;
+      if (!arm_end_candidate(raw, end.seed, end.near_raw, end_box, true, palm) || on_its_arm()) return false;
       seed_out = end.seed;
       return true;
     }
-    if (!arm_end_candidate(raw, seed, near_raw, box, false, palm)) return false;
+    if (!arm_end_candidate(raw, seed, near_raw, box, false, palm) || on_its_arm()) return false;
     seed_out = seed;
     return true;
   };
@@ -1536,6 +1582,8 @@ bool HandFinder::Impl::find_arm_end(std::span<const std::uint16_t> raw, Palm& pa
       }
     }
     candidate_mask.setTo(0);  // not there: the search below as if it had not been tried
+    if (refused_count > 0) refused_regions.setTo(0);
+    refused_count = 0;
   }
   // Otherwise the nearest readings first; before any hand was seen (a hand held up and still from the
   // first frame is part of the background), more of them.
@@ -1575,13 +1623,25 @@ bool HandFinder::Impl::arm_end_candidate(std::span<const std::uint16_t> raw, cv:
   // its nearest reading: a palm and its fingers, or the face of a box) must be whole in view. A
   // hand held against the chest keeps the torso out of it (4-8 cm behind).
   // The grid test first: it is cheap, the full-resolution measure is not.
-  if (front_touches_border(seed, near_raw, two_sided) || !reaches_back(seed, near_raw, two_sided) ||
-      !measure(raw, box, near_raw, seed, palm, two_sided, Candidate::kNewTrack))
+  if (front_touches_border(seed, near_raw, two_sided)) return false;
+  if (!reaches_back(seed, near_raw, two_sided)) {
+    // Whole in view but no arm's end (a hand held still before the chest, say): what lies behind it
+    // on the same region may be its arm (refuse_arm_of_refused_palm). Kept for a later candidate.
+    if (params.refuse_arm_of_refused_palm) {
+      if (refused.size() == refused_count) refused.emplace_back();
+      RefusedArmEnd& r = refused[refused_count++];
+      r.box = box;
+      r.near_raw = near_raw;
+      r.seed = seed;
+      r.two_sided = two_sided;
+      band_region.copyTo(r.region);
+      r.measured = r.is_palm = r.overlapped = false;
+      refused_regions.setTo(255, band_region);
+    }
     return false;
-  const auto new_palm = [&](const Palm& p) {
-    return palm_accepted(p) && p.radius_m <= params.max_new_palm_radius_m && p.ridge_m <= params.max_palm_ridge_m && !is_dome(p) &&
-           !shoulders_below(p) && !behind_band(p, near_raw);
-  };
+  }
+  if (!measure(raw, box, near_raw, seed, palm, two_sided, Candidate::kNewTrack)) return false;
+  const auto new_palm = [&](const Palm& p) { return new_track_palm(p, near_raw); };
   if (!new_palm(palm)) {
     if (!params.second_look_near_nearest || params.palm_from_nearest_m <= 0) return false;
     // The band's widest place was a limb (a tube: its ridge runs on) or round: a hand held up beside
@@ -1599,6 +1659,28 @@ bool HandFinder::Impl::arm_end_candidate(std::span<const std::uint16_t> raw, cv:
   }
   band_region.copyTo(arm);
   cv::dilate(arm, arm, kernel3);
+  return true;
+}
+
+bool HandFinder::Impl::on_arm_of_refused_palm(std::span<const std::uint16_t> raw, const Palm& palm) {
+  // Every refused palm is measured now (each once a frame): the candidate is taken when it is
+  // measured at any of them that passes a new track's tests, held or not.
+  bool holds_palm = false;
+  for (std::size_t i = 0; i < refused_count; ++i) {
+    RefusedArmEnd& r = refused[i];
+    if (!r.measured) {
+      r.measured = true;
+      r.palm = Palm{};  // a measure does not set every field
+      r.is_palm = measure(raw, r.box, r.near_raw, r.seed, r.palm, r.two_sided, Candidate::kNewTrack) && new_track_palm(r.palm, r.near_raw);
+    }
+    holds_palm |= r.is_palm && r.overlapped;
+  }
+  if (!holds_palm) return false;
+  const Eigen::Vector3d at = model.back_project(palm.u, palm.v, palm.z);
+  for (std::size_t i = 0; i < refused_count; ++i) {
+    const RefusedArmEnd& r = refused[i];
+    if (r.is_palm && (model.back_project(r.palm.u, r.palm.v, r.palm.z) - at).norm() <= r.palm.radius_m) return false;
+  }
   return true;
 }
 

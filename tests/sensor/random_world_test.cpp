@@ -503,6 +503,32 @@ TEST(RandomScene, APalmMeasuredOnTheArmBehindTheCandidateDoesNotStartATrack) {
   expect_nothing_captured_but_a_run_without({73u, 497u}, any_depth, 4, false);
 }
 
+// Tuning seed 307 (session 41's check range): the hand held still before the chest at 1.27 m from the
+// first frame (part of the background) is refused by the search as no arm's end (its surface does not
+// run arm_protrusion_m back); the next candidate, its forearm at 1.40 m, whose band holds that hand,
+// reaches back and was measured as a turned palm on the upper arm at 1.48 m, 25 cm from the hand: a run
+// of 15 captured frames (23 in all). A search candidate whose band holds a palm refused nearer as no
+// arm's end, measured elsewhere than that palm, is its arm (refuse_arm_of_refused_palm); with that off
+// the run comes back, so this can fail. The frames tracked on the hand (within 10 cm) are as many
+// either way: the rule refuses the arm, not the hand.
+TEST(RandomScene, TheArmOfAPalmRefusedNearerInTheSearchDoesNotStartATrack) {
+  HandFinderParams off;
+  off.refuse_arm_of_refused_palm = false;
+  const auto on_hand = [](const HandFinderParams& params, ClipScore& score) {
+    std::size_t frames = 0;
+    score = score_clip(random_scenario(307), params, [&](const GroundTruth& truth, const HandObservation& hand) {
+      if (truth.visible && hand.tracked && (hand.position_m.cast<double>() - truth.palm).norm() <= 0.10) ++frames;
+    });
+    return frames;
+  };
+  ClipScore with_rule, without_rule;
+  const std::size_t with_on_hand = on_hand({}, with_rule), without_on_hand = on_hand(off, without_rule);
+  EXPECT_LE(with_rule.longest_captured_run, 1u);
+  EXPECT_LE(with_rule.captured, 1u);
+  EXPECT_GE(with_on_hand, without_on_hand);
+  EXPECT_GE(without_rule.longest_captured_run, 15u);
+}
+
 TEST(ClipScore, CapturedIsFarFromTheHandOrAnyPointWhenNoHandIsRaised) {
   ClipScore score;
   std::size_t run = 0;

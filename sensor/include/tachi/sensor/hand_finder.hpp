@@ -244,6 +244,20 @@ struct HandFinderParams {
   /// shortens 407's to 1 frame; 307's palm, 7.9 cm behind, is not told from a good one by this.
   /// Chosen on seeds 1-300, checked on 301-600 (docs/sensor.md, session 41). <= 0: no such test.
   double max_new_palm_behind_nearest_m = 0.10;
+  /// The search without a background (find_arm_end) refuses a candidate whose band region (the
+  /// cells within hand_depth_band_m of its nearest untried reading, and every nearer cell joined to
+  /// them) holds a candidate refused earlier in the same frame as no arm's end (reaches_back) that
+  /// would have passed a new track's palm tests, where the candidate's palm is measured elsewhere
+  /// than that palm (its centre farther from the refused one's than that one's radius): the refused
+  /// palm is the front of the region, and the candidate lies behind it on the same thing, its arm. A
+  /// hand held still before the chest is no arm's end (its surface does not run arm_protrusion_m
+  /// back); its forearm, the next nearest, reaches back and was measured as a turned palm on the
+  /// upper arm (seed 307 of session 41's check range: a run of 15 captured frames). Measured at that
+  /// palm (the hand found again from its forearm, which reaches back), the candidate is taken as
+  /// before (seeds 179, 290: one and two good frames lost without that exception). The refused
+  /// palms are measured only when a candidate that holds one has passed every other test (measuring
+  /// each as it was refused tripled the bundled bench's p90). false: no such test.
+  bool refuse_arm_of_refused_palm = true;
 };
 
 struct HandObservation {

@@ -1792,14 +1792,24 @@ bool HandFinder::Impl::follow_component(std::span<const std::uint16_t> raw, int 
       palm.cut_by_border = false;
     }
     const bool jump = !take_over && (jumped(palm) || (continuing && off_course(palm)));
+    // A new track's palm shape: a palm-sized circle whose width does not run on along a limb, no dome.
+    const auto palm_shaped = [&] {
+      return palm.radius_m <= params.max_new_palm_radius_m && palm.ridge_m <= params.max_foreground_new_palm_ridge_m && !is_dome(palm) &&
+             !shoulders_below(palm);
+    };
+    // The second palm of a track begun a frame ago: no step to hold it to (max_unproven_step_m).
+    const bool unproven = continuing && params.max_unproven_step_m > 0 && !step_known && frames_since_seen == 1 &&
+                          (model.back_project(palm.u, palm.v, palm.z) - last_seen).norm() > params.max_unproven_step_m;
     const bool found =
         palm_accepted(palm) && !jump &&
-        (continuing || (palm.radius_m <= params.max_new_palm_radius_m && palm.ridge_m <= params.max_foreground_new_palm_ridge_m && !is_dome(palm) &&
-                        !shoulders_below(palm) && !set_in_static_surface(palm) && ((palm.z <= params.max_acquire_depth_m && !take_over) ||
-                         (palm.z <= params.max_track_depth_m && reaches_back(seed, near_raw, at_end))) &&
-                        !is_joint(seed, near_raw) && !nearest_at_border(arm_nearest) && !behind_band(palm, near_raw) &&
-                        !front_crosses_border_beyond_hand(seed, near_raw, at_end, palm)));
-    if (jump || (!found && !continuing)) tracking = false;
+        (continuing ? !unproven || palm_shaped()
+                    : palm_shaped() && !set_in_static_surface(palm) &&
+                          ((palm.z <= params.max_acquire_depth_m && !take_over) ||
+                           (palm.z <= params.max_track_depth_m && reaches_back(seed, near_raw, at_end))) &&
+                          !is_joint(seed, near_raw) && !nearest_at_border(arm_nearest) && !behind_band(palm, near_raw) &&
+                          !front_crosses_border_beyond_hand(seed, near_raw, at_end, palm));
+    // Refused as unproven, it is not followed on either: the next frame would take it as the same hand.
+    if (jump || (!found && (!continuing || unproven))) tracking = false;
     if (!found && !continuing && came_to_rest(component)) excluded = false;
     return found;
   }

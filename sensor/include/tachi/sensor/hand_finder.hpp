@@ -258,6 +258,16 @@ struct HandFinderParams {
   /// palms are measured only when a candidate that holds one has passed every other test (measuring
   /// each as it was refused tripled the bundled bench's p90). false: no such test.
   bool refuse_arm_of_refused_palm = true;
+  /// A track found a frame ago as a new one has no step yet, so off_course cannot hold its second
+  /// palm to a course: a followed palm farther than this from the first must be palm-shaped as a new
+  /// track's is (max_new_palm_radius_m, max_foreground_new_palm_ridge_m, no dome, no shoulders below),
+  /// and is otherwise refused and no longer followed. A hand moves a few cm a frame (1.2 m/s: 4 cm at
+  /// 30 Hz); a palm measured on the arm of a hand just acquired lay 10-20 cm from it, its ridge running
+  /// 10-22 cm along the arm (tuning seeds 3, 65, 126, 164, 181: one captured frame each, after which the
+  /// track was lost). Only the shape: held to every new-track test (is_joint, the acquisition depth),
+  /// fast hands' second palms (6-8 cm steps, ridges under 2 cm: seeds 41, 138, 259) were refused and
+  /// their tracks lost for up to 7 frames. <= 0: no such test.
+  double max_unproven_step_m = 0.06;
 };
 
 struct HandObservation {

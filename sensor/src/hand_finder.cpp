@@ -409,10 +409,15 @@ struct HandFinder::Impl {
     }
     return false;
   }
+  /// A new track's palm shape: a palm-sized circle whose width does not run on along a limb for more than
+  /// `max_ridge_m` (max_palm_ridge_m in the search, max_foreground_new_palm_ridge_m from the foreground), no
+  /// dome, no shoulders beneath it (a head).
+  bool new_track_shape(const Palm& p, double max_ridge_m) const {
+    return p.radius_m <= params.max_new_palm_radius_m && p.ridge_m <= max_ridge_m && !is_dome(p) && !shoulders_below(p);
+  }
   /// A new track's palm tests, as arm_end_candidate asks them of a candidate with nearest reading near_raw.
   bool new_track_palm(const Palm& p, std::uint16_t near_raw) const {
-    return palm_accepted(p) && p.radius_m <= params.max_new_palm_radius_m && p.ridge_m <= params.max_palm_ridge_m && !is_dome(p) &&
-           !shoulders_below(p) && !behind_band(p, near_raw);
+    return palm_accepted(p) && new_track_shape(p, params.max_palm_ridge_m) && !behind_band(p, near_raw);
   }
   /// refuse_arm_of_refused_palm: a candidate whose band held one of this frame's refused arm ends
   /// (their `overlapped`, set when it was tried) and whose palm passed lies on the arm of such a palm
@@ -1513,8 +1518,13 @@ void HandFinder::Impl::band_cells_at(cv::Point seed, std::uint16_t near_raw, boo
 bool HandFinder::Impl::find_arm_end(std::span<const std::uint16_t> raw, Palm& palm, cv::Point& seed_out) {
   candidate_mask.create(kGridH, kGridW, CV_8U);
   candidate_mask.setTo(0);
-  refused_regions.create(kGridH, kGridW, CV_8U);
-  refused_regions.setTo(0);
+  // refused_regions is all zero whenever refused_count is 0: cleared only after a frame that refused some.
+  if (refused_regions.empty()) {
+    refused_regions.create(kGridH, kGridW, CV_8U);
+    refused_regions.setTo(0);
+  } else if (refused_count > 0) {
+    refused_regions.setTo(0);
+  }
   refused_count = 0;
   // One candidate: the grid cells within the depth band connected to the seed (masked as tried).
   const auto try_seed = [&](cv::Point seed, std::uint16_t near_raw) {
@@ -1792,11 +1802,7 @@ bool HandFinder::Impl::follow_component(std::span<const std::uint16_t> raw, int 
       palm.cut_by_border = false;
     }
     const bool jump = !take_over && (jumped(palm) || (continuing && off_course(palm)));
-    // A new track's palm shape: a palm-sized circle whose width does not run on along a limb, no dome.
-    const auto palm_shaped = [&] {
-      return palm.radius_m <= params.max_new_palm_radius_m && palm.ridge_m <= params.max_foreground_new_palm_ridge_m && !is_dome(palm) &&
-             !shoulders_below(palm);
-    };
+    const auto palm_shaped = [&] { return new_track_shape(palm, params.max_foreground_new_palm_ridge_m); };
     // The second palm of a track begun a frame ago: no step to hold it to (max_unproven_step_m).
     const bool unproven = continuing && params.max_unproven_step_m > 0 && !step_known && frames_since_seen == 1 &&
                           (model.back_project(palm.u, palm.v, palm.z) - last_seen).norm() > params.max_unproven_step_m;

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <numbers>
 #include <vector>
 
 #include <Eigen/Eigenvalues>
@@ -76,6 +77,11 @@ cv::Point2d plateau_centre(const cv::Mat& dist, double peak, cv::Point at) {
   }
   return {su / sw, sv / sw};
 }
+
+/// The largest circle inscribed in the non-zero pixels of `region`: `dist` its distance transform
+/// (L2, 5x5 mask), `peak` the radius at `peak_at`, `centre` its sub-pixel centre (plateau_centre).
+/// False when no circle of 2 px fits.
+bool largest_inscribed_circle(const cv::Mat& region, cv::Mat& dist, double& peak, cv::Point& peak_at, cv::Point2d& centre);
 
 /// How far (pixels) from a distance transform's maximum `peak` at `at` the region stays nearly as
 /// wide (values >= kRidgeShare of the peak): a palm is a compact blob, its
@@ -184,6 +190,15 @@ void distance_peak(const cv::Mat& dist, double& peak, cv::Point& at) {
   at = {x, best_row};
   peak = row[x];
 }
+
+bool largest_inscribed_circle(const cv::Mat& region, cv::Mat& dist, double& peak, cv::Point& peak_at, cv::Point2d& centre) {
+  cv::distanceTransform(region, dist, cv::DIST_L2, cv::DIST_MASK_5);
+  peak = 0;
+  distance_peak(dist, peak, peak_at);
+  if (peak < 2.0) return false;
+  centre = plateau_centre(dist, peak, peak_at);
+  return true;
+}
 }  // namespace
 
 struct HandFinder::Impl {
@@ -268,6 +283,7 @@ struct HandFinder::Impl {
     double valid_fraction = 0;    ///< share of the circle with readings
     bool cut_by_border = false;   ///< the hand leaves the image within a palm diameter of the circle
     bool placed_by_model = false; ///< an edge-on palm: its centre placed by the hand's shape (lower confidence)
+    bool in_own_plane = false;    ///< measured in its own plane (measure_turned_palm): its circle is the palm face's already
     double ridge_m = 0;           ///< how far from the circle's centre the region stays nearly as wide (ridge_length)
     double bulge_significance = 0;  ///< how surely its readings bulge toward the sensor (measure_bulge) ...
     double bulge_min_per_m = 0;     ///< ... and how much along the flattest direction (1 / (2 R) for a sphere's cap)
@@ -370,6 +386,8 @@ struct HandFinder::Impl {
   bool make_plane_grid(const Roi& roi, const Plane& plane, PlaneGrid& out) const;
   bool measure_turned_palm(std::span<const std::uint16_t> raw, const Roi& roi, cv::Point seed, Plane plane, Palm& palm);
   bool measure_edge_on_palm(const Roi& roi, const Plane& hand_plane, Palm& palm);
+  Eigen::Vector3d palm_face_centre(std::span<const std::uint16_t> raw, const Palm& palm, const Eigen::Vector3d& at);
+  cv::Mat face_mask, face_dist;  // palm_face_centre's window (reallocated only when a larger one is needed)
   Eigen::Vector3d trimmed_major_axis(Eigen::Vector3d axis, Eigen::Vector3d mean);
   std::vector<double> off_axis;            // trimmed_major_axis's distances of the hand's readings from the axis
   bool arm_centre(const Roi& roi, const Eigen::Vector3d& hand_centre, const Eigen::Vector3d& hand_axis, Eigen::Vector3d& centre);
@@ -699,6 +717,7 @@ bool HandFinder::Impl::measure_in_band(std::span<const std::uint16_t> raw, const
   if (max_dist * z_near / k.fx < params.min_palm_radius_m && turned_palm()) {
     circle_px = palm.radius_m * k.fx / palm.z;
     palm.ridge_m = 0;  // measured in its own plane: the flattest palm-sized place, not a tube
+    palm.in_own_plane = true;
   } else {
     const double u = rx0 - 1 + centre.x, v = ry0 - 1 + centre.y;
     // Palm depth: median reading inside the palm circle.
@@ -757,6 +776,131 @@ bool HandFinder::Impl::measure_in_band(std::span<const std::uint16_t> raw, const
   const double crossing_m = std::max({top, bottom, left_edge, right_edge}) * static_cast<double>(palm.z) / k.fx;
   palm.cut_by_border = crossing_m >= params.border_cut_width_m && palm.radius_m < params.whole_palm_radius_m;
   return true;
+}
+
+/// The centre of the palm's face, for a palm measured by its silhouette's inscribed circle (`at`,
+/// the circle's centre at the median depth of its readings). A hand is a slab ~3 cm thick: turned
+/// by an angle a about an axis across the view, its silhouette gains the hand's side (t sin a wide)
+/// on one edge, so the silhouette's widest place lies ~(t / 2) sin a from the face's centre toward
+/// that side (measured on seeds 1-600: 5-10 mm at 30-60 degrees, along the turn, in every clip).
+/// The face is found as what a hand's side is not: the readings near the palm's plane. That plane
+/// is fitted to the circle's readings (total least squares, then refitted to those within
+/// the face band); the window's readings within the face band of it, connected to the circle, holes
+/// filled, give the face's inscribed circle, whose centre is taken onto the plane. Blended in
+/// between kFaceFromDeg and kFaceFullDeg of turn, so that the reported point moves continuously with
+/// the hand's turn; a palm facing the sensor keeps `at`.
+Eigen::Vector3d HandFinder::Impl::palm_face_centre(std::span<const std::uint16_t> raw, const Palm& palm,
+                                                   const Eigen::Vector3d& at) {
+  constexpr double kFaceBandM = 0.010;    // the face (palm, fingers' fronts, thumb) within this of its plane;
+                                          // the hand's side curves away behind it by up to its thickness
+  constexpr double kFaceBandSteps = 1.5;  // ... and within this many of Kinect's depth steps (13 mm at 2.15 m:
+                                          // a 1 cm band there frayed the face, and its circle wandered 1-3 cm)
+  constexpr double kFaceFromDeg = 10.0;   // turned less: the side is under ~2 mm wide, `at` kept
+  constexpr double kFaceFullDeg = 20.0;   // turned more: the face's centre taken whole
+  constexpr double kMaxFaceShiftM = 0.02; // half a hand's thickness: the side moves the widest place no more
+  const auto& k = model.intrinsics();
+  const double r_px = palm.radius_m * k.fx / palm.z;
+  if (!(r_px >= 2.0)) return at;
+  const double depth_step = 0.001 / std::abs(model.raw_at(palm.z + 0.001) - model.raw_at(palm.z));
+  const double band = std::max(kFaceBandM, kFaceBandSteps * depth_step);
+  // The plane of the readings within `radius` px of (cu, cv), within `band` of `near` when
+  // given. The circle lies inside the hand's region; a hole's reading from behind the hand is
+  // dropped by the depth gate and the refit. Every other row and column: a palm's circle holds
+  // ~150-1,700 of them, plenty for three unknowns, at a quarter of the cost.
+  const auto circle_plane = [&](double cu, double cv, double radius, const Plane* near, Plane& plane) {
+    const int x0 = std::max(0, static_cast<int>(std::floor(cu - radius))), x1 = std::min(kDepthWidth - 1, static_cast<int>(std::ceil(cu + radius)));
+    const int y0 = std::max(0, static_cast<int>(std::floor(cv - radius))), y1 = std::min(kDepthHeight - 1, static_cast<int>(std::ceil(cv + radius)));
+    Eigen::Matrix3d outer = Eigen::Matrix3d::Zero();
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+    int count = 0;
+    const double offset = near ? near->centroid.dot(near->normal) : 0.0;
+    for (int y = y0 + (y0 & 1); y <= y1; y += 2) {
+      const std::uint16_t* row = raw.data() + static_cast<std::size_t>(y) * kDepthWidth;
+      for (int x = x0 + (x0 & 1); x <= x1; x += 2) {
+        if ((x - cu) * (x - cu) + (y - cv) * (y - cv) > radius * radius || row[x] >= kNoReading) continue;
+        const double z = model.metres(row[x]);
+        if (std::abs(z - palm.z) > palm.radius_m + 0.02) continue;
+        const Eigen::Vector3d q = model.back_project(x, y, z);
+        if (near && std::abs(q.dot(near->normal) - offset) > band) continue;
+        outer += q * q.transpose();
+        sum += q;
+        ++count;
+      }
+    }
+    return plane_through(outer, sum, count, plane);
+  };
+  Plane rough, plane;
+  if (!circle_plane(palm.u, palm.v, r_px, nullptr, rough) || !circle_plane(palm.u, palm.v, r_px, &rough, plane)) return at;
+  const double view_cos = std::clamp(-plane.normal.dot(plane.centroid.normalized()), -1.0, 1.0);
+  const double turn_deg = std::acos(view_cos) * 180.0 / std::numbers::pi;
+  const double f = std::clamp((turn_deg - kFaceFromDeg) / (kFaceFullDeg - kFaceFromDeg), 0.0, 1.0);
+  const double weight = f * f * (3 - 2 * f);
+  if (weight <= 0) return at;
+  // The face's readings in a window 1.5 palm radii around the circle, with a zero border: the face's
+  // circle lies within a side's width (clamped below to half a radius) of the silhouette's.
+  const int half = static_cast<int>(std::ceil(1.5 * r_px)) + 2;
+  const int wx0 = std::max(0, static_cast<int>(palm.u) - half), wx1 = std::min(kDepthWidth, static_cast<int>(palm.u) + half + 1);
+  const int wy0 = std::max(0, static_cast<int>(palm.v) - half), wy1 = std::min(kDepthHeight, static_cast<int>(palm.v) + half + 1);
+  const int w = wx1 - wx0 + 2, h = wy1 - wy0 + 2;
+  if (face_mask.rows < h || face_mask.cols < w) {
+    face_mask.create(std::max(h, face_mask.rows), std::max(w, face_mask.cols), CV_8U);
+    face_dist.create(face_mask.rows, face_mask.cols, CV_32F);
+  }
+  cv::Mat mask = face_mask(cv::Rect(0, 0, w, h)), dist = face_dist(cv::Rect(0, 0, w, h));
+  mask.setTo(0);
+  const double offset = plane.centroid.dot(plane.normal);
+  for (int y = wy0; y < wy1; ++y) {
+    const std::uint16_t* row = raw.data() + static_cast<std::size_t>(y) * kDepthWidth;
+    auto* m = mask.ptr<std::uint8_t>(y - wy0 + 1) + 1;
+    const double ray_y = (y - k.cy) / k.fy;
+    for (int x = wx0; x < wx1; ++x) {
+      if (row[x] >= kNoReading) continue;
+      const double z = model.metres(row[x]);
+      const double off = z * (plane.normal.x() * (x - k.cx) / k.fx + plane.normal.y() * ray_y + plane.normal.z()) - offset;
+      if (std::abs(off) <= band) m[x - wx0] = 255;
+    }
+  }
+  // Connected to the circle's centre (or the face reading nearest it within the circle).
+  cv::Point seed(static_cast<int>(std::lround(palm.u)) - wx0 + 1, static_cast<int>(std::lround(palm.v)) - wy0 + 1);
+  if (mask.at<std::uint8_t>(seed) != 255) {
+    double best = r_px * r_px / 4;
+    bool found = false;
+    const int reach = static_cast<int>(r_px / 2);
+    for (int dy = -reach; dy <= reach; ++dy)
+      for (int dx = -reach; dx <= reach; ++dx) {
+        const cv::Point q = seed + cv::Point(dx, dy);
+        if (q.x < 1 || q.y < 1 || q.x >= w - 1 || q.y >= h - 1 || mask.at<std::uint8_t>(q) != 255) continue;
+        if (const double d2 = dx * dx + dy * dy; d2 < best) best = d2, seed = q, found = true;
+      }
+    if (!found) return at;
+  }
+  cv::floodFill(mask, seed, cv::Scalar(128));
+  cv::compare(mask, 128, mask, cv::CMP_EQ);
+  // Holes (dropouts, a finger's gap closed all round) count as face: the outside flooded from the border.
+  cv::floodFill(mask, cv::Point(0, 0), cv::Scalar(128));
+  cv::compare(mask, 128, mask, cv::CMP_NE);
+  double peak = 0;
+  cv::Point peak_at;
+  cv::Point2d c;
+  if (!largest_inscribed_circle(mask, dist, peak, peak_at, c)) return at;
+  const double u = wx0 - 1 + c.x, v = wy0 - 1 + c.y;
+  // The face's circle is the silhouette's less the hand's side: it lies within a radius of it. Farther,
+  // it is some other flat place (the fingers' block): `at` kept.
+  if ((u - palm.u) * (u - palm.u) + (v - palm.v) * (v - palm.v) > r_px * r_px) return at;
+  // The plane again, of the face's circle alone (the silhouette's held some of the hand's side).
+  Plane face_plane;
+  if (circle_plane(u, v, peak, &plane, face_plane)) plane = face_plane;
+  const double face_offset = plane.centroid.dot(plane.normal);
+  const Eigen::Vector3d ray = model.back_project(u, v, 1.0);
+  const double ray_along_normal = ray.dot(plane.normal);
+  if (std::abs(ray_along_normal) < 1e-6) return at;
+  const Eigen::Vector3d face = ray * (face_offset / ray_along_normal);
+  if (!face.allFinite() || face.z() <= 0) return at;
+  // Farther than a side can move it, the face's circle is partly some other flat place: moved only
+  // as far as a side could (clamped, not refused, so the point moves continuously).
+  Eigen::Vector3d shift = face - at;
+  if (const double length = shift.norm(); length > kMaxFaceShiftM) shift *= kMaxFaceShiftM / length;
+  return at + weight * shift;
 }
 
 /// How much the palm circle's readings (palm_pixels) bulge toward the sensor. A sphere's cap of
@@ -988,12 +1132,10 @@ bool HandFinder::Impl::measure_turned_palm(std::span<const std::uint16_t> raw, c
   if (!make_plane_grid(roi, plane, palm_grid)) return false;
   cv::warpPerspective(roi_closed, rectified_closed, palm_grid.grid_to_roi, palm_grid.size, cv::INTER_NEAREST | cv::WARP_INVERSE_MAP,
                       cv::BORDER_CONSTANT, cv::Scalar(0));
-  cv::distanceTransform(rectified_closed, rectified_dist, cv::DIST_L2, cv::DIST_MASK_5);
   double peak = 0;
   cv::Point peak_at;
-  distance_peak(rectified_dist, peak, peak_at);
-  if (peak < 2.0) return false;
-  const cv::Point2d c = plateau_centre(rectified_dist, peak, peak_at);
+  cv::Point2d c;
+  if (!largest_inscribed_circle(rectified_closed, rectified_dist, peak, peak_at, c)) return false;
   const Eigen::Vector3d centre = palm_grid.point(c.x, c.y);
   if (centre.z() <= 0) return false;
   // Seen more obliquely than this, the palm is a strip narrower than the overlapping fingers and
@@ -1981,9 +2123,18 @@ HandObservation HandFinder::Impl::find(std::span<const std::uint16_t> raw) {
   last_seen_cell = {static_cast<int>(palm.u) / kStep, static_cast<int>(palm.v) / kStep};
   frames_since_seen = 0;
   out.tracked = true;
-  out.position_m = p.cast<float>();
+  // Reported: the palm face's centre. The track above keeps the silhouette's circle, which every
+  // test was tuned on; the two differ only for a palm turned from the sensor.
+  const Eigen::Vector3d face =
+      !params.report_palm_face || palm.in_own_plane || palm.placed_by_model ? p : palm_face_centre(raw, palm, p);
+  out.position_m = face.cast<float>();
   out.u = static_cast<float>(palm.u);
   out.v = static_cast<float>(palm.v);
+  if (face != p) {
+    const Eigen::Vector2d face_px = model.project(face);
+    out.u = static_cast<float>(face_px.x());
+    out.v = static_cast<float>(face_px.y());
+  }
   out.palm_radius_m = static_cast<float>(palm.radius_m);
   const double size_score = std::exp(-std::pow((palm.radius_m - params.palm_radius_m) / 0.02, 2));
   out.confidence = static_cast<float>(std::clamp(palm.valid_fraction, 0.0, 1.0) * (0.5 + 0.5 * size_score));

@@ -268,6 +268,12 @@ struct HandFinderParams {
   /// fast hands' second palms (6-8 cm steps, ridges under 2 cm: seeds 41, 138, 259) were refused and
   /// their tracks lost for up to 7 frames. <= 0: no such test.
   double max_unproven_step_m = 0.06;
+  /// Report the centre of the palm's face rather than of the hand's silhouette (palm_face_centre in
+  /// hand_finder.cpp). A palm turned from the sensor shows the hand's side beside it, and the
+  /// silhouette's widest place lay 5-10 mm toward that side at 30-60 degrees of turn (seeds 1-600).
+  /// Only the reported position changes: the track's tests keep the silhouette's circle. false: as
+  /// before session 44.
+  bool report_palm_face = true;
 };
 
 struct HandObservation {

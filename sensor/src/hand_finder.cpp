@@ -782,7 +782,8 @@ bool HandFinder::Impl::measure_in_band(std::span<const std::uint16_t> raw, const
 /// the circle's centre at the median depth of its readings). A hand is a slab ~3 cm thick: turned
 /// by an angle a about an axis across the view, its silhouette gains the hand's side (t sin a wide)
 /// on one edge, so the silhouette's widest place lies ~(t / 2) sin a from the face's centre toward
-/// that side (measured on seeds 1-600: 5-10 mm at 30-60 degrees, along the turn, in every clip).
+/// that side (measured on seeds 1-300: typically 5-10 mm at 30-60 degrees; 64 of the 66 clips turned
+/// 15 degrees or more leaned along the turn).
 /// The face is found as what a hand's side is not: the readings near the palm's plane. That plane
 /// is fitted to the circle's readings (total least squares, then refitted to those within
 /// the face band); the window's readings within the face band of it, connected to the circle, holes

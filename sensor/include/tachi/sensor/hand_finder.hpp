@@ -270,7 +270,7 @@ struct HandFinderParams {
   double max_unproven_step_m = 0.06;
   /// Report the centre of the palm's face rather than of the hand's silhouette (palm_face_centre in
   /// hand_finder.cpp). A palm turned from the sensor shows the hand's side beside it, and the
-  /// silhouette's widest place lay 5-10 mm toward that side at 30-60 degrees of turn (seeds 1-600).
+  /// silhouette's widest place lay typically 5-10 mm toward that side at 30-60 degrees of turn (seeds 1-300).
   /// Only the reported position changes: the track's tests keep the silhouette's circle. false: as
   /// before session 44.
   bool report_palm_face = true;

@@ -78,6 +78,11 @@ cv::Point2d plateau_centre(const cv::Mat& dist, double peak, cv::Point at) {
   return {su / sw, sv / sw};
 }
 
+/// `filled` = `region` (a mask with a zero border) with its holes filled: the outside flooded from
+/// the border, whatever it cannot reach is region or hole. Gaps between fingers open to the
+/// outside, so they stay open. `region` and `filled` may be the same image.
+void fill_holes(const cv::Mat& region, cv::Mat& filled);
+
 /// The largest circle inscribed in the non-zero pixels of `region`: `dist` its distance transform
 /// (L2, 5x5 mask), `peak` the radius at `peak_at`, `centre` its sub-pixel centre (plateau_centre).
 /// False when no circle of 2 px fits.
@@ -189,6 +194,12 @@ void distance_peak(const cv::Mat& dist, double& peak, cv::Point& at) {
   while (x + 1 < dist.cols && std::bit_cast<std::int32_t>(row[x]) != best) ++x;
   at = {x, best_row};
   peak = row[x];
+}
+
+void fill_holes(const cv::Mat& region, cv::Mat& filled) {
+  if (filled.data != region.data) region.copyTo(filled);
+  cv::floodFill(filled, cv::Point(0, 0), cv::Scalar(128));
+  cv::compare(filled, 128, filled, cv::CMP_NE);
 }
 
 bool largest_inscribed_circle(const cv::Mat& region, cv::Mat& dist, double& peak, cv::Point& peak_at, cv::Point2d& centre) {
@@ -387,7 +398,6 @@ struct HandFinder::Impl {
   bool measure_turned_palm(std::span<const std::uint16_t> raw, const Roi& roi, cv::Point seed, Plane plane, Palm& palm);
   bool measure_edge_on_palm(const Roi& roi, const Plane& hand_plane, Palm& palm);
   Eigen::Vector3d palm_face_centre(std::span<const std::uint16_t> raw, const Palm& palm, const Eigen::Vector3d& at);
-  cv::Mat face_mask, face_dist;  // palm_face_centre's window (reallocated only when a larger one is needed)
   Eigen::Vector3d trimmed_major_axis(Eigen::Vector3d axis, Eigen::Vector3d mean);
   std::vector<double> off_axis;            // trimmed_major_axis's distances of the hand's readings from the axis
   bool arm_centre(const Roi& roi, const Eigen::Vector3d& hand_centre, const Eigen::Vector3d& hand_axis, Eigen::Vector3d& centre);
@@ -656,12 +666,9 @@ bool HandFinder::Impl::measure_in_band(std::span<const std::uint16_t> raw, const
   ry1 = ry0 + filled.height;
   roi_closed = roi_closed_buffer(cv::Rect(0, 0, hand_rect.width, hand_rect.height));
   roi_dist = roi_dist_buffer(cv::Rect(0, 0, hand_rect.width, hand_rect.height));
-  // Holes in the hand (dropouts with hand all around) count as hand: flood the outside from the
-  // zero border; whatever it cannot reach is hand or hole. Gaps between fingers open to the
-  // outside, so fingers stay apart and do not widen the palm.
-  roi_mask.copyTo(roi_closed);
-  cv::floodFill(roi_closed, cv::Point(0, 0), cv::Scalar(128));
-  cv::compare(roi_closed, 128, roi_closed, cv::CMP_NE);
+  // Holes in the hand (dropouts with hand all around) count as hand; fingers stay apart and do not
+  // widen the palm.
+  fill_holes(roi_mask, roi_closed);
   cv::distanceTransform(roi_closed, roi_dist, cv::DIST_L2, cv::DIST_MASK_5);
   // The palm: the region's widest place; for a followed hand, the widest place near the seed
   // (params.palm_from_nearest_m) unless that holds no palm-sized circle and the region's widest
@@ -843,24 +850,11 @@ Eigen::Vector3d HandFinder::Impl::palm_face_centre(std::span<const std::uint16_t
   const int wx0 = std::max(0, static_cast<int>(palm.u) - half), wx1 = std::min(kDepthWidth, static_cast<int>(palm.u) + half + 1);
   const int wy0 = std::max(0, static_cast<int>(palm.v) - half), wy1 = std::min(kDepthHeight, static_cast<int>(palm.v) + half + 1);
   const int w = wx1 - wx0 + 2, h = wy1 - wy0 + 2;
-  if (face_mask.rows < h || face_mask.cols < w) {
-    face_mask.create(std::max(h, face_mask.rows), std::max(w, face_mask.cols), CV_8U);
-    face_dist.create(face_mask.rows, face_mask.cols, CV_32F);
-  }
-  cv::Mat mask = face_mask(cv::Rect(0, 0, w, h)), dist = face_dist(cv::Rect(0, 0, w, h));
-  mask.setTo(0);
-  const double offset = plane.centroid.dot(plane.normal);
-  for (int y = wy0; y < wy1; ++y) {
-    const std::uint16_t* row = raw.data() + static_cast<std::size_t>(y) * kDepthWidth;
-    auto* m = mask.ptr<std::uint8_t>(y - wy0 + 1) + 1;
-    const double ray_y = (y - k.cy) / k.fy;
-    for (int x = wx0; x < wx1; ++x) {
-      if (row[x] >= kNoReading) continue;
-      const double z = model.metres(row[x]);
-      const double off = z * (plane.normal.x() * (x - k.cx) / k.fx + plane.normal.y() * ray_y + plane.normal.z()) - offset;
-      if (std::abs(off) <= band) m[x - wx0] = 255;
-    }
-  }
+  // The frame-sized buffers' views, free once the frame's palm is chosen.
+  roi_mask = roi_mask_buffer(cv::Rect(0, 0, w, h));
+  roi_dist = roi_dist_buffer(cv::Rect(0, 0, w, h));
+  plane_band_mask(raw, Roi{wx0, wy0, wx1, wy1}, plane, band);
+  cv::Mat& mask = roi_mask;
   // Connected to the circle's centre (or the face reading nearest it within the circle).
   cv::Point seed(static_cast<int>(std::lround(palm.u)) - wx0 + 1, static_cast<int>(std::lround(palm.v)) - wy0 + 1);
   if (mask.at<std::uint8_t>(seed) != 255) {
@@ -877,13 +871,11 @@ Eigen::Vector3d HandFinder::Impl::palm_face_centre(std::span<const std::uint16_t
   }
   cv::floodFill(mask, seed, cv::Scalar(128));
   cv::compare(mask, 128, mask, cv::CMP_EQ);
-  // Holes (dropouts, a finger's gap closed all round) count as face: the outside flooded from the border.
-  cv::floodFill(mask, cv::Point(0, 0), cv::Scalar(128));
-  cv::compare(mask, 128, mask, cv::CMP_NE);
+  fill_holes(mask, mask);  // dropouts, a finger's gap closed all round
   double peak = 0;
   cv::Point peak_at;
   cv::Point2d c;
-  if (!largest_inscribed_circle(mask, dist, peak, peak_at, c)) return at;
+  if (!largest_inscribed_circle(mask, roi_dist, peak, peak_at, c)) return at;
   const double u = wx0 - 1 + c.x, v = wy0 - 1 + c.y;
   // The face's circle is the silhouette's less the hand's side: it lies within a radius of it. Farther,
   // it is some other flat place (the fingers' block): `at` kept.
@@ -1127,9 +1119,7 @@ bool HandFinder::Impl::measure_turned_palm(std::span<const std::uint16_t> raw, c
   // Its centre: the largest inscribed circle of the flat readings (holes filled) in the plane.
   PlaneGrid palm_grid;
   select_near_plane(plane, kPalmBandM, &palm_at, kPalmSearchM, true);
-  roi_mask.copyTo(roi_closed);
-  cv::floodFill(roi_closed, cv::Point(0, 0), cv::Scalar(128));
-  cv::compare(roi_closed, 128, roi_closed, cv::CMP_NE);
+  fill_holes(roi_mask, roi_closed);
   if (!make_plane_grid(roi, plane, palm_grid)) return false;
   cv::warpPerspective(roi_closed, rectified_closed, palm_grid.grid_to_roi, palm_grid.size, cv::INTER_NEAREST | cv::WARP_INVERSE_MAP,
                       cv::BORDER_CONSTANT, cv::Scalar(0));

@@ -42,8 +42,13 @@ constexpr double kMaxPlacedViewCos = 0.707;  // cos 45 degrees: a palm seen more
 constexpr double kTipToPalmCentreM = 0.12;   // the hand's far end (its readings' 99.5th percentile along
                                              // the hand) to the palm centre; see measure_edge_on_palm
 constexpr double kTipQuantile = 0.995;       // the far end: robust to a few stray readings
-constexpr double kEdgeQuantile = 0.99;       // the palm's far edge, likewise
 constexpr double kPalmHalfLengthM = 0.045;   // the palm spans this either side of its centre along the hand
+constexpr double kEdgeSliceM = 0.01;         // the palm's far edge is taken in slices this long along the hand ...
+constexpr int kEdgeSlices = static_cast<int>(2 * kPalmHalfLengthM / kEdgeSliceM + 0.5);  // ... over its stretch
+constexpr double kEdgeQuantile = 0.99;       // ... each slice's edge: robust to a stray reading
+constexpr int kMinSliceReadings = 5;         // ... a slice with fewer readings has no edge
+constexpr int kMinEdgeSlices = 3;            // ... with fewer slices, the whole stretch's edge:
+constexpr double kWholeEdgeQuantile = 0.99;  // ... robust to a few stray readings
 constexpr double kArmSearchM = 0.25;         // the forearm: the surface that runs on from the hand, this near it
 constexpr double kArmAxisM = 0.08;           // ... and this near the hand's axis (a forearm's radius ~2.8 cm, its wrist 3.4 cm behind the palm)
 constexpr double kAxisKeptShare = 0.8;       // the hand's axis: refitted to this share of its readings nearest it ...
@@ -403,6 +408,8 @@ struct HandFinder::Impl {
   bool arm_centre(const Roi& roi, const Eigen::Vector3d& hand_centre, const Eigen::Vector3d& hand_axis, Eigen::Vector3d& centre);
   std::vector<double> along;               // measure_edge_on_palm's coordinates of the hand's readings
   std::vector<std::size_t> palm_stretch;   // ... and the palm's stretch of them
+  std::vector<std::pair<int, double>> sliced;  // ... its flat readings' slices along it and their far-side coordinates
+  std::vector<double> slice_centres;           // ... and the centre each slice's far edge gives
   cv::Mat rectified_closed, rectified_mask, rectified_dist, rectified_cover;  // measure_turned_palm's view of the palm plane
   cv::Mat roi_hand;  // measure_turned_palm's hand region (a view of roi_hand_buffer)
   struct HandPoint {
@@ -1170,10 +1177,11 @@ bool HandFinder::Impl::measure_turned_palm(std::span<const std::uint16_t> raw, c
 ///    the hand's far end (the synthetic hand's middle fingertip is 12.6 cm from the palm centre, an
 ///    adult's 12-13.5 cm; the readings' 99.5th percentile lies 5-7 mm short of the tip, measured on
 ///    turned_palm);
-///  - across it, the palm's far edge is a silhouette against what is behind (the near edge has the
-///    thumb): the centre lies a palm's half width (palm_radius_m) in from it, measured on the
-///    readings of the palm's stretch of the hand that lie within kPalmBandM of their own plane;
-///  - onto that plane.
+///  - across it, the palm's far edge is a silhouette against what is behind (the near one runs into
+///    the hand's side): the centre lies a palm's half width in from it, measured on the readings of
+///    the palm's stretch of the hand that lie within kPalmBandM of their own plane, slice by slice
+///    along the hand, so that a thumb standing out on the far side does not move it;
+///  - onto the plane of the palm's readings around it.
 /// False when the hand leaves the image, the forearm is not seen (which end is the wrist is then
 /// unknown), too few readings, or most flat readings lie outside the palm placed.
 bool HandFinder::Impl::measure_edge_on_palm(const Roi& roi, const Plane& hand_plane, Palm& palm) {
@@ -1237,10 +1245,46 @@ bool HandFinder::Impl::measure_edge_on_palm(const Roi& roi, const Plane& hand_pl
     sum_bd += b * d;
   }
   const double far_side = sum_bd * static_cast<double>(selected.size()) > sum_b * sum_d ? 1.0 : -1.0;
-  for (double& b : along) b *= far_side;  // now the far edge is the largest
-  const auto edge_at = along.begin() + static_cast<std::ptrdiff_t>(kEdgeQuantile * static_cast<double>(along.size() - 1));
-  std::nth_element(along.begin(), edge_at, along.end());
-  const double centre_across = far_side * (*edge_at - params.palm_radius_m);
+  // The centre across, from the far edge slice by slice along the palm. The palm's outline is
+  // rounded (taken as an ellipse, palm_radius_m across by kPalmHalfLengthM along, the hand model's
+  // proportions), so each slice's edge, less the outline's half width at that slice, is an estimate
+  // of the centre. The thumb stands out beside the palm over part of its length, on the far side or
+  // the near one as the hand and its turn have it, and a slice short of readings falls inside the
+  // edge: the median of the slices' estimates holds against both. Taken as the whole stretch's edge
+  // less palm_radius_m, a thumb on the far side put the centre 3-4 cm too far (seeds 48, 84, 138:
+  // the palm turned 52 degrees away from its thumb), and the rounded outline a few mm short.
+  sliced.clear();
+  for (std::size_t j = 0; j < selected.size(); ++j) {
+    const double t = (hand_points[selected[j]].point - mean).dot(toward_tips) - centre_along + kPalmHalfLengthM;
+    sliced.emplace_back(std::clamp(static_cast<int>(t / kEdgeSliceM), 0, kEdgeSlices - 1), far_side * along[j]);
+  }
+  std::sort(sliced.begin(), sliced.end());
+  slice_centres.clear();
+  for (std::size_t first = 0; first < sliced.size();) {
+    std::size_t last = first;
+    while (last < sliced.size() && sliced[last].first == sliced[first].first) ++last;
+    if (last - first >= static_cast<std::size_t>(kMinSliceReadings)) {
+      // Sorted by (slice, coordinate): the slice's kEdgeQuantile reading is at its rank.
+      const double edge = sliced[first + static_cast<std::size_t>(kEdgeQuantile * static_cast<double>(last - first - 1))].second;
+      const double at = (sliced[first].first + 0.5) * kEdgeSliceM - kPalmHalfLengthM;  // the slice's middle, from the centre
+      const double half_width = params.palm_radius_m * std::sqrt(std::max(0.0, 1.0 - (at / kPalmHalfLengthM) * (at / kPalmHalfLengthM)));
+      slice_centres.push_back(edge - half_width);
+    }
+    first = last;
+  }
+  double centre_far = 0;  // the centre's coordinate, positive toward the far side
+  if (slice_centres.size() >= static_cast<std::size_t>(kMinEdgeSlices)) {
+    const auto mid = slice_centres.begin() + static_cast<std::ptrdiff_t>(slice_centres.size() / 2);
+    std::nth_element(slice_centres.begin(), mid, slice_centres.end());
+    centre_far = *mid;
+  } else {
+    // Too few slices seen for a median: the stretch's edge as a whole.
+    for (double& b : along) b *= far_side;  // now the far edge is the largest
+    const auto edge_at = along.begin() + static_cast<std::ptrdiff_t>(kWholeEdgeQuantile * static_cast<double>(along.size() - 1));
+    std::nth_element(along.begin(), edge_at, along.end());
+    centre_far = *edge_at - params.palm_radius_m;
+  }
+  const double centre_across = far_side * centre_far;
   // A palm placed where the palm is: most of the stretch's flat readings lie within its half width
   // (measured: 62-79% on turned_palm; 38-49% where it was placed 2-6 cm off, at yaw 70 with the
   // palm face partly hidden by the fingers).
@@ -1258,6 +1302,10 @@ bool HandFinder::Impl::measure_edge_on_palm(const Roi& roi, const Plane& hand_pl
     const double t = (hand_points[i].point - mean).dot(toward_tips) - centre_along + kPalmHalfLengthM;
     covered[static_cast<std::size_t>(std::clamp(static_cast<int>(t / kCellM), 0, kSteps - 1))] = true;
   }
+  // Onto the plane of the palm's own readings around the centre placed (as measure_turned_palm's
+  // candidates): the stretch's plane holds the thumb's and the hand's rounded sides as well.
+  select_near_plane(palm_plane, kPalmRefitBandM, &centre, kPalmRefitRadiusM, false);
+  if (Plane local; fit_selected(local)) centre -= (centre - local.centroid).dot(local.normal) * local.normal;
   const Eigen::Vector2d pixel = model.project(centre);
   palm.u = pixel.x();
   palm.v = pixel.y();

@@ -1293,6 +1293,11 @@ bool HandFinder::Impl::measure_edge_on_palm(const Roi& roi, const Plane& hand_pl
     centre_far = *edge_at - params.palm_radius_m;
   }
   const double centre_across = far_side * centre_far;
+  // The palm is most of the hand's width: its centre lies within a half width of the hand's axis
+  // (measured: -21 to +14 mm on seeds 1-300's placed frames, the thumb's side pulling the axis).
+  // Farther, the "far edge" is something else in the palm's plane that the hand's region ran into,
+  // nearly along the line of sight for a palm seen edge-on (seed 990: placed 25 cm behind the hand).
+  if (std::abs(centre_across) > params.palm_radius_m) return false;
   // A palm placed where the palm is: most of the stretch's flat readings lie within its half width
   // (measured: 62-79% on turned_palm; 38-49% where it was placed 2-6 cm off, at yaw 70 with the
   // palm face partly hidden by the fingers).

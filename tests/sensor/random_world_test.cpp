@@ -658,6 +658,16 @@ TEST(RandomScene, AnEdgeOnPalmIsPlacedFromThePalmsEdgeNotItsThumbs) {
   const auto [thumb_near, thumb_near_rms] = placed_rms({259, 296});
   EXPECT_GE(thumb_near, 40);
   EXPECT_LT(thumb_near_rms, 0.012);
+  // Seed 990: a hand 1.76 m away whose region ran, in the palm's edge-on plane, into what is behind;
+  // its "far edge" there put the centre 22-25 cm behind the hand (across the palm is nearly along the
+  // line of sight there). A centre farther than a palm's half width from the hand's axis is not placed.
+  // (Its other placed frames err along the hand, up to 18 cm, by 10 cm at most in depth.)
+  double deepest = 0;
+  score_clip(random_scenario(990), {}, [&](const GroundTruth& truth, const HandObservation& hand) {
+    if (hand.tracked && hand.palm_radius_m == static_cast<float>(HandFinderParams{}.palm_radius_m) && hand.confidence <= 0.5f)
+      deepest = std::max(deepest, std::abs(hand.position_m.z() - truth.palm.z()));
+  });
+  EXPECT_LT(deepest, 0.15);
 }
 
 TEST(Summary, FailsOnEachRateItMisses) {

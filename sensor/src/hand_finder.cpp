@@ -598,14 +598,14 @@ void HandFinder::reset() {
 bool HandFinder::Impl::measure(std::span<const std::uint16_t> raw, const cv::Rect& cells, std::uint16_t near_raw,
                                cv::Point seed_cell, Palm& palm, bool two_sided, Candidate candidate) {
   if (!measure_in_band(raw, cells, near_raw, band_limit[near_raw], seed_cell, palm, 0, two_sided, candidate)) return false;
-  // No whole palm, and the band's region was cut by the ROI (made from the foreground's cells, which
+  // No palm or no whole one, and the band's region was cut by the ROI (made from the foreground's cells, which
   // may hold only part of the hand: one rising through where the arm rested is less than
   // foreground_m in front of it there; a hand held still, learnt into the background but for its
   // fingers): measured again with the ROI grown by a palm diameter on those sides. A palm-sized
   // circle there replaces none; a larger one replaces a small one if it adjoins it, within a palm's
   // diameter, as a palm adjoins its fingers (seed 66: the fingers' block, a 3.3 cm circle 6 cm above
   // the palm's; seed 369: a circle 30 cm away, on whatever else the grown ROI's band held).
-  if (palm.radius_m < params.whole_palm_radius_m && touched != 0) {
+  if ((!palm_sized(palm) || palm.radius_m < params.whole_palm_radius_m) && touched != 0) {
     Palm grown;
     const auto adjoins = [&] {
       return (model.back_project(grown.u, grown.v, grown.z) - model.back_project(palm.u, palm.v, palm.z)).norm() <=

@@ -45,10 +45,9 @@ constexpr double kTipQuantile = 0.995;       // the far end: robust to a few str
 constexpr double kPalmHalfLengthM = 0.045;   // the palm spans this either side of its centre along the hand
 constexpr double kEdgeSliceM = 0.01;         // the palm's far edge is taken in slices this long along the hand ...
 constexpr int kEdgeSlices = static_cast<int>(2 * kPalmHalfLengthM / kEdgeSliceM + 0.5);  // ... over its stretch
-constexpr double kEdgeQuantile = 0.99;       // ... each slice's edge: robust to a stray reading
+constexpr double kEdgeQuantile = 0.99;       // ... each slice's edge (and, with too few slices, the whole stretch's): robust to stray readings
 constexpr int kMinSliceReadings = 5;         // ... a slice with fewer readings has no edge
-constexpr int kMinEdgeSlices = 3;            // ... with fewer slices, the whole stretch's edge:
-constexpr double kWholeEdgeQuantile = 0.99;  // ... robust to a few stray readings
+constexpr int kMinEdgeSlices = 3;            // ... with fewer slices, the whole stretch's edge
 constexpr double kArmSearchM = 0.25;         // the forearm: the surface that runs on from the hand, this near it
 constexpr double kArmAxisM = 0.08;           // ... and this near the hand's axis (a forearm's radius ~2.8 cm, its wrist 3.4 cm behind the palm)
 constexpr double kAxisKeptShare = 0.8;       // the hand's axis: refitted to this share of its readings nearest it ...
@@ -1288,7 +1287,7 @@ bool HandFinder::Impl::measure_edge_on_palm(const Roi& roi, const Plane& hand_pl
   } else {
     // Too few slices seen for a median: the stretch's edge as a whole.
     for (double& b : along) b *= far_side;  // now the far edge is the largest
-    const auto edge_at = along.begin() + static_cast<std::ptrdiff_t>(kWholeEdgeQuantile * static_cast<double>(along.size() - 1));
+    const auto edge_at = along.begin() + static_cast<std::ptrdiff_t>(kEdgeQuantile * static_cast<double>(along.size() - 1));
     std::nth_element(along.begin(), edge_at, along.end());
     centre_far = *edge_at - params.palm_radius_m;
   }

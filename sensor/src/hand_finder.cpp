@@ -299,6 +299,7 @@ struct HandFinder::Impl {
     bool cut_by_border = false;   ///< the hand leaves the image within a palm diameter of the circle
     bool placed_by_model = false; ///< an edge-on palm: its centre placed by the hand's shape (lower confidence)
     bool in_own_plane = false;    ///< measured in its own plane (measure_turned_palm): its circle is the palm face's already
+    double tips_down = 0;         ///< placed palms: sine of the fingers' direction below the camera's level (1: down)
     double ridge_m = 0;           ///< how far from the circle's centre the region stays nearly as wide (ridge_length)
     double bulge_significance = 0;  ///< how surely its readings bulge toward the sensor (measure_bulge) ...
     double bulge_min_per_m = 0;     ///< ... and how much along the flattest direction (1 / (2 R) for a sphere's cap)
@@ -1219,6 +1220,7 @@ bool HandFinder::Impl::measure_edge_on_palm(const Roi& roi, const Plane& hand_pl
   Eigen::Vector3d forearm;
   if (!arm_centre(roi, mean, toward_tips, forearm)) return false;
   if (toward_tips.dot(forearm - mean) > 0) toward_tips = -toward_tips;
+  palm.tips_down = toward_tips.y();  // the camera's y runs down
   // Along the hand: the far end, robustly, and the palm centre kTipToPalmCentreM back from it.
   along.clear();
   for (const auto& h : hand_points) along.push_back((h.point - mean).dot(toward_tips));
@@ -1928,7 +1930,8 @@ bool HandFinder::Impl::palm_accepted(const Palm& palm) const {
   const double expected_px = params.palm_radius_m * model.intrinsics().fx / palm.z + params.edge_margin_px;
   const bool inside = palm.u - expected_px >= params.invalid_left_columns && palm.u + expected_px <= kDepthWidth - 1 &&
                       palm.v - expected_px >= 0 && palm.v + expected_px <= kDepthHeight - 1;
-  return inside && palm_sized(palm) && palm.valid_fraction >= 0.5 && !palm.cut_by_border;
+  return inside && palm_sized(palm) && palm.valid_fraction >= 0.5 && !palm.cut_by_border &&
+         !(palm.placed_by_model && palm.tips_down > params.max_palm_tips_down);  // a hand hanging at rest
 }
 
 /// Steps 2-4 for one foreground component: its hand (the part within the band of its nearest

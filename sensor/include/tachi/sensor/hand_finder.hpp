@@ -268,6 +268,17 @@ struct HandFinderParams {
   /// fast hands' second palms (6-8 cm steps, ridges under 2 cm: seeds 41, 138, 259) were refused and
   /// their tracks lost for up to 7 frames. <= 0: no such test.
   double max_unproven_step_m = 0.06;
+  /// No palm seen edge-on (placed by the hand's shape) is reported whose fingers point down by more
+  /// than this sine of the angle below the camera's level (0.707: 45 degrees): that is a hand hanging
+  /// at rest beside the body, or turning into that pose as it is lowered, not a hand held up to cut.
+  /// Edge-on with its fingers down, a hanging hand reaches out of the surface behind it as a raised
+  /// one does, and it was taken as a new track, or followed down into its rest (tuning seeds 68, 186,
+  /// 200, 263, 272: captured runs of 1-6 frames while the hand was not raised; its fingers 72-90
+  /// degrees down). A raised hand holds its fingers up or level: on seeds 1-300 the good placed palms
+  /// pointed at most 40 degrees down (0.64). A palm measured as a circle (not edge-on) has no fingers'
+  /// direction to test. A Kinect tilted by its motor (+-27 degrees) moves the level by as much; a
+  /// hanging hand's fingers stay 55 or more degrees down. > 1: no such test.
+  double max_palm_tips_down = 0.707;
   /// Report the centre of the palm's face rather than of the hand's silhouette (palm_face_centre in
   /// hand_finder.cpp). A palm turned from the sensor shows the hand's side beside it, and the
   /// silhouette's widest place lay typically 5-10 mm toward that side at 30-60 degrees of turn (seeds 1-300).

@@ -276,8 +276,9 @@ struct HandFinderParams {
   /// 200, 263, 272: captured runs of 1-6 frames while the hand was not raised; its fingers 72-90
   /// degrees down). A raised hand holds its fingers up or level: on seeds 1-300 the good placed palms
   /// pointed at most 40 degrees down (0.64). A palm measured as a circle (not edge-on) has no fingers'
-  /// direction to test. A Kinect tilted by its motor (+-27 degrees) moves the level by as much; a
-  /// hanging hand's fingers stay 55 or more degrees down. > 1: no such test.
+  /// direction to test. A Kinect tilted by its motor (up to 27 degrees) brings a hand hanging straight
+  /// down (84 degrees in the randomized world, placed at 72-90) to 57-63 degrees below its level, the
+  /// lowest estimates to ~45: untested, as the randomized world's camera is level. > 1: no such test.
   double max_palm_tips_down = 0.707;
   /// Report the centre of the palm's face rather than of the hand's silhouette (palm_face_centre in
   /// hand_finder.cpp). A palm turned from the sensor shows the hand's side beside it, and the

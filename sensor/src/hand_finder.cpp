@@ -597,6 +597,9 @@ void HandFinder::reset() {
 /// `near_raw` at grid cell `seed_cell`. Fills `palm`; false when no palm-like region is there.
 bool HandFinder::Impl::measure(std::span<const std::uint16_t> raw, const cv::Rect& cells, std::uint16_t near_raw,
                                cv::Point seed_cell, Palm& palm, bool two_sided, Candidate candidate) {
+  // From a fresh palm: callers measure one Palm for candidate after candidate, and the circle path does not
+  // set every field (an earlier candidate's placed_by_model, in_own_plane or tips_down would stay).
+  palm = Palm{};
   if (!measure_in_band(raw, cells, near_raw, band_limit[near_raw], seed_cell, palm, 0, two_sided, candidate)) return false;
   // No palm or no whole one, and the band's region was cut by the ROI (made from the foreground's cells, which
   // may hold only part of the hand: one rising through where the arm rested is less than

@@ -53,6 +53,7 @@ constexpr double kArmAxisM = 0.08;           // ... and this near the hand's axi
 constexpr double kAxisKeptShare = 0.8;       // the hand's axis: refitted to this share of its readings nearest it ...
 constexpr int kAxisPasses = 3;               // ... this many times (turned_palm's edge-on RMS: 10.8 -> 9.8 mm, 0.7-0.9 alike)
 constexpr double kFrontSurfaceM = 0.02;     // a candidate's front surface (find_arm_end's border test): a palm is flat within ~1 cm
+constexpr double kJointRadiusM = 0.08;       // an elbow and the start of its limbs (an upper arm is ~9 cm across)
 constexpr double kSurfaceStepM = 0.03;       // a step between grid neighbours on one surface (as reaches_back)
 constexpr double kEndBandNearM = 0.02;       // a hand at an arm's geodesic end: its band starts this in front of its
                                              // nearest grid reading (full resolution finds a little nearer), not at
@@ -359,7 +360,7 @@ struct HandFinder::Impl {
   void band_cells_at(cv::Point seed, std::uint16_t near_raw, bool two_sided, cv::Rect& box);
   /// The near side of a two-sided band around `near_raw` (kEndBandNearM in front of it).
   std::uint16_t end_band_near(std::uint16_t near_raw) const { return raw_limit(model.metres(near_raw) - kEndBandNearM, false); }
-  bool is_joint(cv::Point seed, std::uint16_t near_raw);
+  bool is_joint(cv::Point seed, std::uint16_t near_raw, const cv::Point* reached_from = nullptr);
   /// The end of an arm (arm_end): the hand at the arm's geodesic extremity.
   struct ArmEnd {
     cv::Point seed;              ///< the end's hand: its nearest grid cell ...
@@ -1457,7 +1458,7 @@ bool HandFinder::Impl::make_plane_grid(const Roi& roi, const Plane& plane, Plane
 /// HandFinderParams::surface_step_quanta of the Kinect's depth steps, where coarser) nearer or
 /// farther than the cell they are reached from (one surface: no depth jump). `on_cell(cell, z)`
 /// sees each cell taken, in order, and may end the walk (returns true: the walk returns true);
-/// `on_step(z)` decides for each neighbour: kTake, kSkip, or kAbort (the walk returns false).
+/// `on_step(cell, z)` decides for each neighbour: kTake, kSkip, or kAbort (the walk returns false).
 /// Shared by reaches_back, is_joint and arm_end.
 template <class OnCell, class OnStep>
 bool HandFinder::Impl::walk_surface(cv::Point seed, OnCell&& on_cell, OnStep&& on_step, bool depth_steps) {
@@ -1483,7 +1484,7 @@ bool HandFinder::Impl::walk_surface(cv::Point seed, OnCell&& on_cell, OnStep&& o
         // The farther reading's depth step: the coarser of the two.
         const float max_step = depth_steps ? surface_step[std::max(d, raw_c)] : static_cast<float>(kSurfaceStepM);
         if (zn <= 0 || std::abs(zn - zc) > max_step) continue;
-        const Step step = on_step(zn);
+        const Step step = on_step(n, zn);
         if (step == Step::kAbort) return false;
         if (step == Step::kSkip) continue;
         visited[grid_index(n)] = visit_generation;
@@ -1506,7 +1507,7 @@ bool HandFinder::Impl::reaches_back(cv::Point seed, std::uint16_t near_raw, bool
       seed, [&](cv::Point, float zc) { return zc >= goal; },
       // The surface goes on toward the sensor: a limb's middle, not its end.
       // `past_nearer`: a hand at an arm's geodesic end, whose forearm runs on nearer (an elbow).
-      [&](float zn) { return zn < nearer_floor && !past_nearer ? Step::kAbort : Step::kTake; }, true);
+      [&](cv::Point, float zn) { return zn < nearer_floor && !past_nearer ? Step::kAbort : Step::kTake; }, true);
 }
 
 /// Whether the candidate at grid cell `seed` (nearest reading `near_raw`) is a limb's joint rather
@@ -1514,9 +1515,20 @@ bool HandFinder::Impl::reaches_back(cv::Point seed, std::uint16_t near_raw, bool
 /// behind it), the cells 5-10 cm behind it form two separate groups (an elbow pointing at the
 /// camera, with the upper arm and the forearm running back from it), where a hand has one (its
 /// forearm; the torso behind a hand held against it is one ring).
-bool HandFinder::Impl::is_joint(cv::Point seed, std::uint16_t near_raw) {
+/// `reached_from`: the candidate is an arm's geodesic end (arm_end), reached from the arm's nearest
+/// reading there (an elbow pointing at the camera). The walk does not go back over that joint
+/// (within kJointRadiusM of it): from a raised hand whose fingertips are as near as the elbow, it
+/// ran down the forearm, over the elbow and onto the upper arm behind it, a second group that is the
+/// elbow's, not the hand's (tuning seed 138: a hand raised in front of a second person, 14 frames
+/// refused as a new track).
+bool HandFinder::Impl::is_joint(cv::Point seed, std::uint16_t near_raw, const cv::Point* reached_from) {
   const float z0 = model.metres(near_raw);
   const float slab_near = z0 + 0.05f, slab_far = z0 + 0.10f;
+  const double joint_cells =
+      reached_from != nullptr ? kJointRadiusM * model.intrinsics().fx / model.metres(grid.at<std::uint16_t>(*reached_from)) / kStep : -1.0;
+  const auto at_joint = [&](cv::Point n) {
+    return reached_from != nullptr && std::hypot(n.x - reached_from->x, n.y - reached_from->y) <= joint_cells;
+  };
   slab.clear();
   walk_surface(
       seed,
@@ -1524,7 +1536,7 @@ bool HandFinder::Impl::is_joint(cv::Point seed, std::uint16_t near_raw) {
         if (zc >= slab_near) slab.push_back(c);
         return false;
       },
-      [&](float zn) { return zn > slab_far ? Step::kSkip : Step::kTake; });
+      [&](cv::Point n, float zn) { return zn > slab_far || at_joint(n) ? Step::kSkip : Step::kTake; });
   // Groups of the slab's cells (8-connected among themselves), those of 3 cells or more.
   if (visit_generation > 0xfffffff0u) {  // two more generations are used here; none may wrap to 0
     std::fill(visited.begin(), visited.end(), 0u);
@@ -1625,7 +1637,7 @@ bool HandFinder::Impl::arm_end(cv::Point seed, std::uint16_t near_raw, ArmEnd& e
         current = c;
         return false;
       },
-      [&](float zn) {
+      [&](cv::Point, float zn) {
         if (zn > z_far) {
           if (arm_roots.empty() || arm_roots.back() != current) arm_roots.push_back(current);
           return Step::kSkip;
@@ -1849,10 +1861,17 @@ bool HandFinder::Impl::arm_end_candidate(std::span<const std::uint16_t> raw, cv:
     return false;
   }
   if (!measure(raw, box, near_raw, seed, palm, two_sided, Candidate::kNewTrack)) return false;
-  const auto new_palm = [&](const Palm& p) { return new_track_palm(p, near_raw); };
+  // The hand at this nearest reading: its palm within max_new_palm_from_nearest_m of it.
+  const Eigen::Vector3d nearest_m = model.back_project(seed.x * kStep + kStep / 2, seed.y * kStep + kStep / 2, z);
+  const auto new_palm = [&](const Palm& p) {
+    return new_track_palm(p, near_raw) &&
+           (params.max_new_palm_from_nearest_m <= 0 ||
+            (model.back_project(p.u, p.v, p.z) - nearest_m).norm() <= params.max_new_palm_from_nearest_m);
+  };
   if (!new_palm(palm)) {
     if (!params.second_look_near_nearest || params.palm_from_nearest_m <= 0) return false;
-    // The band's widest place was a limb (a tube: its ridge runs on) or round: a hand held up beside
+    // The band's widest place was a limb (a tube: its ridge runs on), round, or more than a hand's length from the
+    // nearest reading (an elbow below a raised hand, at its depth): a hand held up beside
     // the head with its forearm and upper arm at its depth has its widest place at the elbow, 15-25 cm
     // below the palm. The palm is then sought where a followed one is, near the nearest reading (the
     // fingertips); the same tests decide (seed 86 of the tuning range: its first 15 frames).
@@ -2011,7 +2030,7 @@ bool HandFinder::Impl::follow_component(std::span<const std::uint16_t> raw, int 
                     : palm_shaped() && !set_in_static_surface(palm) &&
                           ((palm.z <= params.max_acquire_depth_m && !take_over) ||
                            (palm.z <= params.max_track_depth_m && reaches_back(seed, near_raw, at_end))) &&
-                          !is_joint(seed, near_raw) && !nearest_at_border(arm_nearest) && !behind_band(palm, near_raw) &&
+                          !is_joint(seed, near_raw, at_end ? &arm_nearest : nullptr) && !nearest_at_border(arm_nearest) && !behind_band(palm, near_raw) &&
                           !front_crosses_border_beyond_hand(seed, near_raw, at_end, palm));
     // Refused as unproven, it is not followed on either: the next frame would take it as the same hand.
     if (jump || (!found && (!continuing || unproven))) tracking = false;

@@ -192,6 +192,13 @@ struct HandFinderParams {
   /// at its depth has its widest place at the elbow. Tuning seeds 1-100 and 101-200: visible frames
   /// tracked 91.78 -> 92.39 % and 92.69 -> 93.27 %, nothing else changed. false: the first look only.
   bool second_look_near_nearest = true;
+  /// A new track without a background is a hand at the candidate's nearest reading: its palm's centre
+  /// lies within a hand's length of that reading (fingertips 12-13 cm from it at most; tuning seeds
+  /// 1-80, 554 good new tracks: at most 12.8 cm). A palm measured farther off is some other
+  /// palm-sized place in the depth band: a far user's elbow held forward 1 cm behind a hand raised
+  /// beside the head, 39 cm below it (tuning seed 495: 4 frames captured). It is looked at again near
+  /// the nearest reading (second_look_near_nearest), else refused. <= 0: no such limit.
+  double max_new_palm_from_nearest_m = 0.2;
   /// A head is no hand: a new track does not start on a palm circle with a body's shoulders beneath
   /// it, i.e. readings within head_depth_m of the palm's depth that span head_shoulders_half_m to
   /// each side of its column along some grid row 25-45 cm below its centre (a head's centre is

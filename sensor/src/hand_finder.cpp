@@ -1524,8 +1524,9 @@ bool HandFinder::Impl::reaches_back(cv::Point seed, std::uint16_t near_raw, bool
 bool HandFinder::Impl::is_joint(cv::Point seed, std::uint16_t near_raw, const cv::Point* reached_from) {
   const float z0 = model.metres(near_raw);
   const float slab_near = z0 + 0.05f, slab_far = z0 + 0.10f;
-  const double joint_cells =
-      reached_from != nullptr ? kJointRadiusM * model.intrinsics().fx / model.metres(grid.at<std::uint16_t>(*reached_from)) / kStep : -1.0;
+  const double joint_cells = reached_from == nullptr ? -1.0
+                                                     : kJointRadiusM * model.intrinsics().fx /
+                                                           model.metres(grid.at<std::uint16_t>(*reached_from)) / kStep;
   const auto at_joint = [&](cv::Point n) {
     return reached_from != nullptr && std::hypot(n.x - reached_from->x, n.y - reached_from->y) <= joint_cells;
   };
@@ -2030,7 +2031,8 @@ bool HandFinder::Impl::follow_component(std::span<const std::uint16_t> raw, int 
                     : palm_shaped() && !set_in_static_surface(palm) &&
                           ((palm.z <= params.max_acquire_depth_m && !take_over) ||
                            (palm.z <= params.max_track_depth_m && reaches_back(seed, near_raw, at_end))) &&
-                          !is_joint(seed, near_raw, at_end ? &arm_nearest : nullptr) && !nearest_at_border(arm_nearest) && !behind_band(palm, near_raw) &&
+                          !is_joint(seed, near_raw, at_end ? &arm_nearest : nullptr) && !nearest_at_border(arm_nearest) &&
+                          !behind_band(palm, near_raw) &&
                           !front_crosses_border_beyond_hand(seed, near_raw, at_end, palm));
     // Refused as unproven, it is not followed on either: the next frame would take it as the same hand.
     if (jump || (!found && (!continuing || unproven))) tracking = false;

@@ -451,7 +451,8 @@ struct HandFinder::Impl {
   bool new_track_shape(const Palm& p, double max_ridge_m) const {
     return p.radius_m <= params.max_new_palm_radius_m && p.ridge_m <= max_ridge_m && !is_dome(p) && !shoulders_below(p);
   }
-  /// A new track's palm tests, as arm_end_candidate asks them of a candidate with nearest reading near_raw.
+  /// A new track's palm tests, as arm_end_candidate asks them of a candidate with nearest reading near_raw
+  /// (which asks max_new_palm_from_nearest_m too, of its own candidate; a refused palm is not asked it).
   bool new_track_palm(const Palm& p, std::uint16_t near_raw) const {
     return palm_accepted(p) && new_track_shape(p, params.max_palm_ridge_m) && !behind_band(p, near_raw);
   }
@@ -523,6 +524,10 @@ struct HandFinder::Impl {
   /// (max_new_palm_behind_nearest_m): measured on an arm running back from it, not on its hand.
   bool behind_band(const Palm& palm, std::uint16_t near_raw) const {
     return params.max_new_palm_behind_nearest_m > 0 && palm.z - model.metres(near_raw) > params.max_new_palm_behind_nearest_m;
+  }
+  /// Grid cell `c`'s reading as a 3D point (the cell's centre pixel at its depth).
+  Eigen::Vector3d cell_point(cv::Point c) const {
+    return model.back_project(c.x * kStep + kStep / 2, c.y * kStep + kStep / 2, model.metres(grid.at<std::uint16_t>(c)));
   }
   bool palm_sized(const Palm& palm) const {
     return palm.radius_m >= params.min_palm_radius_m && palm.radius_m <= params.max_palm_radius_m;
@@ -1381,9 +1386,6 @@ bool HandFinder::Impl::arm_centre(const Roi& roi, const Eigen::Vector3d& hand_ce
   }
   queue.clear();
   const auto at = [](cv::Point p) { return static_cast<std::size_t>(p.y) * kGridW + static_cast<std::size_t>(p.x); };
-  const auto point = [&](cv::Point c) {
-    return model.back_project(c.x * kStep + kStep / 2, c.y * kStep + kStep / 2, model.metres(grid.at<std::uint16_t>(c)));
-  };
   for (int gy = roi.y0 / kStep; gy <= (roi.y1 - 1 - kStep / 2) / kStep; ++gy)
     for (int gx = roi.x0 / kStep; gx <= (roi.x1 - 1 - kStep / 2) / kStep; ++gx) {
       const int x = gx * kStep + kStep / 2, y = gy * kStep + kStep / 2;
@@ -1395,13 +1397,13 @@ bool HandFinder::Impl::arm_centre(const Roi& roi, const Eigen::Vector3d& hand_ce
   int count = 0;
   for (std::size_t head = 0; head < queue.size(); ++head) {
     const cv::Point c = queue[head];
-    const Eigen::Vector3d pc = point(c);
+    const Eigen::Vector3d pc = cell_point(c);
     for (int dy = -1; dy <= 1; ++dy)
       for (int dx = -1; dx <= 1; ++dx) {
         const cv::Point n{c.x + dx, c.y + dy};
         if (n.x < 0 || n.y < 0 || n.x >= kGridW || n.y >= kGridH || visited[at(n)] == visit_generation) continue;
         if (grid.at<std::uint16_t>(n) >= kNoReading) continue;
-        const Eigen::Vector3d pn = point(n);
+        const Eigen::Vector3d pn = cell_point(n);
         if (pn.z() <= 0 || std::abs(pn.z() - pc.z()) > kSurfaceStepM || (pn - hand_centre).norm() > kArmSearchM) continue;
         visited[at(n)] = visit_generation;
         queue.push_back(n);
@@ -1863,7 +1865,7 @@ bool HandFinder::Impl::arm_end_candidate(std::span<const std::uint16_t> raw, cv:
   }
   if (!measure(raw, box, near_raw, seed, palm, two_sided, Candidate::kNewTrack)) return false;
   // The hand at this nearest reading: its palm within max_new_palm_from_nearest_m of it.
-  const Eigen::Vector3d nearest_m = model.back_project(seed.x * kStep + kStep / 2, seed.y * kStep + kStep / 2, z);
+  const Eigen::Vector3d nearest_m = cell_point(seed);
   const auto new_palm = [&](const Palm& p) {
     return new_track_palm(p, near_raw) &&
            (params.max_new_palm_from_nearest_m <= 0 ||
